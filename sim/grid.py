@@ -1,0 +1,122 @@
+"""The paper's gridded route world and the tabular model the learners train on.
+
+Every cell of the arena is a state (``s = iy * nx + ix``); blocked cells are
+states that nothing reaches, which keeps the index a pure function of the pose
+for the physics world. Actions: 0 up (+y), 1 down (-y), 2 left (-x), 3 right (+x).
+
+A move succeeds when the target cell is in the arena, free for the inflated
+robot, and the robot's swept disc along the straight segment between the two
+centres clears every circle (so the route the grid allows is one the physics
+robot can drive). Otherwise it is a *bump*: the agent stays, reward ``bump``.
+Entering the goal gives ``goal`` and terminates; any other move gives ``step``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim.discretiser import Discretiser
+from sim.planning import ACTION_DELTAS, bfs_distances
+from sim.scenario import Scenario
+
+ACTION_NAMES = ("up", "down", "left", "right")
+
+
+def _segment_distance(px: np.ndarray, py: np.ndarray, ax: np.ndarray, ay: np.ndarray,
+                      bx: np.ndarray, by: np.ndarray) -> np.ndarray:
+    """Distance from points p to segments a-b (broadcasting)."""
+    abx, aby = bx - ax, by - ay
+    t = np.clip(((px - ax) * abx + (py - ay) * aby) / (abx * abx + aby * aby), 0.0, 1.0)
+    return np.hypot(px - (ax + t * abx), py - (ay + t * aby))
+
+
+def passable_moves(sc: Scenario, blocked: np.ndarray) -> np.ndarray:
+    """bool[nS, 4]: which moves succeed, given the inflated occupancy ``blocked[ny, nx]``."""
+    nx, ny = sc.nx, sc.ny
+    disc = Discretiser.from_scenario(sc)
+    xy = disc.centres()
+    iy, ix = np.divmod(np.arange(nx * ny), nx)
+    free = ~blocked.ravel()
+    ok = np.zeros((nx * ny, 4), dtype=bool)
+    circ = (np.array([(o.x_m, o.y_m, o.radius_m) for o in sc.obstacles])
+            if sc.obstacles else np.zeros((0, 3)))
+    infl = sc.robot.inflation_m
+    for a, (dx, dy) in enumerate(ACTION_DELTAS):
+        tx, ty = ix + dx, iy + dy
+        inside = (tx >= 0) & (tx < nx) & (ty >= 0) & (ty < ny)
+        t = np.where(inside, ty * nx + tx, 0)
+        good = inside & free & free[t]
+        if len(circ):
+            bx = xy[:, :1] + dx * sc.cell_size_m
+            by = xy[:, 1:] + dy * sc.cell_size_m
+            d = _segment_distance(circ[None, :, 0], circ[None, :, 1], xy[:, :1], xy[:, 1:],
+                                  bx, by)
+            good &= ~(d < circ[None, :, 2] + infl).any(axis=1)
+        ok[:, a] = good
+    return ok
+
+
+@dataclass(frozen=True, eq=False)
+class TabularModel:
+    """The sim/learning seam: a deterministic grid MDP as plain arrays."""
+
+    next_state: np.ndarray  # int32[nS, 4]
+    reward: np.ndarray  # float64[nS, 4]
+    terminal: np.ndarray  # bool[nS]; only the goal
+    coords: np.ndarray  # float64[nS, 2]; cell centres [m], what function approximators see
+    start_states: np.ndarray  # int32[k]; free cells that reach the goal, goal excluded
+    start: int  # state of S
+    goal: int  # state of G
+    distance_to_goal: np.ndarray  # int32[nS]; BFS moves to G, -1 if unreachable/blocked
+    blocked: np.ndarray  # bool[ny, nx]; inflated occupancy
+    nx: int
+    ny: int
+    cell_size_m: float
+    bounds_m: tuple[float, float, float, float]  # (xmin, ymin, xmax, ymax) of the arena
+    max_steps: int  # steps per episode
+
+    @property
+    def n_states(self) -> int:
+        return int(self.next_state.shape[0])
+
+    @property
+    def n_actions(self) -> int:
+        return int(self.next_state.shape[1])
+
+    @property
+    def optimal_route_length(self) -> int:
+        """BFS moves from S to G."""
+        return int(self.distance_to_goal[self.start])
+
+
+def build_model(sc: Scenario) -> TabularModel:
+    """Rasterise ``sc`` and export its grid dynamics. Assumes ``sc`` is validated."""
+    disc = Discretiser.from_scenario(sc)
+    blocked = disc.occupancy(sc)
+    ok = passable_moves(sc, blocked)
+    n = disc.n_states
+    states = np.arange(n)
+    nx = sc.nx
+    deltas = np.array([dy * nx + dx for dx, dy in ACTION_DELTAS])
+    next_state = np.where(ok, states[:, None] + deltas[None, :], states[:, None]).astype(np.int32)
+    goal = disc.index(*sc.goal)
+    rw = sc.rewards
+    reward = np.where(ok, rw.step, rw.bump)
+    reward[next_state == goal] = rw.goal
+    reward[goal] = 0.0
+    terminal = np.zeros(n, dtype=bool)
+    terminal[goal] = True
+    next_state[goal] = goal
+    dist = bfs_distances(ok, nx, sc.goal)
+    start_states = np.flatnonzero(dist > 0).astype(np.int32)
+    for arr in (next_state, reward, terminal, dist, start_states, blocked):
+        arr.setflags(write=False)
+    coords = disc.centres()
+    coords.setflags(write=False)
+    return TabularModel(next_state=next_state, reward=reward, terminal=terminal, coords=coords,
+                        start_states=start_states, start=disc.index(*sc.start), goal=goal,
+                        distance_to_goal=dist, blocked=blocked, nx=nx, ny=sc.ny,
+                        cell_size_m=sc.cell_size_m, bounds_m=(0.0, 0.0, sc.width_m, sc.height_m),
+                        max_steps=sc.steps_per_episode)

@@ -83,11 +83,11 @@ class Scenario:
 
     @property
     def nx(self) -> int:
-        return int(round(self.width_m / self.cell_size_m))
+        return round(self.width_m / self.cell_size_m)
 
     @property
     def ny(self) -> int:
-        return int(round(self.height_m / self.cell_size_m))
+        return round(self.height_m / self.cell_size_m)
 
     @property
     def n_cells(self) -> int:
@@ -148,8 +148,13 @@ def validate_shape(sc: Scenario) -> None:
             raise ScenarioError(src, f"rewards.{name}", "must be finite", "use a number")
 
 
-def validate(sc: Scenario) -> None:
-    """Full validation: shape, start/goal free for the inflated robot, goal reachable."""
+def validate(sc: Scenario, names: dict[str, str] | None = None) -> None:
+    """Full validation: shape, start/goal free for the inflated robot, goal reachable.
+
+    ``names`` renames the start/goal fields in messages (for a bare ``.map`` the
+    user gave them on the command line, in the Moving AI frame).
+    """
+    names = names or {"start": "start", "goal": "goal"}
     from sim.discretiser import Discretiser
     from sim.planning import bfs_distances
 
@@ -158,7 +163,8 @@ def validate(sc: Scenario) -> None:
     blocked = disc.occupancy(sc)
     for fld, (ix, iy) in (("start", sc.start), ("goal", sc.goal)):
         if blocked[iy, ix]:
-            raise ScenarioError(sc.source, fld, f"cell ({ix}, {iy}) is blocked for the robot "
+            raise ScenarioError(sc.source, names[fld], f"cell ({ix}, {iy}) (x right, y up) is "
+                                "blocked for the robot "
                                 f"(radius {sc.robot.radius_m} m + clearance "
                                 f"{sc.robot.clearance_m} m overlaps an obstacle, map cell or "
                                 "wall)", "move it to a free cell or move the obstacle")
@@ -166,8 +172,8 @@ def validate(sc: Scenario) -> None:
 
     dist = bfs_distances(passable_moves(sc, blocked), sc.nx, sc.goal)
     if dist[sc.start[1] * sc.nx + sc.start[0]] < 0:
-        raise ScenarioError(sc.source, "goal", f"cell {sc.goal} cannot be reached from start "
-                            f"{sc.start} by the inflated robot",
+        raise ScenarioError(sc.source, names["goal"], "cannot be reached from the start by the "
+                            "inflated robot",
                             "remove or move obstacles to open a route, or move start/goal")
 
 
@@ -211,7 +217,7 @@ def chain(start_m: tuple[float, float], end_m: tuple[float, float], radius_m: fl
           spacing_m: float) -> tuple[Circle, ...]:
     """Circles of one radius every ``spacing_m`` along a segment: a wall made of posts."""
     (x0, y0), (x1, y1) = start_m, end_m
-    n = max(1, int(math.floor(math.hypot(x1 - x0, y1 - y0) / spacing_m)))
+    n = max(1, math.floor(math.hypot(x1 - x0, y1 - y0) / spacing_m))
     return tuple(Circle(x0 + (x1 - x0) * k / n, y0 + (y1 - y0) * k / n, radius_m)
                  for k in range(n + 1))
 
@@ -242,7 +248,7 @@ class _Table:
         value = self.data[key]
         if kind is float and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
-        if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
+        if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
             names = kind.__name__ if isinstance(kind, type) else "/".join(k.__name__ for k in kind)
             raise ScenarioError(self.source, self._fld(key), f"expected {names}, got {value!r}",
                                 f"write {key} as a {names}")
@@ -393,7 +399,8 @@ def scenario_from_map(path: str | Path, start_xy: Cell, goal_xy: Cell,
                   height_m=h * cell_size_m, start=movingai_to_cell(*start_xy, h),
                   goal=movingai_to_cell(*goal_xy, h), cell_size_m=cell_size_m,
                   blocked_cells=_blocked_cells(grid_map), source=str(path))
-    validate(sc)
+    validate(sc, names={"start": f"--start {start_xy[0]},{start_xy[1]}",
+                        "goal": f"--goal {goal_xy[0]},{goal_xy[1]}"})
     return sc
 
 

@@ -1,0 +1,57 @@
+"""Facts about scenarios for ``rnhql scenarios``: size, free cells, optimal route."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sim.grid import build_model
+from sim.scenario import Scenario, builtin_names, resolve_scenario
+
+
+@dataclass(frozen=True)
+class ScenarioFacts:
+    name: str
+    size_cells: tuple[int, int]
+    size_m: tuple[float, float]
+    obstacles: int
+    blocked_map_cells: int
+    free_cells: int
+    start: tuple[int, int]
+    goal: tuple[int, int]
+    optimal_route_length: int  # BFS moves S -> G, 4-connected, inflated robot
+    manhattan: int
+    description: str
+
+    def row(self) -> list[str]:
+        return [self.name, f"{self.size_cells[0]}x{self.size_cells[1]}",
+                f"{self.size_m[0]:g}x{self.size_m[1]:g} m",
+                str(self.obstacles + self.blocked_map_cells), str(self.free_cells),
+                f"{self.start}", f"{self.goal}", str(self.optimal_route_length),
+                str(self.manhattan)]
+
+
+HEADER = ["scenario", "cells", "size", "obstacles", "free", "start", "goal", "optimal",
+          "manhattan"]
+
+
+def facts(sc: Scenario) -> ScenarioFacts:
+    m = build_model(sc)
+    return ScenarioFacts(
+        name=sc.name, size_cells=(sc.nx, sc.ny), size_m=(sc.width_m, sc.height_m),
+        obstacles=len(sc.obstacles), blocked_map_cells=len(sc.blocked_cells),
+        free_cells=int((~m.blocked).sum()), start=sc.start, goal=sc.goal,
+        optimal_route_length=m.optimal_route_length,
+        manhattan=abs(sc.start[0] - sc.goal[0]) + abs(sc.start[1] - sc.goal[1]),
+        description=sc.description)
+
+
+def builtin_facts() -> list[ScenarioFacts]:
+    return [facts(resolve_scenario(name)) for name in builtin_names()]
+
+
+def format_table(rows: list[list[str]], header: list[str]) -> str:
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
+    lines.append("  ".join("-" * w for w in widths))
+    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
+    return "\n".join(lines)

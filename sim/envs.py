@@ -1,0 +1,25 @@
+"""Gymnasium registration of the rnhql environments.
+
+``import sim.envs`` registers the ids; ``gymnasium.make("sim.envs:rnhql/GridRoute-v0")``
+does the import for you. Entry points are strings so nothing heavy (pymunk) is
+imported until an env is made.
+"""
+
+from __future__ import annotations
+
+from gymnasium.envs.registration import register, registry
+
+ENV_SPECS = {
+    "rnhql/GridRoute-v0": ("sim.grid_env:GridRouteEnv", 600),
+    "rnhql/PhysicsRoute-v0": ("sim.physics_env:PhysicsRouteEnv", 600),
+    "rnhql/DiffDrive-v0": ("sim.physics_env:DiffDriveEnv", 2000),
+}
+
+
+def register_envs() -> None:
+    for env_id, (entry_point, max_steps) in ENV_SPECS.items():
+        if env_id not in registry:
+            register(id=env_id, entry_point=entry_point, max_episode_steps=max_steps)
+
+
+register_envs()

@@ -1,0 +1,123 @@
+from __future__ import annotations
+
+import dataclasses
+import textwrap
+
+import numpy as np
+import pytest
+
+from sim.errors import ScenarioError
+from sim.scenario import (
+    Circle,
+    Robot,
+    Scenario,
+    builtin_names,
+    load_scenario,
+    random_circles,
+    resolve_scenario,
+    validate,
+)
+from tests.conftest import MAPS
+
+BASE = """\
+name = "t"
+start = [1, 1]
+goal = [8, 8]
+[arena]
+width_m = 10.0
+height_m = 10.0
+"""
+
+
+def write(tmp_path, body, name="s.toml"):
+    p = tmp_path / name
+    p.write_text(textwrap.dedent(body))
+    return p
+
+
+def test_builtins_load_and_include_a_long_detour():
+    names = builtin_names()
+    assert {"paper-40", "paper-50", "arena", "zigzag-50"} <= set(names)
+    sc = resolve_scenario("paper-50")
+    assert (sc.nx, sc.ny, sc.start, sc.goal) == (50, 50, (5, 5), (45, 45))
+    assert resolve_scenario("paper-40").goal == (35, 35)
+
+
+def test_random_layout_is_deterministic_and_keeps_start_goal_connected():
+    sc = Scenario(name="r", width_m=30, height_m=30, start=(3, 3), goal=(26, 26))
+    a = random_circles(sc, 15, 1.0, 2.5, np.random.default_rng(7))
+    b = random_circles(sc, 15, 1.0, 2.5, np.random.default_rng(7))
+    assert a == b and len(a) == 15
+    validate(dataclasses.replace(sc, obstacles=a))  # connected, start/goal free
+
+
+def test_good_toml_loads(tmp_path):
+    sc = load_scenario(write(tmp_path, BASE + "[obstacles]\ncircles = [[5.0, 5.0, 1.0]]\n"))
+    assert sc.obstacles == (Circle(5.0, 5.0, 1.0),)
+
+
+def test_toml_may_reference_a_map(tmp_path):
+    (tmp_path / "m.map").write_text((MAPS / "arena.map").read_text())
+    sc = load_scenario(write(tmp_path, 'start = [3, 5]\ngoal = [45, 43]\n[arena]\nmap = "m.map"\n'))
+    assert (sc.nx, sc.ny) == (49, 49) and len(sc.blocked_cells) > 0
+
+
+BAD = [
+    ("colour = 'red'\n" + BASE, "colour", "unknown key"),
+    (BASE + "depth_m = 3.0\n", "arena.depth_m", "unknown key"),
+    (BASE + "[robot]\nwheels = 3\n", "robot.wheels", "unknown key"),
+    (BASE.replace("[1, 1]", "[5, 5]") + "[obstacles]\ncircles = [[5.5, 5.5, 1.0]]\n",
+     "start", "blocked"),
+    (BASE.replace("[1, 1]", "[12, 1]"), "start", "outside"),
+    (BASE.replace("[8, 8]", "[-1, 8]"), "goal", "outside"),
+    (BASE + "[obstacles]\ncircles = [[7.0, 7.0, 3.3]]\n", "goal", "blocked"),
+    (BASE + "[[obstacles.chains]]\nfrom = [0.0, 5.0]\nto = [10.0, 5.0]\nradius_m = 0.6\n",
+     "goal", "cannot be reached"),
+    (BASE + "[obstacles]\ncircles = [[5.0, 5.0, -1.0]]\n", "obstacles.circles[0]", "radius"),
+    (BASE + "[obstacles]\ncircles = [[5.0, 5.0, nan]]\n", "obstacles.circles[0]", "radius"),
+    (BASE.replace("width_m = 10.0", "width_m = 10.0\ncell_size_m = 3.0"), "arena.width_m",
+     "whole number"),
+    (BASE + "[robot]\nradius_m = 0.6\n", "robot.radius_m", "does not fit"),
+    (BASE + "[robot]\nradius_m = -0.3\n", "robot.radius_m", "positive"),
+    (BASE.replace('start = [1, 1]', 'start = "a"'), "start", "expected list"),
+    ("steps_per_episode = 0\n" + BASE, "steps_per_episode", "positive"),
+    ("name = \n", "TOML", "cannot be parsed"),
+]
+
+
+@pytest.mark.parametrize(("body", "field", "words"), BAD)
+def test_bad_scenarios_name_file_field_and_fix(tmp_path, body, field, words):
+    path = write(tmp_path, body)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    err = info.value
+    assert err.source == str(path)
+    assert err.field == field, str(err)
+    assert words in str(err)
+    assert "Fix: " in str(err) and err.fix
+
+
+def test_bad_map_files_raise_through_the_scenario_loader(tmp_path):
+    (tmp_path / "m.map").write_text("type octile\nheight 2\nwidth 3\nmap\n...\n..?\n")
+    with pytest.raises(ScenarioError, match="unknown map character"):
+        load_scenario(write(tmp_path, 'start = [0, 0]\ngoal = [2, 1]\n[arena]\nmap = "m.map"\n'))
+
+
+def test_unknown_name_lists_the_builtins():
+    with pytest.raises(ScenarioError, match="paper-50"):
+        resolve_scenario("paper-51")
+
+
+def test_map_start_goal_use_the_movingai_frame():
+    sc = resolve_scenario(str(MAPS / "arena.map"), (3, 43), (45, 5))
+    assert sc.start == (3, 5) and sc.goal == (45, 43)
+    with pytest.raises(ScenarioError) as info:
+        resolve_scenario(str(MAPS / "arena.map"), (0, 0), (45, 5))
+    assert info.value.field == "--start 0,0"
+
+
+def test_robot_too_large_for_a_cell_is_a_clear_error():
+    sc = Scenario(name="t", width_m=10, height_m=10, start=(1, 1), goal=(8, 8),
+                  robot=Robot(radius_m=0.5))
+    with pytest.raises(ScenarioError, match="does not fit"):
+        validate(sc)

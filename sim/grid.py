@@ -14,6 +14,7 @@ Entering the goal gives ``goal`` and terminates; any other move gives ``step``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -35,27 +36,44 @@ def _segment_distance(px: np.ndarray, py: np.ndarray, ax: np.ndarray, ay: np.nda
 def passable_moves(sc: Scenario, blocked: np.ndarray) -> np.ndarray:
     """bool[nS, 4]: which moves succeed, given the inflated occupancy ``blocked[ny, nx]``."""
     nx, ny = sc.nx, sc.ny
-    disc = Discretiser.from_scenario(sc)
-    xy = disc.centres()
+    xy = Discretiser.from_scenario(sc).centres()
     iy, ix = np.divmod(np.arange(nx * ny), nx)
     free = ~blocked.ravel()
     ok = np.zeros((nx * ny, 4), dtype=bool)
-    circ = (np.array([(o.x_m, o.y_m, o.radius_m) for o in sc.obstacles])
-            if sc.obstacles else np.zeros((0, 3)))
-    infl = sc.robot.inflation_m
     for a, (dx, dy) in enumerate(ACTION_DELTAS):
         tx, ty = ix + dx, iy + dy
         inside = (tx >= 0) & (tx < nx) & (ty >= 0) & (ty < ny)
         t = np.where(inside, ty * nx + tx, 0)
-        good = inside & free & free[t]
-        if len(circ):
-            bx = xy[:, :1] + dx * sc.cell_size_m
-            by = xy[:, 1:] + dy * sc.cell_size_m
-            d = _segment_distance(circ[None, :, 0], circ[None, :, 1], xy[:, :1], xy[:, 1:],
-                                  bx, by)
-            good &= ~(d < circ[None, :, 2] + infl).any(axis=1)
-        ok[:, a] = good
+        ok[:, a] = inside & free & free[t]
+    if sc.obstacles:
+        circ = np.array([(o.x_m, o.y_m, o.radius_m) for o in sc.obstacles])
+        reach = circ[:, 2] + sc.robot.inflation_m
+        # a segment of length c starting at a centre can only come within `reach`
+        # of a circle if that centre is within reach + c: test those pairs only
+        d_centre = np.hypot(xy[:, :1] - circ[None, :, 0], xy[:, 1:] - circ[None, :, 1])
+        s_idx, k_idx = np.nonzero(d_centre < reach[None, :] + sc.cell_size_m)
+        p = xy[s_idx]
+        for a, (dx, dy) in enumerate(ACTION_DELTAS):
+            end = p + np.array([dx, dy]) * sc.cell_size_m
+            d = _segment_distance(circ[k_idx, 0], circ[k_idx, 1], p[:, 0], p[:, 1],
+                                  end[:, 0], end[:, 1])
+            ok[s_idx[d < reach[k_idx]], a] = False
     return ok
+
+
+@lru_cache(maxsize=16)
+def rasterise(sc: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(blocked[ny,nx], passable[nS,4], distance_to_goal[nS]) of a scenario, read-only.
+
+    Cached because validation and model building both need it; a Scenario is
+    frozen and hashable, so the cache key is the whole problem.
+    """
+    blocked = Discretiser.from_scenario(sc).occupancy(sc)
+    ok = passable_moves(sc, blocked)
+    dist = bfs_distances(ok, sc.nx, sc.goal)
+    for arr in (blocked, ok, dist):
+        arr.setflags(write=False)
+    return blocked, ok, dist
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,8 +112,7 @@ class TabularModel:
 def build_model(sc: Scenario) -> TabularModel:
     """Rasterise ``sc`` and export its grid dynamics. Assumes ``sc`` is validated."""
     disc = Discretiser.from_scenario(sc)
-    blocked = disc.occupancy(sc)
-    ok = passable_moves(sc, blocked)
+    blocked, ok, dist = rasterise(sc)
     n = disc.n_states
     states = np.arange(n)
     nx = sc.nx
@@ -109,9 +126,8 @@ def build_model(sc: Scenario) -> TabularModel:
     terminal = np.zeros(n, dtype=bool)
     terminal[goal] = True
     next_state[goal] = goal
-    dist = bfs_distances(ok, nx, sc.goal)
     start_states = np.flatnonzero(dist > 0).astype(np.int32)
-    for arr in (next_state, reward, terminal, dist, start_states, blocked):
+    for arr in (next_state, reward, terminal, start_states):
         arr.setflags(write=False)
     coords = disc.centres()
     coords.setflags(write=False)

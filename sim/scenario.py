@@ -155,12 +155,10 @@ def validate(sc: Scenario, names: dict[str, str] | None = None) -> None:
     user gave them on the command line, in the Moving AI frame).
     """
     names = names or {"start": "start", "goal": "goal"}
-    from sim.discretiser import Discretiser
-    from sim.planning import bfs_distances
+    from sim.grid import rasterise  # grid builds on scenario: import late
 
     validate_shape(sc)
-    disc = Discretiser.from_scenario(sc)
-    blocked = disc.occupancy(sc)
+    blocked, _, dist = rasterise(sc)
     for fld, (ix, iy) in (("start", sc.start), ("goal", sc.goal)):
         if blocked[iy, ix]:
             raise ScenarioError(sc.source, names[fld], f"cell ({ix}, {iy}) (x right, y up) is "
@@ -168,9 +166,6 @@ def validate(sc: Scenario, names: dict[str, str] | None = None) -> None:
                                 f"(radius {sc.robot.radius_m} m + clearance "
                                 f"{sc.robot.clearance_m} m overlaps an obstacle, map cell or "
                                 "wall)", "move it to a free cell or move the obstacle")
-    from sim.grid import passable_moves
-
-    dist = bfs_distances(passable_moves(sc, blocked), sc.nx, sc.goal)
     if dist[sc.start[1] * sc.nx + sc.start[0]] < 0:
         raise ScenarioError(sc.source, names["goal"], "cannot be reached from the start by the "
                             "inflated robot",

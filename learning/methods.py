@@ -1,0 +1,223 @@
+"""The learning methods as frozen config dataclasses (paper defaults) and their registry.
+
+A config is pure data: which update rule (``kind``, one of :mod:`learning.kinds`)
+and its hyper-parameters with units/meaning in the field comments. The rules
+themselves live in the njit modules (:mod:`learning.rules`, :mod:`learning.rbf`,
+:mod:`learning.mlp`, :mod:`learning.shaping`), shared by both drivers.
+``params()`` packs the fields into the float64 vector those rules read, with the
+slot layout documented in :mod:`learning.kinds`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from learning import kinds as K
+
+
+@dataclass(frozen=True)
+class MethodConfig:
+    """Fields every method has. Episodes are 0-based; rewards are the env's."""
+
+    name: ClassVar[str] = "?"  # paper/display name
+    cli: ClassVar[str] = "?"  # CLI name, the key in METHODS
+    kind: ClassVar[int] = -1  # update-rule family, see learning.kinds
+
+    eps: float = 0.1  # probability of a uniformly random action (epsilon-greedy)
+    alpha: float = 0.1  # Q learning rate (step size on the TD error)
+    gamma: float = 0.95  # discount per step
+
+    def __post_init__(self) -> None:
+        for f, lo, hi in (("eps", 0.0, 1.0), ("alpha", 0.0, 1.0), ("gamma", 0.0, 1.0)):
+            v = getattr(self, f)
+            if not (lo <= v <= hi) or (f != "eps" and v == 0.0):
+                raise ValueError(f"{type(self).__name__}.{f} = {v} must be in "
+                                 f"{'[' if f == 'eps' else '('}{lo}, {hi}]")
+
+    def extra(self) -> tuple[float, ...]:
+        """Method-specific params, in the slot order of learning.kinds (from slot 4)."""
+        return ()
+
+    def params(self) -> np.ndarray:
+        """float64[N_PARAMS]: the packed hyper-parameters the njit rules read."""
+        p = np.zeros(K.N_PARAMS)
+        p[K.P_EPS], p[K.P_ALPHA], p[K.P_GAMMA] = self.eps, self.alpha, self.gamma
+        p[K.P_LAMBDA] = getattr(self, "lam", 0.0)
+        ex = self.extra()
+        p[K.P_X0:K.P_X0 + len(ex)] = ex
+        return p
+
+    def fields(self) -> dict[str, object]:
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+
+@dataclass(frozen=True)
+class STQL(MethodConfig):
+    """Tabular Q-learning, Q0 = 0 (Watkins 1989)."""
+
+    name: ClassVar[str] = "ST-QL"
+    cli: ClassVar[str] = "st-ql"
+    kind: ClassVar[int] = K.QL
+    q0: float = 0.0  # initial Q for every (s, a) [reward units]
+
+    def extra(self) -> tuple[float, ...]:
+        return (self.q0,)
+
+
+@dataclass(frozen=True)
+class QOpt(STQL):
+    """Q-learning with optimistic initial values: Q0 = the goal reward."""
+
+    name: ClassVar[str] = "Q-OPT"
+    cli: ClassVar[str] = "q-opt"
+    q0: float = 100.0  # initial Q [reward units]; the paper's goal reward
+
+
+@dataclass(frozen=True)
+class QLambda(MethodConfig):
+    """Tabular Watkins Q(lambda), replacing traces, cut when a non-greedy action is taken.
+
+    Replacing (not accumulating) traces: a bump keeps the agent in its cell, and
+    accumulating traces on such self-loops grow to 1/(1-gamma*lambda) ~ 5.
+    """
+
+    name: ClassVar[str] = "Q(lambda)"
+    cli: ClassVar[str] = "q-lambda"
+    kind: ClassVar[int] = K.QLAMBDA
+    lam: float = 0.85  # trace decay lambda
+    trace_min: float = 1e-8  # traces below this are dropped (keeps the trace list short)
+
+    def extra(self) -> tuple[float, ...]:
+        return (self.trace_min,)
+
+
+@dataclass(frozen=True)
+class RNQL(MethodConfig):
+    """Q from four 2-10-1 sigmoid nets (one per action) over the normalised cell centre.
+
+    Watkins Q(lambda) with gradient traces (accumulating), cut when the action
+    taken is non-greedy. The nets predict Q / q_scale: with Q ~ 100 an unscaled
+    linear output would need weights ~100, which makes the hidden-layer
+    gradients ~100x larger and saturates the sigmoids.
+    """
+
+    name: ClassVar[str] = "RN-QL"
+    cli: ClassVar[str] = "rn-ql"
+    kind: ClassVar[int] = K.RNQL
+    lam: float = 0.85  # trace decay lambda
+    q_scale: float = 100.0  # Q = q_scale * net output [reward units]
+    init_range: float = 0.5  # initial weights ~ U(-init_range, init_range)
+
+    def extra(self) -> tuple[float, ...]:
+        return (self.q_scale,)
+
+
+@dataclass(frozen=True)
+class PFHRL(MethodConfig):
+    """Q-learning + static potential shaping (Ng 1999), Phi = -scale * Manhattan cells to G."""
+
+    name: ClassVar[str] = "PFH-RL"
+    cli: ClassVar[str] = "pfh-rl"
+    kind: ClassVar[int] = K.PFH
+    scale: float = 1.0  # potential per cell of Manhattan distance [reward units / cell]
+
+
+@dataclass(frozen=True)
+class SarsaRS(MethodConfig):
+    """SARSA + shaping Phi = omega * V(z) from an abstract b x b-cell grid (Grzes & Kudenko 2008).
+
+    V over abstract states is learned online by SMDP TD: when the abstract state
+    changes z -> z' after k steps with discounted reward R,
+    V(z) += alpha_v * (R + gamma^k V(z') - V(z)) (V(z') = 0 on termination).
+    """
+
+    name: ClassVar[str] = "SARSA-RS"
+    cli: ClassVar[str] = "sarsa-rs"
+    kind: ClassVar[int] = K.SARSARS
+    block: int = 5  # abstract cell side b [cells]
+    omega: float = 1.0  # potential scale omega [dimensionless]
+    alpha_v: float = 0.1  # abstract-V learning rate
+
+    def extra(self) -> tuple[float, ...]:
+        return (self.omega, self.alpha_v)
+
+
+@dataclass(frozen=True)
+class HAQL(MethodConfig):
+    """Heuristically accelerated Q-learning (Bianchi 2008): act on argmax[Q + xi * H^beta].
+
+    H(s,a) = max_b Q(s,b) - Q(s,a) + eta for the heuristic move a = pi_H(s) (the
+    move that most reduces the Manhattan distance to G), else 0. With xi = beta
+    = 1 the heuristic move always wins the argmax; Q is learned off-policy.
+    """
+
+    name: ClassVar[str] = "HAQL"
+    cli: ClassVar[str] = "haql"
+    kind: ClassVar[int] = K.HAQL
+    xi: float = 1.0  # heuristic weight xi
+    beta_h: float = 1.0  # heuristic exponent beta
+    eta: float = 0.1  # margin of the heuristic move over the current max [reward units]
+
+    def extra(self) -> tuple[float, ...]:
+        return (self.xi, self.beta_h, self.eta)
+
+
+@dataclass(frozen=True)
+class DynaQ(MethodConfig):
+    """Dyna-Q (Sutton 1990): Q-learning + planning from a learned deterministic model."""
+
+    name: ClassVar[str] = "DYNA-Q"
+    cli: ClassVar[str] = "dyna-q"
+    kind: ClassVar[int] = K.DYNA
+    n_planning: int = 5  # simulated Q updates per real step, (s, a) uniform over seen pairs
+
+    def extra(self) -> tuple[float, ...]:
+        return (float(self.n_planning),)
+
+
+@dataclass(frozen=True)
+class RNHQL(MethodConfig):
+    """RNH-QL: Q-table + Gaussian RBF network V_NN giving dynamic potential shaping.
+
+    V_NN(s) = w . phi(s) over k x k Gaussian centres (cell-centred lattice over
+    the arena, width = lattice spacing), trained by TD(lambda) from the first
+    episode with traces cut on non-greedy actions (a non-greedy step leaves w
+    unchanged). From episode ``warmup_episodes`` on, the Q update adds
+    F = gamma * Phi(s') - Phi(s), Phi = V_NN evaluated when a state is entered
+    (Devlin & Kudenko 2012), Phi(goal) = 0.
+
+    The V_NN step is ``beta / mean_s |phi(s)|^2`` (normalised LMS): a constant, so
+    this is plain linear TD(lambda), and with sigma = spacing |phi|^2 ~ pi, so
+    beta = 0.1 moves V(s) by ~10% of the TD error per visit, ~50% with the
+    trace's 1/(1 - gamma*lambda) ~ 5 revisits: stable.
+    """
+
+    name: ClassVar[str] = "RNH-QL"
+    cli: ClassVar[str] = "rnh-ql"
+    kind: ClassVar[int] = K.RNHQL
+    lam: float = 0.85  # V_NN trace decay lambda
+    k: int = 10  # RBF centres per axis (k * k in all)
+    beta: float = 0.1  # V_NN step per unit of mean squared feature norm
+    warmup_episodes: int = 300  # shaping starts at this 0-based episode index
+    freeze_after_episodes: int | None = None  # stop training V_NN from this episode (None: never)
+
+    def extra(self) -> tuple[float, ...]:
+        freeze = math.inf if self.freeze_after_episodes is None else self.freeze_after_episodes
+        return (self.beta, float(self.warmup_episodes), float(freeze))
+
+
+METHODS: dict[str, type[MethodConfig]] = {
+    c.cli: c for c in (STQL, RNQL, PFHRL, SarsaRS, HAQL, RNHQL, QOpt, QLambda, DynaQ)
+}
+
+
+def config_from_fields(cli: str, fields: dict[str, object]) -> MethodConfig:
+    """Rebuild a config from its CLI name and field values (e.g. from a checkpoint)."""
+    if cli not in METHODS:
+        raise ValueError(f"unknown method {cli!r}; known: {', '.join(METHODS)}")
+    return METHODS[cli](**fields)

@@ -1,0 +1,127 @@
+"""PNG figures of a comparison: the paper's curves and the learned routes on the map.
+
+Curves are the median over seeds with an interquartile band, smoothed by a
+moving average (window in the legend) because single-episode steps are noisy.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Circle as CirclePatch  # noqa: E402
+
+from sim.grid import TabularModel  # noqa: E402
+from sim.planning import bfs_route  # noqa: E402
+from sim.scenario import Scenario  # noqa: E402
+
+COLOURS = plt.get_cmap("tab10").colors
+
+
+def _smooth(y: np.ndarray, window: int) -> np.ndarray:
+    if window <= 1 or y.shape[-1] < window:
+        return y
+    kernel = np.ones(window) / window
+    return np.apply_along_axis(lambda r: np.convolve(r, kernel, mode="valid"), -1, y)
+
+
+def _groups(results: dict[str, Any]) -> dict[tuple[str, str], list[dict[str, Any]]]:
+    out: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in results["runs"]:
+        out.setdefault((r["method"], r["world"]), []).append(r)
+    return out
+
+
+def curve_figure(results: dict[str, Any], key: str, ylabel: str, path: Path,
+                 window: int = 25, logy: bool = False) -> None:
+    fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
+    for i, ((method, world), runs) in enumerate(_groups(results).items()):
+        y = _smooth(np.array([r[key] for r in runs], dtype=float), window)
+        x = np.arange(y.shape[1]) + (window // 2 if y.shape[1] < len(runs[0][key]) else 0)
+        q25, med, q75 = np.percentile(y, [25, 50, 75], axis=0)
+        label = method if len({w for _, w in _groups(results)}) == 1 else f"{method} ({world})"
+        colour = COLOURS[i % len(COLOURS)]
+        ax.plot(x, med, color=colour, lw=1.4, label=label,
+                ls="-" if world == "grid" else "--")
+        ax.fill_between(x, q25, q75, color=colour, alpha=0.15, lw=0)
+    ax.set_xlabel("episode")
+    ax.set_ylabel(ylabel)
+    if logy:
+        ax.set_yscale("log")
+    ax.set_title(f"{results['scenario']['name']}: {ylabel} (median, IQR over seeds; "
+                 f"moving average {window})", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def draw_map(ax: plt.Axes, sc: Scenario, model: TabularModel) -> None:
+    ax.imshow(model.blocked, origin="lower", cmap="Greys", alpha=0.25,
+              extent=(0, sc.width_m, 0, sc.height_m), vmin=0, vmax=1.5)
+    for o in sc.obstacles:
+        ax.add_patch(CirclePatch((o.x_m, o.y_m), o.radius_m, color="#464a54", lw=0))
+    c = sc.cell_size_m
+    for ix, iy in sc.blocked_cells:
+        ax.add_patch(plt.Rectangle((ix * c, iy * c), c, c, color="#464a54", lw=0))
+    for cell, colour, label in ((sc.start, "#2ea043", "S"), (sc.goal, "#e6aa14", "G")):
+        x, y = (cell[0] + 0.5) * c, (cell[1] + 0.5) * c
+        ax.plot(x, y, "o", color=colour, ms=8, zorder=5)
+        ax.annotate(label, (x, y), xytext=(4, 4), textcoords="offset points", fontsize=9,
+                    weight="bold")
+    ax.set_xlim(0, sc.width_m)
+    ax.set_ylim(0, sc.height_m)
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
+def routes_figure(results: dict[str, Any], sc: Scenario, model: TabularModel,
+                  path: Path) -> None:
+    """One panel per method (and world): seed-0's final greedy route against the BFS optimum."""
+    groups = _groups(results)
+    n = len(groups)
+    cols = min(n, 3)
+    rows = int(np.ceil(n / cols))
+    fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 4 * rows), dpi=100, squeeze=False)
+    optimum = model.coords[bfs_route(model.next_state, model.distance_to_goal, model.start)]
+    for ax, ((method, world), runs) in zip(axes.ravel(), groups.items(), strict=False):
+        draw_map(ax, sc, model)
+        ax.plot(optimum[:, 0], optimum[:, 1], color="#888888", lw=3, alpha=0.5,
+                label=f"BFS optimum ({len(optimum) - 1})")
+        run = min(runs, key=lambda r: r["seed"])
+        route = model.coords[np.asarray(run["final_route"], dtype=int)]
+        length = run["final_route_length"]
+        ax.plot(route[:, 0], route[:, 1], color="#d9342b", lw=1.6,
+                label=f"greedy route ({'G not reached' if length < 0 else length})")
+        ax.set_title(f"{method} ({world}), seed {run['seed']}", fontsize=9)
+        ax.legend(fontsize=7, loc="lower right")
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def time_figure(results: dict[str, Any], path: Path) -> None:
+    """Execution time per episode (the paper's Fig. 10), median over seeds."""
+    curve_figure(results, "wall_time_per_episode_s", "wall time per episode [s]", path,
+                 window=50, logy=True)
+
+
+def all_figures(results: dict[str, Any], sc: Scenario, model: TabularModel,
+                out_dir: Path) -> list[Path]:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = [out_dir / "steps_per_episode.png", out_dir / "reward_per_step.png",
+             out_dir / "time_per_episode.png", out_dir / "routes.png"]
+    curve_figure(results, "steps_per_episode", "steps per episode", paths[0], logy=True)
+    curve_figure(results, "reward_per_step", "average cumulative reward per step", paths[1])
+    time_figure(results, paths[2])
+    routes_figure(results, sc, model, paths[3])
+    return paths

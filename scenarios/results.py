@@ -1,0 +1,138 @@
+"""The ``results.json`` contract, its summary statistics, ``summary.md`` and atomic writes.
+
+``results.json`` (a contract for scripts)::
+
+    {
+      "rnhql_version": str, "scenario": {name, source, size_cells, start, goal},
+      "world": "grid" | "physics" | "grid,physics", "episodes": int,
+      "optimal_route_length": int,            # BFS moves S -> G
+      "runs": [ {"method", "method_name", "seed", "world", "config",
+                 "episodes_to_optimal" (int | null), "final_route_length" (int, -1 = G not
+                 reached), "final_route_optimal" (bool), "success_rate", "wall_time_s",
+                 "env_steps", "optimal_action_fraction", "steps_per_episode" [int],
+                 "reward_per_step" [float], "wall_time_per_episode_s" [float],
+                 "final_route" [state], ...} ],
+      "summary": {method: {world: {figure: {"median", "q25", "q75"}, ...,
+                                   "optimal_route_fraction", "seeds"}}}
+    }
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+SUMMARY_FIGURES = ("episodes_to_optimal", "final_route_length", "success_rate", "wall_time_s",
+                   "env_steps", "optimal_action_fraction")
+
+
+def atomic_write_text(path: str | Path, text: str) -> None:
+    """Write via a temp file in the same directory and ``os.replace``: never half a file."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _stats(values: list[float]) -> dict[str, float | None]:
+    """Median and quartiles; ``None`` entries (never reached) count as +infinity."""
+    arr = np.array([math.inf if v is None else float(v) for v in values])
+    if arr.size == 0:
+        return {"median": None, "q25": None, "q75": None}
+    q25, med, q75 = np.percentile(arr, [25, 50, 75], method="linear") if np.isfinite(
+        arr).all() else np.quantile(arr, [0.25, 0.5, 0.75], method="inverted_cdf")
+    return {k: (None if not math.isfinite(v) else float(v))
+            for k, v in (("median", med), ("q25", q25), ("q75", q75))}
+
+
+def summarise(runs: list[dict[str, Any]]) -> dict[str, dict[str, dict[str, Any]]]:
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
+    for r in runs:
+        groups[(r["method"], r["world"])].append(r)
+    out: dict[str, dict[str, dict[str, Any]]] = defaultdict(dict)
+    for (method, world), rs in groups.items():
+        entry: dict[str, Any] = {f: _stats([r[f] for r in rs]) for f in SUMMARY_FIGURES}
+        entry["optimal_route_fraction"] = float(np.mean([r["final_route_optimal"] for r in rs]))
+        entry["seeds"] = len(rs)
+        out[method][world] = entry
+    return dict(out)
+
+
+def _fmt(stat: dict[str, float | None], digits: int = 0) -> str:
+    def one(v: float | None) -> str:
+        return "never" if v is None else f"{v:.{digits}f}"
+    return f"{one(stat['median'])} [{one(stat['q25'])}, {one(stat['q75'])}]"
+
+
+def summary_markdown(results: dict[str, Any], method_order: list[str] | None = None) -> str:
+    """A human report: one row per method and world, then the honest verdict on RNH-QL."""
+    summ = results["summary"]
+    methods = method_order or list(summ)
+    lines = [f"# {results['scenario']['name']}: {results['episodes']} episodes, "
+             f"world {results['world']}",
+             "",
+             f"Optimal route S -> G: {results['optimal_route_length']} moves (BFS). "
+             "Figures are median [25th, 75th percentile] over seeds; `never` = "
+             "the greedy route from S never became optimal.",
+             "",
+             "| method | world | seeds | final route optimal | episodes to optimal | "
+             "final route length | success rate | optimal actions | wall time (s) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for m in methods:
+        for world, e in summ.get(m, {}).items():
+            lines.append(
+                f"| {m} | {world} | {e['seeds']} | {e['optimal_route_fraction']:.0%} | "
+                f"{_fmt(e['episodes_to_optimal'])} | {_fmt(e['final_route_length'])} | "
+                f"{_fmt(e['success_rate'], 2)} | {_fmt(e['optimal_action_fraction'], 2)} | "
+                f"{_fmt(e['wall_time_s'], 2)} |")
+    lines += ["", *verdict(results)]
+    return "\n".join(lines) + "\n"
+
+
+def _score(e: dict[str, Any]) -> tuple[float, float]:
+    """Rank: more seeds optimal first, then fewer median episodes to optimal."""
+    med = e["episodes_to_optimal"]["median"]
+    return (-e["optimal_route_fraction"], math.inf if med is None else med)
+
+
+def verdict(results: dict[str, Any]) -> list[str]:
+    """Say plainly whether RNH-QL beat every baseline, per world."""
+    summ = results["summary"]
+    lines = []
+    worlds = sorted({w for m in summ.values() for w in m})
+    for world in worlds:
+        ranked = sorted((_score(e[world]), m) for m, e in summ.items() if world in e)
+        if not ranked:
+            continue
+        best = ranked[0][1]
+        if "rnh-ql" not in summ or world not in summ["rnh-ql"]:
+            lines.append(f"- {world}: best method {best}.")
+            continue
+        if best == "rnh-ql" or ranked[0][0] == _score(summ["rnh-ql"][world]):
+            lines.append(f"- {world}: RNH-QL ranks first (most seeds optimal, then fewest "
+                         "episodes to optimal).")
+        else:
+            pos = [m for _, m in ranked].index("rnh-ql") + 1
+            lines.append(f"- {world}: RNH-QL does NOT win: it ranks {pos} of {len(ranked)}; "
+                         f"{best} is best (most seeds optimal, then fewest episodes to optimal).")
+    return lines
+
+
+def write_results(out_dir: str | Path, results: dict[str, Any],
+                  method_order: list[str] | None = None) -> None:
+    out = Path(out_dir)
+    atomic_write_text(out / "results.json", json.dumps(results, indent=1))
+    atomic_write_text(out / "summary.md", summary_markdown(results, method_order))

@@ -12,13 +12,13 @@ from typing import Any
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.patches import Circle as CirclePatch  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Circle as CirclePatch
 
-from sim.grid import TabularModel  # noqa: E402
-from sim.planning import bfs_route  # noqa: E402
-from sim.scenario import Scenario  # noqa: E402
+from sim.grid import TabularModel
+from sim.planning import bfs_route
+from sim.scenario import Scenario
 
 COLOURS = plt.get_cmap("tab10").colors
 

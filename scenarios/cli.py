@@ -69,6 +69,48 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--goal", help="X,Y goal for a .map (Moving AI frame: y counts down)")
     p.set_defaults(func=cmd_scenarios)
 
+    from scenarios import commands as c
+
+    p = sub.add_parser("train", help="train one method on one scenario")
+    add_scenario_args(p)
+    p.add_argument("--method", default="rnh-ql", help="method (default rnh-ql)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--episodes", type=int, default=3000)
+    p.add_argument("--world", default="grid", help="grid (default) or physics")
+    p.add_argument("--set", action="append", metavar="FIELD=VALUE",
+                   help="override a config field, e.g. --set alpha=0.2 (repeatable)")
+    p.add_argument("--save", metavar="AGENT.npz", help="save the trained agent")
+    p.add_argument("--resume", metavar="AGENT.npz", help="continue a saved grid run")
+    p.add_argument("--json", metavar="FILE", help="also write the run's record as JSON")
+    p.set_defaults(func=c.cmd_train)
+
+    p = sub.add_parser("route", help="print and draw a saved agent's greedy route from S")
+    add_scenario_args(p)
+    p.add_argument("--agent", required=True, metavar="AGENT.npz")
+    p.add_argument("--world", default="grid", help="grid (default) or physics (drive it)")
+    p.add_argument("--png", metavar="FILE", help="also draw the routes to a PNG")
+    p.set_defaults(func=c.cmd_route)
+
+    p = sub.add_parser("compare", help="methods x seeds (x worlds): results, summary, figures")
+    add_scenario_args(p)
+    p.add_argument("--methods", help="comma-separated (default: all nine)")
+    p.add_argument("--seeds", type=int, default=10, help="number of seeds (default 10)")
+    p.add_argument("--seed-base", type=int, default=0, help="first seed (default 0)")
+    p.add_argument("--episodes", type=int, default=3000)
+    p.add_argument("--world", default="grid", help="grid, physics or grid,physics")
+    p.add_argument("--set", action="append", metavar="FIELD=VALUE",
+                   help="override a config field for every method that has it")
+    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument("--backend", default="local", help="local (process pool) or ray")
+    p.add_argument("--address", default=None, help="Ray cluster: auto or ray://host:port")
+    p.add_argument("--out", required=True, metavar="DIR")
+    p.add_argument("--resume", action="store_true", help="skip runs already finished in DIR")
+    p.set_defaults(func=c.cmd_compare)
+
+    p = sub.add_parser("bench", help="measure throughput")
+    p.add_argument("--json", action="store_true")
+    p.add_argument("--physics", action="store_true", help="include the physics benchmark")
+    p.set_defaults(func=c.cmd_bench)
     return parser
 
 
@@ -80,6 +122,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     except InputError as err:
         print(f"rnhql: error: {err}", file=sys.stderr)
         return 2
+    except Exception as err:
+        from learning.checkpoint import CheckpointError
+        from scenarios.backends import SweepError
+
+        if isinstance(err, CheckpointError):
+            print(f"rnhql: error: {err}", file=sys.stderr)
+            return 2
+        if isinstance(err, SweepError):
+            print(f"rnhql: {err}", file=sys.stderr)
+            return 1
+        raise
     except KeyboardInterrupt:
         print("rnhql: interrupted", file=sys.stderr)
         return 130

@@ -65,15 +65,20 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, dict[str, dict[str, Any]]
     out: dict[str, dict[str, dict[str, Any]]] = defaultdict(dict)
     for (method, world), rs in groups.items():
         entry: dict[str, Any] = {f: _stats([r[f] for r in rs]) for f in SUMMARY_FIGURES}
+        # a route that never reaches G has no length: rank it as infinitely long
+        entry["final_route_length"] = _stats([r["final_route_length"] if
+                                              r["final_route_length"] >= 0 else None for r in rs])
+        entry["reached_goal_fraction"] = float(np.mean([r["final_route_length"] >= 0
+                                                        for r in rs]))
         entry["optimal_route_fraction"] = float(np.mean([r["final_route_optimal"] for r in rs]))
         entry["seeds"] = len(rs)
         out[method][world] = entry
     return dict(out)
 
 
-def _fmt(stat: dict[str, float | None], digits: int = 0) -> str:
+def _fmt(stat: dict[str, float | None], digits: int = 0, missing: str = "never") -> str:
     def one(v: float | None) -> str:
-        return "never" if v is None else f"{v:.{digits}f}"
+        return missing if v is None else f"{v:.{digits}f}"
     return f"{one(stat['median'])} [{one(stat['q25'])}, {one(stat['q75'])}]"
 
 
@@ -86,7 +91,8 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
              "",
              f"Optimal route S -> G: {results['optimal_route_length']} moves (BFS). "
              "Figures are median [25th, 75th percentile] over seeds; `never` = "
-             "the greedy route from S never became optimal.",
+             "the greedy route from S never became optimal; `no G` = the final greedy "
+             "route from S does not reach the goal.",
              "",
              "| method | world | seeds | final route optimal | episodes to optimal | "
              "final route length | success rate | optimal actions | wall time (s) |",
@@ -95,39 +101,48 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
         for world, e in summ.get(m, {}).items():
             lines.append(
                 f"| {m} | {world} | {e['seeds']} | {e['optimal_route_fraction']:.0%} | "
-                f"{_fmt(e['episodes_to_optimal'])} | {_fmt(e['final_route_length'])} | "
+                f"{_fmt(e['episodes_to_optimal'])} | "
+                f"{_fmt(e['final_route_length'], missing='no G')} | "
                 f"{_fmt(e['success_rate'], 2)} | {_fmt(e['optimal_action_fraction'], 2)} | "
                 f"{_fmt(e['wall_time_s'], 2)} |")
     lines += ["", *verdict(results)]
     return "\n".join(lines) + "\n"
 
 
-def _score(e: dict[str, Any]) -> tuple[float, float]:
-    """Rank: more seeds optimal first, then fewer median episodes to optimal."""
+RANKING = ("most seeds optimal, then fewest episodes to optimal, then most seeds reaching G, "
+           "then highest training success rate")
+
+
+def _score(e: dict[str, Any]) -> tuple[float, float, float, float]:
+    """Lexicographic rank, see RANKING (lower is better)."""
     med = e["episodes_to_optimal"]["median"]
-    return (-e["optimal_route_fraction"], math.inf if med is None else med)
+    return (-e["optimal_route_fraction"], math.inf if med is None else med,
+            -e["reached_goal_fraction"], -(e["success_rate"]["median"] or 0.0))
 
 
 def verdict(results: dict[str, Any]) -> list[str]:
-    """Say plainly whether RNH-QL beat every baseline, per world."""
+    """Say plainly, per world, whether RNH-QL beat every other method."""
     summ = results["summary"]
     lines = []
     worlds = sorted({w for m in summ.values() for w in m})
     for world in worlds:
-        ranked = sorted((_score(e[world]), m) for m, e in summ.items() if world in e)
-        if not ranked:
-            continue
-        best = ranked[0][1]
-        if "rnh-ql" not in summ or world not in summ["rnh-ql"]:
-            lines.append(f"- {world}: best method {best}.")
-            continue
-        if best == "rnh-ql" or ranked[0][0] == _score(summ["rnh-ql"][world]):
-            lines.append(f"- {world}: RNH-QL ranks first (most seeds optimal, then fewest "
-                         "episodes to optimal).")
+        scored = {m: _score(e[world]) for m, e in summ.items() if world in e}
+        best = min(scored.values())
+        leaders = sorted(m for m, sc in scored.items() if sc == best)
+        if all(summ[m][world]["optimal_route_fraction"] == 0 for m in scored):
+            lines.append(f"- {world}: no method's final greedy route from S is optimal in any "
+                         f"seed within {results['episodes']} episodes.")
+        if "rnh-ql" not in scored:
+            lines.append(f"- {world}: best: {', '.join(leaders)}.")
+        elif leaders == ["rnh-ql"]:
+            lines.append(f"- {world}: RNH-QL ranks first ({RANKING}).")
+        elif "rnh-ql" in leaders:
+            lines.append(f"- {world}: RNH-QL ties for first with "
+                         f"{', '.join(m for m in leaders if m != 'rnh-ql')}.")
         else:
-            pos = [m for _, m in ranked].index("rnh-ql") + 1
-            lines.append(f"- {world}: RNH-QL does NOT win: it ranks {pos} of {len(ranked)}; "
-                         f"{best} is best (most seeds optimal, then fewest episodes to optimal).")
+            pos = 1 + sum(sc < scored["rnh-ql"] for sc in scored.values())
+            lines.append(f"- {world}: RNH-QL does NOT win: it ranks {pos} of {len(scored)}; "
+                         f"best: {', '.join(leaders)} ({RANKING}).")
     return lines
 
 

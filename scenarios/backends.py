@@ -1,0 +1,149 @@
+"""Where the runs of a sweep execute: a local process pool, or a Ray cluster.
+
+A backend takes specs and returns their records in spec order; ``on_result``
+sees each record as soon as it finishes so the caller can persist it. A run
+that fails (bad config, crashed worker) does not lose the others: the backend
+finishes the rest and raises :class:`SweepError` naming every failed run's
+parameters.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import Any
+
+from scenarios.experiment import RunSpec, run_one
+from sim.errors import InputError
+
+OnResult = Callable[[dict[str, Any]], None] | None
+
+
+class SweepError(RuntimeError):
+    """Some runs failed; ``failures`` holds (spec, error message) pairs."""
+
+    def __init__(self, failures: list[tuple[RunSpec, str]], finished: int) -> None:
+        self.failures = failures
+        lines = [f"{len(failures)} run(s) failed ({finished} finished and saved):"]
+        lines += [f"  {spec.key}: {msg}" for spec, msg in failures]
+        super().__init__("\n".join(lines))
+
+
+class BackendError(InputError):
+    """A backend that cannot start (e.g. Ray not installed)."""
+
+
+class Progress:
+    """A one-line progress bar on stderr (no dependency; silent when not a TTY)."""
+
+    def __init__(self, total: int, enabled: bool | None = None) -> None:
+        self.total, self.done, self.t0 = total, 0, time.perf_counter()
+        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+
+    def update(self, label: str) -> None:
+        self.done += 1
+        if not self.enabled:
+            return
+        elapsed = time.perf_counter() - self.t0
+        eta = elapsed / self.done * (self.total - self.done)
+        bar = "#" * int(30 * self.done / self.total)
+        sys.stderr.write(f"\r[{bar:<30}] {self.done}/{self.total} {label:<30} "
+                         f"{elapsed:6.1f}s, ~{eta:5.1f}s left")
+        if self.done == self.total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+
+
+class _Collector:
+    def __init__(self, specs: Sequence[RunSpec], on_result: OnResult,
+                 progress: Progress | None) -> None:
+        self.specs, self.on_result, self.progress = specs, on_result, progress
+        self.records: list[dict[str, Any] | None] = [None] * len(specs)
+        self.failures: list[tuple[RunSpec, str]] = []
+
+    def ok(self, i: int, rec: dict[str, Any]) -> None:
+        self.records[i] = rec
+        if self.on_result is not None:
+            self.on_result(rec)
+        self._tick(i)
+
+    def failed(self, i: int, exc: BaseException) -> None:
+        self.failures.append((self.specs[i], f"{type(exc).__name__}: {exc}"))
+        self._tick(i, " FAILED")
+
+    def _tick(self, i: int, suffix: str = "") -> None:
+        if self.progress is not None:
+            sp = self.specs[i]
+            self.progress.update(f"{sp.method} {sp.world} s{sp.seed}{suffix}")
+
+    def result(self) -> list[dict[str, Any]]:
+        done = [r for r in self.records if r is not None]
+        if self.failures:
+            raise SweepError(self.failures, len(done))
+        return done
+
+
+def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = None,
+              progress: Progress | None = None) -> list[dict[str, Any]]:
+    """Run specs in ``jobs`` worker processes (in this process when ``jobs == 1``)."""
+    col = _Collector(specs, on_result, progress)
+    if jobs <= 1 or len(specs) <= 1:
+        for i, spec in enumerate(specs):
+            try:
+                rec = run_one(spec)
+            except InputError:
+                raise
+            except Exception as exc:  # keep going: report with its parameters at the end
+                col.failed(i, exc)
+            else:
+                col.ok(i, rec)
+        return col.result()
+    with ProcessPoolExecutor(max_workers=jobs) as pool:
+        futures = {pool.submit(run_one, spec): i for i, spec in enumerate(specs)}
+        for fut in as_completed(futures):
+            try:
+                rec = fut.result()
+            except Exception as exc:  # includes BrokenProcessPool from a crashed worker
+                col.failed(futures[fut], exc)
+            else:
+                col.ok(futures[fut], rec)
+    return col.result()
+
+
+def run_ray(specs: Sequence[RunSpec], address: str | None = None, num_cpus: int | None = None,
+            on_result: OnResult = None, progress: Progress | None = None) -> list[dict[str, Any]]:
+    """Run each spec as a Ray task (one CPU each) on a cluster or a local runtime.
+
+    ``address``: ``None`` starts a local runtime (``num_cpus`` CPUs), ``"auto"``
+    joins the cluster this machine belongs to, ``"ray://host:port"`` connects a
+    client. Every node needs rnhql installed (``pip install rnhql[ray]``).
+    """
+    try:
+        import ray
+    except ImportError:
+        raise BackendError("command line", "--backend ray", "Ray is not installed",
+                           "pip install 'rnhql[ray]' (or pip install ray)") from None
+    started_here = not ray.is_initialized()
+    if started_here:
+        ray.init(address=address, num_cpus=num_cpus if address is None else None,
+                 include_dashboard=False, log_to_driver=False, configure_logging=False)
+    try:
+        task = ray.remote(num_cpus=1, max_retries=1)(run_one)
+        refs = {task.remote(spec): i for i, spec in enumerate(specs)}
+        col = _Collector(specs, on_result, progress)
+        pending = list(refs)
+        while pending:
+            ready, pending = ray.wait(pending, num_returns=1)
+            i = refs[ready[0]]
+            try:
+                rec = ray.get(ready[0])
+            except Exception as exc:  # RayTaskError wraps the worker's exception
+                col.failed(i, getattr(exc, "cause", None) or exc)
+            else:
+                col.ok(i, rec)
+        return col.result()
+    finally:
+        if started_here:
+            ray.shutdown()

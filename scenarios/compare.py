@@ -1,0 +1,96 @@
+"""``rnhql compare``: methods x seeds (x worlds) on one scenario -> results, summary, figures.
+
+Partial progress survives: every finished run is appended to
+``DIR/runs.partial.jsonl`` as it arrives, and ``--resume DIR`` skips the runs
+whose key is already there. ``results.json`` is written (atomically) only
+when the sweep is complete.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Sequence
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+from scenarios.experiment import RunSpec, load
+from scenarios.results import summarise, write_results
+
+ALL_METHODS = ("rnh-ql", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt", "q-lambda",
+               "dyna-q")
+PARTIAL = "runs.partial.jsonl"
+
+
+def version() -> str:
+    try:
+        return metadata.version("rnhql")
+    except metadata.PackageNotFoundError:  # running from a source tree
+        return "0+unknown"
+
+
+def make_specs(scenario: str, methods: Sequence[str], seeds: Sequence[int], episodes: int,
+               worlds: Sequence[str], overrides: tuple[tuple[str, float], ...] = (),
+               start=None, goal=None) -> list[RunSpec]:
+    return [RunSpec(scenario=scenario, method=m, seed=s, episodes=episodes, world=w,
+                    overrides=overrides, start=start, goal=goal)
+            for w in worlds for m in methods for s in seeds]
+
+
+def assemble(specs: Sequence[RunSpec], runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """The results.json payload for finished runs, in spec order."""
+    spec0 = specs[0]
+    sc, model = load(spec0.scenario, spec0.start, spec0.goal)
+    order = {s.key: i for i, s in enumerate(specs)}
+    runs = sorted(runs, key=lambda r: order.get(r["key"], len(order)))
+    worlds = sorted({s.world for s in specs}, key=["grid", "physics"].index)
+    return {
+        "rnhql_version": version(),
+        "scenario": {"name": sc.name, "source": sc.source, "size_cells": [sc.nx, sc.ny],
+                     "start": list(sc.start), "goal": list(sc.goal)},
+        "world": ",".join(worlds),
+        "episodes": spec0.episodes,
+        "optimal_route_length": model.optimal_route_length,
+        "runs": runs,
+        "summary": summarise(runs),
+    }
+
+
+def read_partial(out_dir: Path) -> dict[str, dict[str, Any]]:
+    """Finished runs of an interrupted sweep, by key (a torn last line is ignored)."""
+    path = out_dir / PARTIAL
+    done: dict[str, dict[str, Any]] = {}
+    if path.exists():
+        for line in path.read_text(encoding="utf-8").splitlines():
+            try:
+                rec = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            done[rec["key"]] = rec
+    return done
+
+
+def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
+              execute: Callable[..., list[dict[str, Any]]], resume: bool = False,
+              figures: bool = True, **execute_kwargs: Any) -> dict[str, Any]:
+    """Run the specs not finished yet with ``execute`` (a backend), then write everything."""
+    from scenarios.plots import all_figures
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    done = read_partial(out_dir) if resume else {}
+    if not resume:
+        (out_dir / PARTIAL).unlink(missing_ok=True)
+    todo = [s for s in specs if s.key not in done]
+    with open(out_dir / PARTIAL, "a", encoding="utf-8") as partial:
+        def save(rec: dict[str, Any]) -> None:
+            partial.write(json.dumps(rec) + "\n")
+            partial.flush()
+
+        new = execute(todo, on_result=save, **execute_kwargs) if todo else []
+    results = assemble(specs, [*done.values(), *new])
+    write_results(out_dir, results, list(dict.fromkeys(s.method for s in specs)))
+    if figures:
+        sc, model = load(specs[0].scenario, specs[0].start, specs[0].goal)
+        all_figures(results, sc, model, out_dir)
+    (out_dir / PARTIAL).unlink(missing_ok=True)
+    return results

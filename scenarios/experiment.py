@@ -1,0 +1,128 @@
+"""Multi-seed experiments: a sweep is a list of independent :class:`RunSpec`.
+
+Each spec is run in a worker process (the scenario is resolved again there:
+specs are small and picklable, models are cached per process), and becomes one
+``runs[]`` record of ``results.json`` (see :mod:`scenarios.results`). The
+backend only decides *where* :func:`run_one` executes, so the local pool and
+Ray produce the same records for the same seeds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterable
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from sim.errors import InputError
+from sim.grid import TabularModel, build_model
+from sim.scenario import Cell, Scenario, resolve_scenario
+
+WORLDS = ("grid", "physics")
+
+
+class ExperimentError(InputError):
+    """A bad method name, config override or world."""
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One training run: everything needed to reproduce it."""
+
+    scenario: str  # built-in name, .toml or .map path
+    method: str  # CLI name, e.g. "rnh-ql"
+    seed: int
+    episodes: int
+    world: str = "grid"
+    overrides: tuple[tuple[str, float], ...] = ()  # config field -> value (sweeps)
+    start: Cell | None = None  # for a .map (Moving AI frame)
+    goal: Cell | None = None
+    test_every: int = 10  # greedy test from S every N episodes
+
+    @property
+    def key(self) -> str:
+        """A stable id of the run, for resuming sweeps and naming recordings."""
+        extra = "".join(f",{k}={v:g}" for k, v in self.overrides)
+        return f"{self.scenario}|{self.world}|{self.method}{extra}|s{self.seed}|e{self.episodes}"
+
+
+@lru_cache(maxsize=8)
+def load(scenario: str, start: Cell | None = None,
+         goal: Cell | None = None) -> tuple[Scenario, TabularModel]:
+    sc = resolve_scenario(scenario, start, goal)
+    return sc, build_model(sc)
+
+
+def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
+    """The method's frozen config with paper defaults, fields overridden by name."""
+    from learning.methods import METHODS
+
+    if method not in METHODS:
+        raise ExperimentError("command line", "--method", f"unknown method {method!r}",
+                              f"use one of: {', '.join(METHODS)}")
+    cls = METHODS[method]
+    names = {f.name: f for f in dataclasses.fields(cls)}
+    kwargs: dict[str, Any] = {}
+    for k, v in overrides:
+        if k not in names:
+            raise ExperimentError("command line", f"--set {k}", f"{method} has no field {k!r}",
+                                  f"use one of: {', '.join(names)}")
+        kwargs[k] = int(v) if names[k].type in (int, "int") else v
+    try:
+        return cls(**kwargs)
+    except (TypeError, ValueError) as exc:
+        raise ExperimentError("command line", "--set", str(exc), "pick a valid value") from None
+
+
+def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dict[str, Any]:
+    """One ``runs[]`` entry of results.json from a finished training result."""
+    steps = np.asarray(result.steps)
+    returns = np.asarray(result.returns)
+    optimal = model.optimal_route_length
+    final_len = int(result.final_route_length)
+    return {
+        "key": spec.key,
+        "method": spec.method,
+        "method_name": type(cfg).name,
+        "seed": spec.seed,
+        "world": spec.world,
+        "config": cfg.fields(),
+        "episodes_to_optimal": (None if result.episodes_to_optimal is None
+                                else int(result.episodes_to_optimal)),
+        "final_route_length": final_len,
+        "final_route_optimal": final_len == optimal,
+        "final_route_excess": None if final_len < 0 else final_len - optimal,
+        "final_route": [int(s) for s in result.final_route],
+        "success_rate": float(np.mean(result.success)),
+        "wall_time_s": float(np.sum(result.wall_time_s)),
+        "env_steps": int(steps.sum()),
+        "optimal_action_fraction": float(result.optimal_action_fraction),
+        "steps_per_episode": steps.astype(int).tolist(),
+        "reward_per_step": np.round(returns / np.maximum(steps, 1), 6).tolist(),
+        "wall_time_per_episode_s": np.round(np.asarray(result.wall_time_s), 9).tolist(),
+        "test_episodes": np.asarray(result.test_episodes).astype(int).tolist(),
+        "test_route_length": np.asarray(result.test_route_length).astype(int).tolist(),
+        **getattr(result, "world_extras", {}),
+    }
+
+
+def run_one(spec: RunSpec) -> dict[str, Any]:
+    """Train one run in this process and return its results.json record."""
+    from learning.train import train_tabular
+
+    sc, model = load(spec.scenario, spec.start, spec.goal)
+    cfg = make_config(spec.method, spec.overrides)
+    rng = np.random.default_rng(spec.seed)
+    if spec.world == "grid":
+        result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every)
+    elif spec.world == "physics":
+        from scenarios.physics_runs import train_physics
+
+        result = train_physics(cfg, sc, model, spec.episodes, rng, test_every=spec.test_every)
+    else:
+        raise ExperimentError("command line", "--world", f"unknown world {spec.world!r}",
+                              f"use one of: {', '.join(WORLDS)}")
+    return run_record(spec, cfg, result, model)

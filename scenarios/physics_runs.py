@@ -1,0 +1,152 @@
+"""Training and driving in the physics world (``--world physics``).
+
+The learner is the step-by-step agent (:mod:`learning.agent`) on
+``rnhql/PhysicsRoute-v0``: the same update rules as the grid kernels, states
+from the discretised pose, bumps from real contacts.
+
+Greedy tests every ``test_every`` episodes evaluate the learned policy on the
+*grid* model of the same scenario (instant, deterministic, and the same states),
+so ``episodes_to_optimal`` means the same thing in both worlds; the final
+greedy route is then also *driven* in physics, which gives the continuous
+figures (metres driven, contacts, sim time to goal).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import sim.envs  # noqa: F401  (registers the ids)
+from learning.agent import StepAgent, make_agent, run_env_episodes
+from learning.geometry import geometry_of
+from learning.train import greedy_test, shortest_fraction
+from sim.grid import TabularModel
+from sim.scenario import Scenario
+
+
+class ContactCounter(gym.Wrapper):
+    """Counts contacts and sim time per episode from the physics env's ``info``."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.contacts: list[int] = []
+        self.sim_time_s: list[float] = []
+        self._c, self._t, self._active = 0, 0.0, False
+
+    def reset(self, **kwargs: Any):
+        self.flush()
+        return self.env.reset(**kwargs)
+
+    def step(self, action: int):
+        obs, r, term, trunc, info = self.env.step(action)
+        self._c += len(info["contacts"])
+        self._t, self._active = info["time_s"], True
+        return obs, r, term, trunc, info
+
+    def flush(self) -> None:
+        """Close the running episode's counts (called by reset, and once at the end)."""
+        if self._active:
+            self.contacts.append(self._c)
+            self.sim_time_s.append(self._t)
+        self._c, self._t, self._active = 0, 0.0, False
+
+
+@dataclass
+class DrivenRoute:
+    """A greedy policy driven from S in physics."""
+
+    states: list[int]
+    trajectory: np.ndarray  # (n, 3) poses of every substep [m, m, rad]
+    reached: bool
+    contacts: int
+    sim_time_s: float
+    metres: float  # path length driven [m]
+
+    def extras(self) -> dict[str, Any]:
+        return {"physics_route_length": len(self.states) - 1 if self.reached else -1,
+                "physics_route_metres": round(self.metres, 4),
+                "physics_route_contacts": self.contacts,
+                "physics_route_sim_time_s": round(self.sim_time_s, 4)}
+
+
+def drive_greedy(agent_or_policy: Any, sc: Scenario, max_steps: int | None = None) -> DrivenRoute:
+    """Drive the greedy policy (a StepAgent or ``policy(s) -> a``) from S in a fresh world."""
+    policy = (agent_or_policy.greedy_action if isinstance(agent_or_policy, StepAgent)
+              else agent_or_policy)
+    env = gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
+                   max_episode_steps=max_steps or sc.steps_per_episode)
+    s, info = env.reset(seed=0)
+    states, traj = [int(s)], [info["trajectory"]]
+    contacts, term, trunc = 0, False, False
+    while not (term or trunc):
+        s, _, term, trunc, info = env.step(policy(int(s)))
+        states.append(int(s))
+        traj.append(info["trajectory"])
+        contacts += len(info["contacts"])
+    pts = np.concatenate(traj)
+    metres = float(np.hypot(*np.diff(pts[:, :2], axis=0).T).sum())
+    env.close()
+    return DrivenRoute(states, pts, bool(term), contacts, float(info["time_s"]), metres)
+
+
+@dataclass(eq=False)
+class PhysicsTrainResult:
+    """The fields :func:`scenarios.experiment.run_record` reads, for a physics run."""
+
+    agent: StepAgent
+    steps: np.ndarray
+    returns: np.ndarray
+    success: np.ndarray
+    shaping_mean: np.ndarray
+    shaping_std: np.ndarray
+    wall_time_s: np.ndarray
+    test_episodes: np.ndarray
+    test_route_length: np.ndarray
+    optimal_length: int
+    final_route: list[int]
+    final_route_length: int
+    optimal_action_fraction: float
+    driven: DrivenRoute
+    world_extras: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def episodes_to_optimal(self) -> int | None:
+        hit = np.flatnonzero(self.test_route_length == self.optimal_length)
+        return int(self.test_episodes[hit[0]]) if len(hit) else None
+
+
+def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
+                  rng: np.random.Generator, test_every: int = 10) -> PhysicsTrainResult:
+    env = ContactCounter(gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
+                                  max_episode_steps=sc.steps_per_episode))
+    agent = make_agent(cfg, geometry_of(model), rng)
+    logs, walls, tests_e, tests_l = [], [], [], []
+    done = 0
+    while done < n_episodes:
+        n = min(test_every, n_episodes - done)
+        t0 = time.perf_counter()
+        logs.append(run_env_episodes(agent, env, n))
+        walls.append(np.full(n, (time.perf_counter() - t0) / n))
+        done += n
+        tests_e.append(done)
+        tests_l.append(greedy_test(agent.state, model)[0])
+    env.flush()
+    env.close()
+    length, route = greedy_test(agent.state, model)
+    driven = drive_greedy(agent, sc)
+    cat = {k: np.concatenate([getattr(lg, k) for lg in logs])
+           for k in ("steps", "returns", "success", "shaping_mean", "shaping_std")}
+    extras = {"contacts_per_episode": env.contacts[-n_episodes:],
+              "sim_time_per_episode_s": np.round(env.sim_time_s[-n_episodes:], 4).tolist(),
+              **driven.extras()}
+    return PhysicsTrainResult(agent=agent, **cat, wall_time_s=np.concatenate(walls),
+                              test_episodes=np.asarray(tests_e),
+                              test_route_length=np.asarray(tests_l),
+                              optimal_length=model.optimal_route_length, final_route=route,
+                              final_route_length=length,
+                              optimal_action_fraction=shortest_fraction(agent.state, model),
+                              driven=driven, world_extras=extras)

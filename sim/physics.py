@@ -1,0 +1,441 @@
+"""The Pymunk world of a scenario: walls, obstacles, blocked cells and a diff-drive disc robot.
+
+Frames and units as in :mod:`sim.scenario`: metres, seconds, radians, x right,
+y up, origin at the arena's bottom-left corner. Top-down: no gravity.
+
+How the robot is driven (Pymunk's ``examples/tank.py``): a kinematic *control
+body* carries the commanded twist; a :class:`pymunk.PivotJoint` and a
+:class:`pymunk.GearJoint` with ``max_bias = 0`` pull the robot's linear and
+angular velocity towards it, each limited by a ``max_force``. Those limits are
+the wheels' traction: ``traction_margin`` times what the wheel acceleration
+limit needs (``m * a_max`` and ``I * 2 a_max / wheel_base``). A command that
+respects the wheel limits is therefore tracked exactly (the robot's velocity
+equals the control body's after every step), while a contact the wheels push
+against holds. There is no global damping: the ground's friction acts through
+the wheels, i.e. through these joints, and the robot is never left undriven.
+
+Why a fresh :class:`pymunk.Space` per world: a copied space does not replay bit
+for bit (pymunk#181); a new world per episode does.
+
+Tunnelling: Chipmunk detects contacts only between overlapping shapes after a
+step, so a disc at speed ``v`` can enter an obstacle by up to ``v * dt``.
+:meth:`PhysicsWorld.cast_free_distance` casts the robot's disc along a straight
+leg once; the drive loop then shortens the one step that would cross the first
+surface so the disc enters it by at most ``contact_depth_m`` -- enough for
+Chipmunk to report the contact, never more: the time-of-impact clamp of a
+continuous collision detector, for one query per leg.
+:meth:`PhysicsWorld.advance` (free driving, for ``DiffDrive``) casts every step.
+
+Hot path: :meth:`PhysicsWorld.drive` calls Chipmunk through pymunk's cffi
+``lib`` directly (``cpSpaceStep``, body getters/setters): the public
+properties build ``Vec2d`` objects and ``Space.step`` does bookkeeping for
+deferred adds/removes and post-step callbacks this world never uses, together
+about 3x the cost of the physics itself. If those internals are missing
+(another pymunk), the public API is used; both give identical numbers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import Any, NamedTuple
+
+import pymunk
+
+from sim.scenario import Scenario
+
+try:  # pymunk's own cffi binding of Chipmunk; see the module docstring
+    from pymunk._chipmunk_cffi import lib as _cp
+except ImportError:  # pragma: no cover - another pymunk layout
+    _cp = None
+
+
+class CollisionType(IntEnum):
+    """Pymunk collision types of the world's shapes."""
+
+    ROBOT = 1
+    OBSTACLE = 2  # circular obstacles
+    WALL = 3  # arena walls
+    CELL = 4  # blocked map cells
+
+
+_MISSING = object()
+STATIC_KINDS = (CollisionType.OBSTACLE, CollisionType.WALL, CollisionType.CELL)
+_ROBOT_CATEGORY = 0b01
+_STATIC_CATEGORY = 0b10
+
+
+@dataclass(frozen=True)
+class PhysicsConfig:
+    """Time stepping, controller tolerances and contact parameters."""
+
+    dt_s: float = 0.1  # physics step [s]
+    substeps: int = 1  # physics steps per control period (commands change once per period)
+    iterations: int = 10  # Chipmunk solver iterations per step
+    tolerance_m: float = 0.02  # a primitive ends this close to the target cell centre [m]
+    tolerance_rad: float = math.radians(2.0)  # ... and to the action's cardinal heading [rad]
+    timeout_s: float = 5.0  # a primitive gives up after this much simulated time [s]
+    #   (checked between legs; a free primitive takes 1.3-2.2 s at the paper robot's limits)
+    contact_depth_m: float = 0.005  # deepest a step may carry the robot into a surface [m]
+    collision_slop_m: float = 0.001  # overlap Chipmunk leaves uncorrected [m]
+    # Fraction of an overlap Chipmunk leaves uncorrected after 1 s [-]. 1.0 = no positional
+    # correction: a correction is a pseudo-velocity stored in the body that pymunk cannot
+    # clear, so it would move a robot placed back on its start cell after a bump. The
+    # time-of-impact clamp bounds every overlap by contact_depth_m instead.
+    collision_bias: float = 1.0
+    traction_margin: float = 2.0  # joint force limits / what the wheel limits need [-]
+    friction: float = 0.5  # robot-to-anything Coulomb friction coefficient [-]
+
+    @property
+    def control_period_s(self) -> float:
+        """Time one command is held [s]."""
+        return self.dt_s * self.substeps
+
+    def validate(self) -> None:
+        for name in ("dt_s", "tolerance_m", "tolerance_rad", "timeout_s", "contact_depth_m",
+                     "traction_margin"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"PhysicsConfig.{name} must be a finite positive number, "
+                                 f"got {v!r}")
+        if not (0.0 <= self.collision_bias <= 1.0):
+            raise ValueError(f"PhysicsConfig.collision_bias must be in [0, 1], "
+                             f"got {self.collision_bias!r}")
+        if not (isinstance(self.substeps, int) and self.substeps >= 1):
+            raise ValueError(f"PhysicsConfig.substeps must be an int >= 1, got {self.substeps!r}")
+        if not (isinstance(self.iterations, int) and self.iterations >= 1):
+            raise ValueError(f"PhysicsConfig.iterations must be an int >= 1, "
+                             f"got {self.iterations!r}")
+
+
+class Contact(NamedTuple):
+    """A contact that began (Pymunk ``begin``) between the robot and static geometry."""
+
+    step: int  # physics step (since the world was built) in which it began
+    kind: CollisionType  # what the robot touched
+    x_m: float  # contact point on the robot's surface [m]
+    y_m: float
+    normal_x: float  # unit normal from the robot towards the other shape
+    normal_y: float
+    depth_m: float  # overlap when detected [m]
+
+
+def merged_boxes(cells: tuple[tuple[int, int], ...]) -> list[tuple[int, int, int]]:
+    """Blocked cells as horizontal runs ``(iy, ix_first, ix_last)``: fewer shapes, same area."""
+    runs: list[tuple[int, int, int]] = []
+    for iy, ix in sorted((iy, ix) for ix, iy in set(cells)):
+        if runs and runs[-1][0] == iy and runs[-1][2] == ix - 1:
+            runs[-1] = (iy, runs[-1][1], ix)
+        else:
+            runs.append((iy, ix, ix))
+    return runs
+
+
+class PhysicsWorld:
+    """One episode's Pymunk world. Build a new one per reset (see the module doc).
+
+    Public state: :attr:`space`, :attr:`robot` (dynamic body), :attr:`control`
+    (kinematic body), :attr:`steps` (physics steps since built), :attr:`contacts`
+    (every contact that began, in order) and :attr:`contact_counts`.
+    """
+
+    def __init__(self, scenario: Scenario, config: PhysicsConfig | None = None,
+                 pose: tuple[float, float, float] | None = None,
+                 cast_cache: dict[tuple[float, ...], float | None] | None = None) -> None:
+        self.scenario = sc = scenario
+        self.config = cfg = config or PhysicsConfig()
+        cfg.validate()
+        self._h = cfg.dt_s
+        self._cast_cache = {} if cast_cache is None else cast_cache
+        rb = sc.robot
+        self.radius_m = rb.radius_m
+        space = pymunk.Space()
+        space.gravity = (0.0, 0.0)
+        space.damping = 1.0
+        space.iterations = cfg.iterations
+        space.collision_slop = cfg.collision_slop_m
+        space.collision_bias = cfg.collision_bias
+        self.space = space
+        self._query_filter = pymunk.ShapeFilter(mask=_STATIC_CATEGORY)
+        space.add(*_static_shapes(sc, space.static_body))
+
+        x, y, th = pose if pose is not None else (*_centre(sc, sc.start), 0.0)
+        moment = pymunk.moment_for_circle(rb.mass_kg, 0.0, rb.radius_m)
+        robot = pymunk.Body(rb.mass_kg, moment)
+        robot.position, robot.angle = (x, y), th
+        shape = pymunk.Circle(robot, rb.radius_m)
+        shape.collision_type = CollisionType.ROBOT
+        shape.friction = cfg.friction
+        shape.elasticity = 0.0
+        shape.filter = pymunk.ShapeFilter(categories=_ROBOT_CATEGORY)
+        control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        control.position, control.angle = (x, y), th
+        pivot = pymunk.PivotJoint(control, robot, (0.0, 0.0), (0.0, 0.0))
+        pivot.max_bias = 0.0  # match velocities only; positions are the controller's job
+        pivot.max_force = cfg.traction_margin * rb.mass_kg * rb.max_wheel_accel_m_s2
+        gear = pymunk.GearJoint(control, robot, 0.0, 1.0)
+        gear.max_bias = 0.0
+        gear.max_force = (cfg.traction_margin * moment * 2.0 * rb.max_wheel_accel_m_s2
+                          / rb.wheel_base_m)
+        space.add(robot, shape, control, pivot, gear)
+        self.robot, self.robot_shape, self.control = robot, shape, control
+        self.pivot, self.gear = pivot, gear
+
+        self.steps = 0
+        self.contacts: list[Contact] = []
+        self.contact_counts = dict.fromkeys(STATIC_KINDS, 0)
+        self._pending: list[tuple[Any, ...]] = []
+        for kind in STATIC_KINDS:
+            space.on_collision(CollisionType.ROBOT, kind, begin=self._on_begin, data=kind)
+        self._bind_fast()
+
+    # ------------------------------------------------------------- internals
+    def _bind_fast(self) -> None:
+        if _cp is not None and hasattr(self.space, "_space") and hasattr(self.robot, "_body"):
+            self._S, self._B, self._C = self.space._space, self.robot._body, self.control._body
+            self._fn = (_cp.cpSpaceStep, _cp.cpBodySetVelocity, _cp.cpBodySetAngularVelocity,
+                        _cp.cpBodyGetPosition, _cp.cpBodyGetAngle, _cp.cpBodyGetVelocity)
+        else:  # pragma: no cover - exercised by tests through use_public_api()
+            self.use_public_api()
+
+    def use_public_api(self) -> None:
+        """Route the hot loop through pymunk's public API (slower; for tests and fallback)."""
+        space, robot, control = self.space, self.robot, self.control
+
+        self._S, self._B, self._C = space, robot, control
+        self._fn = (lambda _s, dt: space.step(dt),
+                    lambda b, v: setattr(b, "velocity", v),
+                    lambda b, w: setattr(b, "angular_velocity", w),
+                    lambda b: b.position, lambda b: b.angle, lambda b: b.velocity)
+
+    def _on_begin(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, kind: Any) -> None:
+        cps = arbiter.contact_point_set
+        pts = cps.points
+        if not pts:  # pragma: no cover - Chipmunk always reports a point for these shapes
+            self._pending.append((kind, math.nan, math.nan, cps.normal.x, cps.normal.y, 0.0))
+            return
+        deepest = min(pts, key=lambda p: p.distance)
+        self._pending.append((kind, deepest.point_a.x, deepest.point_a.y, cps.normal.x,
+                              cps.normal.y, -deepest.distance))
+
+    def _flush_contacts(self) -> None:
+        for kind, x, y, nx, ny, depth in self._pending:
+            self.contacts.append(Contact(self.steps, CollisionType(kind), x, y, nx, ny, depth))
+            self.contact_counts[CollisionType(kind)] += 1
+        self._pending.clear()
+
+    # ------------------------------------------------------------ state
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        """(x [m], y [m], heading [rad]) of the robot; the heading is not wrapped."""
+        p = self._fn[3](self._B)
+        return (p.x, p.y, self._fn[4](self._B))
+
+    @property
+    def velocity(self) -> tuple[float, float, float]:
+        """(vx [m/s], vy [m/s], omega [rad/s]) of the robot."""
+        v = self.robot.velocity
+        return (v.x, v.y, self.robot.angular_velocity)
+
+    @property
+    def time_s(self) -> float:
+        """Simulated time since the world was built [s]."""
+        return self.steps * self._h
+
+    @property
+    def n_contacts(self) -> int:
+        return len(self.contacts)
+
+    def set_twist(self, vx_m_s: float, vy_m_s: float, omega_rad_s: float) -> None:
+        """Command the control body (the robot follows through the joints)."""
+        self._fn[1](self._C, (vx_m_s, vy_m_s))
+        self._fn[2](self._C, omega_rad_s)
+
+    def place(self, x_m: float, y_m: float, heading_rad: float) -> None:
+        """Put the robot (and the control body) at rest at a pose.
+
+        Only between motions: this is the "return to the start cell" of a
+        bumped primitive, not a way of moving the robot. Exact only with
+        ``collision_bias = 1`` (see :class:`PhysicsConfig`); otherwise the
+        pseudo-velocity of a contact correction still moves the robot in the
+        next step.
+        """
+        for body in (self.robot, self.control):
+            body.position, body.angle = (x_m, y_m), heading_rad
+            body.velocity, body.angular_velocity = (0.0, 0.0), 0.0
+        self.space.reindex_shapes_for_body(self.robot)
+
+    # --------------------------------------------------------- collision queries
+    def cast_free_distance(self, x0: float, y0: float, x1: float, y1: float,
+                           dist: float) -> tuple[float, float, float, float, float] | None:
+        """Guard for a straight leg (x0, y0) -> (x1, y1) of length ``dist`` [m].
+
+        Returns ``None`` when the robot's disc sweeps the whole leg without
+        touching anything, else ``(x0, y0, ex, ey, limit)``: along unit
+        direction ``e`` the robot may advance ``limit`` = free distance +
+        ``contact_depth_m`` from (x0, y0). Shapes the disc already overlaps
+        at the start are skipped (see :meth:`cast_alpha`).
+
+        Not ``space.segment_query_first``: Chipmunk's spatial index ignores
+        the query radius (Chipmunk2D#138) and misses shapes whose bounding box
+        the centre line does not cross. Candidates come from a bounding-box
+        query of the swept disc instead, each cast with ``shape.segment_query``.
+        Results are memoised in ``cast_cache`` (a pure function of the static
+        geometry, so the cache may outlive the world and serve the next one).
+        """
+        key = (x0, y0, x1, y1)
+        free = self._cast_cache.get(key, _MISSING)
+        if free is _MISSING:
+            alpha = self.cast_alpha(x0, y0, x1, y1)
+            free = None if alpha is None else alpha * dist
+            self._cast_cache[key] = free
+        if free is None:
+            return None
+        return (x0, y0, (x1 - x0) / dist, (y1 - y0) / dist, free + self.config.contact_depth_m)
+
+    def cast_alpha(self, x0: float, y0: float, x1: float, y1: float) -> float | None:
+        """Fraction of (x0, y0) -> (x1, y1) the robot's disc sweeps before touching anything.
+
+        A shape the disc already overlaps at the start is reported by Chipmunk
+        at alpha 0 and skipped here: that contact exists, and the solver
+        already keeps the robot from moving further into it (skipping it lets
+        a robot resting against a wall drive along or away from it).
+        """
+        r = self.radius_m
+        bb = pymunk.BB(min(x0, x1) - r, min(y0, y1) - r, max(x0, x1) + r, max(y0, y1) + r)
+        alpha = math.inf
+        for shape in self.space.bb_query(bb, self._query_filter):
+            info = shape.segment_query((x0, y0), (x1, y1), r)
+            if info is not None and 0.0 < info.alpha < alpha:
+                alpha = info.alpha
+        return None if alpha == math.inf else alpha
+
+    def overlap_m(self) -> float:
+        """Deepest overlap of the robot with static geometry right now [m] (0 if none)."""
+        worst = 0.0
+        for info in self.space.shape_query(self.robot_shape):
+            for p in info.contact_point_set.points:
+                worst = max(worst, -p.distance)
+        return worst
+
+    # ------------------------------------------------------------- stepping
+    def drive(self, commands: list[tuple[float, float, float]],
+              guard: tuple[float, float, float, float, float] | None,
+              trajectory: list[tuple[float, float, float]]) -> bool:
+        """Hold each control-body twist ``(vx, vy, omega)`` for one control period.
+
+        Appends the pose after every physics step to ``trajectory``. Stops
+        after the step in which a contact began and returns True; returns
+        False when all commands were driven. ``guard`` (from
+        :meth:`cast_free_distance`) shortens the step that would carry the
+        robot past the guard's limit along its direction.
+        """
+        step, set_vel, set_w, get_pos, get_ang, get_vel = self._fn
+        S, B, C = self._S, self._B, self._C
+        h, sub = self._h, self.config.substeps
+        pending = self._pending
+        append = trajectory.append
+        last = None
+        if guard is None and sub == 1:  # the common case, kept lean
+            for n, cmd in enumerate(commands, 1):
+                if cmd != last:  # a held command need not be set again
+                    set_vel(C, (cmd[0], cmd[1]))
+                    set_w(C, cmd[2])
+                    last = cmd
+                step(S, h)
+                p = get_pos(B)
+                append((p.x, p.y, get_ang(B)))
+                if pending:
+                    self.steps += n
+                    self._flush_contacts()
+                    return True
+            self.steps += len(commands)
+            return False
+        if guard is not None:
+            gx, gy, ex, ey, limit = guard
+        p = get_pos(B)
+        px, py = p.x, p.y
+        n = 0
+        for cmd in commands:
+            if cmd != last:
+                set_vel(C, (cmd[0], cmd[1]))
+                set_w(C, cmd[2])
+                last = cmd
+            for _ in range(sub):
+                if guard is not None:
+                    # position integrates first, with the current velocity: shorten the
+                    # step that would carry the disc past the limit
+                    v = get_vel(B)
+                    done = (px - gx) * ex + (py - gy) * ey
+                    if done + h * (v.x * ex + v.y * ey) > limit:
+                        u = max(limit - done, 0.0) / h
+                        set_vel(B, (u * ex, u * ey))
+                step(S, h)
+                n += 1
+                p = get_pos(B)
+                px, py = p.x, p.y
+                append((px, py, get_ang(B)))
+                if pending:
+                    self.steps += n
+                    self._flush_contacts()
+                    return True
+        self.steps += n
+        return False
+
+    def advance(self, n_steps: int, trajectory: list[tuple[float, float, float]] | None = None
+                ) -> int:
+        """Step ``n_steps`` times with the current commands, guarding every step.
+
+        For free driving: each step casts the disc along the displacement the
+        step will make (position integrates first, with the current velocity)
+        and shortens it as in :meth:`drive`. Contacts do not stop it. Returns
+        the number of contacts that began.
+        """
+        robot, h, depth = self.robot, self._h, self.config.contact_depth_m
+        before = len(self.contacts)
+        for _ in range(n_steps):
+            p, v = robot.position, robot.velocity
+            length = h * math.hypot(v.x, v.y)
+            if length > 1e-12:
+                alpha = self.cast_alpha(p.x, p.y, p.x + h * v.x, p.y + h * v.y)
+                if alpha is not None and alpha * length + depth < length:
+                    robot.velocity = v * ((alpha * length + depth) / length)
+            self._fn[0](self._S, h)
+            self.steps += 1
+            if trajectory is not None:
+                q = robot.position
+                trajectory.append((q.x, q.y, robot.angle))
+            if self._pending:
+                self._flush_contacts()
+        return len(self.contacts) - before
+
+
+def _static_shapes(sc: Scenario, body: pymunk.Body) -> list[pymunk.Shape]:
+    """Walls (thick segments whose inner surface is the arena boundary), circles, cell runs."""
+    shapes: list[pymunk.Shape] = []
+    w, h, t = sc.width_m, sc.height_m, sc.cell_size_m
+    for a, b in (((-t, -t), (w + t, -t)), ((w + t, -t), (w + t, h + t)),
+                 ((w + t, h + t), (-t, h + t)), ((-t, h + t), (-t, -t))):
+        shapes.append(_typed(pymunk.Segment(body, a, b, t), CollisionType.WALL))
+    for o in sc.obstacles:
+        shapes.append(_typed(pymunk.Circle(body, o.radius_m, (o.x_m, o.y_m)),
+                             CollisionType.OBSTACLE))
+    c = sc.cell_size_m
+    for iy, ix0, ix1 in merged_boxes(sc.blocked_cells):
+        x0, x1, y0, y1 = ix0 * c, (ix1 + 1) * c, iy * c, (iy + 1) * c
+        box = pymunk.Poly(body, [(x0, y0), (x1, y0), (x1, y1), (x0, y1)])
+        shapes.append(_typed(box, CollisionType.CELL))
+    return shapes
+
+
+def _typed(shape: pymunk.Shape, kind: CollisionType) -> pymunk.Shape:
+    shape.collision_type = kind
+    shape.friction = 1.0  # the robot's friction sets the pair's coefficient (product)
+    shape.elasticity = 0.0
+    shape.filter = pymunk.ShapeFilter(categories=_STATIC_CATEGORY)
+    return shape
+
+
+def _centre(sc: Scenario, cell: tuple[int, int]) -> tuple[float, float]:
+    return (cell[0] + 0.5) * sc.cell_size_m, (cell[1] + 0.5) * sc.cell_size_m

@@ -243,10 +243,6 @@ class PhysicsWorld:
         """Simulated time since the world was built [s]."""
         return self.steps * self._h
 
-    @property
-    def n_contacts(self) -> int:
-        return len(self.contacts)
-
     def set_twist(self, vx_m_s: float, vy_m_s: float, omega_rad_s: float) -> None:
         """Command the control body (the robot follows through the joints)."""
         self._fn[1](self._C, (vx_m_s, vy_m_s))

@@ -1,0 +1,121 @@
+"""The step-by-step driver: an agent for any gymnasium ``Discrete`` env, and its episode loop.
+
+The agent holds the same :class:`learning.state.AgentState` the fused kernels
+train, and each event calls the same compiled function the kernels inline
+(:mod:`learning.dispatch`), with the same generator, so a run through an env
+and a kernel run with the same seed end with identical tables and weights.
+Use this driver where there is no tabular model (the physics env); use
+:func:`learning.train.train_tabular` where there is (100x+ faster).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from learning import dispatch
+from learning import kinds as K
+from learning.geometry import Geometry
+from learning.methods import MethodConfig
+from learning.state import AgentState, init_state
+
+
+class StepAgent:
+    """One learner, driven one event at a time.
+
+    Per episode: ``begin_episode(s0)``; then ``a = act(s)`` and
+    ``update(s, a, r, s2, terminated, truncated)`` per step; then
+    ``end_episode()``. ``greedy_action(s)`` is the method's exploitation policy
+    (no exploration, ties to the lowest index), as used in greedy tests.
+    """
+
+    def __init__(self, cfg: MethodConfig, geometry: Geometry, rng: np.random.Generator,
+                 state: AgentState | None = None) -> None:
+        self.cfg = cfg
+        self.geometry = geometry
+        self.rng = rng
+        self.state = init_state(cfg, geometry, rng) if state is None else state
+        self.kind = int(cfg.kind)
+
+    @property
+    def episodes_done(self) -> int:
+        return int(self.state.ivar[K.I_EPISODE])
+
+    @property
+    def last_shaping(self) -> tuple[float, float]:
+        """(mean, std) of the shaping terms of the last finished episode."""
+        return float(self.state.fvar[K.F_FMEAN]), float(self.state.fvar[K.F_FSTD])
+
+    def begin_episode(self, s0: int) -> None:
+        """Start an episode in state ``s0`` (RNH-QL caches Phi(s0) here)."""
+        dispatch.begin_episode(self.kind, *self.state, int(s0))
+
+    def act(self, s: int) -> int:
+        """The behaviour (exploring) action at ``s``; draws from the agent's generator."""
+        return int(dispatch.act(self.kind, *self.state, int(s), self.rng))
+
+    def update(self, s: int, a: int, r: float, s2: int, terminated: bool,
+               truncated: bool) -> None:
+        """Learn from one transition; bootstraps from ``s2`` unless ``terminated``."""
+        dispatch.update(self.kind, *self.state, int(s), int(a), float(r), int(s2),
+                        bool(terminated), bool(truncated), self.rng)
+
+    def end_episode(self) -> None:
+        dispatch.end_episode(self.kind, *self.state)
+
+    def greedy_action(self, s: int) -> int:
+        return int(dispatch.exploit_action(self.kind, *self.state, int(s)))
+
+
+def make_agent(cfg: MethodConfig, geometry: Geometry, rng: np.random.Generator) -> StepAgent:
+    """A fresh agent; RN-QL draws its initial weights from ``rng`` here."""
+    return StepAgent(cfg, geometry, rng)
+
+
+@dataclass(frozen=True)
+class EpisodeLog:
+    """Per-episode results of :func:`run_env_episodes` (env rewards only, no shaping)."""
+
+    steps: np.ndarray  # int32[n]
+    returns: np.ndarray  # float64[n]
+    success: np.ndarray  # bool[n]; terminated (reached the goal)
+    shaping_mean: np.ndarray  # float64[n]
+    shaping_std: np.ndarray  # float64[n]
+
+
+def run_env_episodes(agent: StepAgent, env: Any, n_episodes: int,
+                     rng: np.random.Generator | None = None) -> EpisodeLog:
+    """Run ``n_episodes`` episodes of ``agent`` on a gymnasium env.
+
+    The start state is drawn exactly as the kernels draw it,
+    ``draw_start(rng, geometry.start_states)``, and passed as
+    ``env.reset(options={"start": s})`` (without ``start_states``, the env's
+    own start is used). ``rng`` defaults to the agent's generator, which is what
+    makes the run match a kernel run with the same seed; the env's generator is
+    never used.
+    """
+    rng = agent.rng if rng is None else rng
+    starts = agent.geometry.start_states
+    out = EpisodeLog(np.zeros(n_episodes, np.int32), np.zeros(n_episodes),
+                     np.zeros(n_episodes, bool), np.zeros(n_episodes), np.zeros(n_episodes))
+    for i in range(n_episodes):
+        if starts is not None:
+            s, _ = env.reset(options={"start": int(dispatch.draw_start(rng, starts))})
+        else:
+            s, _ = env.reset()
+        s = int(s)
+        agent.begin_episode(s)
+        t, ret, terminated, truncated = 0, 0.0, False, False
+        while not (terminated or truncated):
+            a = agent.act(s)
+            s2, r, terminated, truncated, _ = env.step(a)
+            agent.update(s, a, r, int(s2), terminated, truncated)
+            s = int(s2)
+            t += 1
+            ret += float(r)
+        agent.end_episode()
+        out.steps[i], out.returns[i], out.success[i] = t, ret, terminated
+        out.shaping_mean[i], out.shaping_std[i] = agent.last_shaping
+    return out

@@ -1,0 +1,191 @@
+"""Save and restore a learner to ``.npz``: state arrays, config, generator state, metrics so far.
+
+Files are written atomically (a temporary file in the same directory, then
+``os.replace``), so a crash mid-write leaves the old checkpoint intact. Loading
+checks everything a resumed run relies on and raises :class:`CheckpointError`
+(a ``ValueError``) naming the file, the field and the fix; the CLI prints it
+and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from learning import kinds as K
+from learning.methods import METHODS, MethodConfig, config_from_fields
+from learning.state import AgentState
+
+FORMAT = "rnhql-checkpoint-1"
+# (dtype, ndim) of each AgentState slot: a file that disagrees would not type-check in numba
+SLOT_TYPES = {"ivar": (np.int64, 1), "fvar": (np.float64, 1), "par": (np.float64, 1),
+              "q": (np.float64, 2), "w": (np.float64, 1), "e": (np.float64, 1),
+              "feat": (np.float64, 2), "imap": (np.int32, 2), "fmap": (np.float64, 2),
+              "ilist": (np.int32, 1)}
+METRIC_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std",
+                 "test_episodes", "test_route_length")
+
+
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be used: unreadable, or not for this run."""
+
+
+@dataclass(eq=False)
+class Checkpoint:
+    """A learner at an episode boundary, enough to continue it exactly."""
+
+    config: MethodConfig
+    state: AgentState
+    rng_state: dict  # numpy bit_generator.state after the last episode
+    env_steps: int = 0
+    metrics: dict[str, np.ndarray] = field(default_factory=dict)  # METRIC_FIELDS so far
+    path: str = "<memory>"  # where it was loaded from, for messages
+
+    @property
+    def method(self) -> str:
+        return self.config.cli
+
+    @property
+    def episodes(self) -> int:
+        return int(self.state.ivar[K.I_EPISODE])
+
+    @classmethod
+    def of_result(cls, result, rng: np.random.Generator) -> Checkpoint:
+        """From a :class:`learning.train.TrainResult` and the generator that trained it."""
+        metrics = dict(result.episode_arrays())
+        metrics["test_episodes"] = result.test_episodes
+        metrics["test_route_length"] = result.test_route_length
+        return cls(result.config, result.state, rng.bit_generator.state, result.env_steps,
+                   metrics)
+
+    @classmethod
+    def of_agent(cls, agent) -> Checkpoint:
+        """From a :class:`learning.agent.StepAgent` (between episodes)."""
+        return cls(agent.cfg, agent.state, agent.rng.bit_generator.state)
+
+    def check_compatible(self, cfg: MethodConfig, n_states: int) -> None:
+        """Raise CheckpointError unless this checkpoint continues ``cfg`` on ``n_states`` states."""
+        if cfg.cli != self.method:
+            raise CheckpointError(f"{self.path}: field 'method' is {self.method!r} but this run "
+                                  f"trains {cfg.cli!r}; resume with --method {self.method} or "
+                                  "start without --resume")
+        if cfg != self.config:
+            diff = [k for k, v in cfg.fields().items() if self.config.fields().get(k) != v]
+            raise CheckpointError(f"{self.path}: field 'config' differs in {', '.join(diff)} "
+                                  f"(checkpoint {self.config}); use the checkpoint's settings "
+                                  "or start without --resume")
+        got = self.state.feat.shape[0]
+        if got != n_states:
+            raise CheckpointError(f"{self.path}: field 'n_states' is {got} but the scenario "
+                                  f"has {n_states}; resume on the scenario the checkpoint was "
+                                  "trained on or start without --resume")
+
+
+def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
+    """Write ``ckpt`` to ``path`` atomically; returns the path."""
+    path = Path(path)
+    payload = {f"state_{k}": v for k, v in ckpt.state._asdict().items()}
+    payload.update({f"metric_{k}": np.asarray(v) for k, v in ckpt.metrics.items()})
+    payload["format"] = np.array(FORMAT)
+    payload["method"] = np.array(ckpt.method)
+    payload["config"] = np.array(json.dumps(ckpt.config.fields()))
+    payload["rng_state"] = np.array(json.dumps(ckpt.rng_state))
+    payload["env_steps"] = np.array(ckpt.env_steps, dtype=np.int64)
+    payload["n_states"] = np.array(ckpt.state.feat.shape[0], dtype=np.int64)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **payload)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _field(data, name: str, path: Path) -> np.ndarray:
+    if name not in data.files:
+        raise CheckpointError(f"{path}: field {name!r} is missing; the file is not a complete "
+                              "rnhql checkpoint, delete it and train again")
+    try:
+        return data[name]
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+        raise CheckpointError(f"{path}: field {name!r} is unreadable ({exc}); the file is "
+                              "corrupt, delete it and train again") from None
+
+
+def _slot(data, name: str, path: Path) -> np.ndarray:
+    arr = _field(data, f"state_{name}", path)
+    dtype, ndim = SLOT_TYPES[name]
+    if arr.dtype != dtype or arr.ndim != ndim:
+        raise CheckpointError(f"{path}: field 'state_{name}' is {arr.dtype}[{arr.ndim}d], "
+                              f"expected {np.dtype(dtype)}[{ndim}d]; the file is corrupt, "
+                              "delete it and train again")
+    return np.ascontiguousarray(arr).copy()
+
+
+def _read(data, path: Path, method: str | None):
+    """Every field of an open npz, checked; raises CheckpointError naming the field."""
+    fmt = str(_field(data, "format", path))
+    if fmt != FORMAT:
+        raise CheckpointError(f"{path}: field 'format' is {fmt!r}, expected {FORMAT!r}; "
+                              "train again with this version")
+    name = str(_field(data, "method", path))
+    if name not in METHODS:
+        raise CheckpointError(f"{path}: field 'method' is {name!r}, not one of "
+                              f"{', '.join(METHODS)}; the file is corrupt, train again")
+    if method is not None and name != method:
+        raise CheckpointError(f"{path}: field 'method' is {name!r} but {method!r} was "
+                              f"asked for; resume with --method {name} or start "
+                              "without --resume")
+    try:
+        cfg = config_from_fields(name, json.loads(str(_field(data, "config", path))))
+        rng_state = json.loads(str(_field(data, "rng_state", path)))
+    except (ValueError, TypeError) as exc:
+        raise CheckpointError(f"{path}: field 'config' or 'rng_state' is invalid ({exc}); "
+                              "the file is corrupt, delete it and train again") from None
+    state = AgentState(**{k: _slot(data, k, path) for k in AgentState._fields})
+    metrics = {k: _field(data, f"metric_{k}", path).copy() for k in METRIC_FIELDS
+               if f"metric_{k}" in data.files}
+    env_steps = int(_field(data, "env_steps", path))
+    return cfg, state, rng_state, env_steps, metrics
+
+
+def load_checkpoint(path: str | os.PathLike, method: str | None = None,
+                    n_states: int | None = None) -> Checkpoint:
+    """Read a checkpoint; check its method and state count when given."""
+    path = Path(path)
+    try:
+        fh = open(path, "rb")  # closed below, also when np.load fails
+    except FileNotFoundError:
+        raise CheckpointError(f"{path}: no such checkpoint file; check the path") from None
+    except OSError as exc:
+        raise CheckpointError(f"{path}: cannot be opened ({exc}); check the path and its "
+                              "permissions") from None
+    with fh:
+        try:
+            data = np.load(fh, allow_pickle=False)
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+            raise CheckpointError(f"{path}: not a readable .npz ({exc}); the file is corrupt, "
+                                  "delete it and train again") from None
+        if not hasattr(data, "files"):
+            raise CheckpointError(f"{path}: holds a single array, not an rnhql checkpoint "
+                                  "(.npz); check the path")
+        with data:
+            cfg, state, rng_state, env_steps, metrics = _read(data, path, method)
+    ckpt = Checkpoint(cfg, state, rng_state, env_steps, metrics, str(path))
+    if int(state.ivar[K.I_KIND]) != cfg.kind:
+        raise CheckpointError(f"{path}: field 'state_ivar' says rule family "
+                              f"{int(state.ivar[K.I_KIND])}, not {cfg.cli}'s; the file is corrupt, "
+                              "delete it and train again")
+    if n_states is not None:
+        ckpt.check_compatible(cfg, n_states)
+    return ckpt

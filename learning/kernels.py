@@ -1,0 +1,158 @@
+"""Fused numba loops over a tabular model: training episodes, greedy tests, policy checks.
+
+:func:`run_episodes` picks a compiled loop per rule family: each is a two-line
+``cache=True`` wrapper that inlines the shared loop with its family id as a
+constant, so the switch in :mod:`learning.dispatch` folds away and each
+method's loop holds only its own rule. numba cannot read a clock, so wall time
+is measured from Python around calls of :func:`run_episodes`
+(see :mod:`learning.train`).
+
+Cache caveat: numba checks only the defining file of each cached function. After
+editing a callee in another ``learning`` module, delete ``learning/__pycache__``
+(fresh clones and CI are unaffected).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from learning import kinds as K
+from learning.dispatch import act, begin_episode, draw_start, end_episode, exploit_action, update
+from learning.state import AgentState
+
+
+@njit(cache=True, inline="always")
+def _episodes(kind, st, mdp, max_steps, n_episodes, rng, out):
+    ivar, fvar, par, q, w, e, feat, imap, fmap, ilist = st
+    next_state, reward, terminal, start_states = mdp
+    out_steps, out_return, out_success, out_fmean, out_fstd = out
+    total = 0
+    for i in range(n_episodes):
+        s = draw_start(rng, start_states)
+        begin_episode(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
+        ret = 0.0
+        t = 0
+        done = False
+        while t < max_steps:
+            a = act(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
+            s2 = next_state[s, a]
+            r = reward[s, a]
+            done = terminal[s2]
+            t += 1
+            update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, done,
+                   t >= max_steps and not done, rng)
+            ret += r
+            s = s2
+            if done:
+                break
+        end_episode(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist)
+        out_steps[i] = t
+        out_return[i] = ret
+        out_success[i] = done
+        out_fmean[i] = fvar[K.F_FMEAN]
+        out_fstd[i] = fvar[K.F_FSTD]
+        total += t
+    return total
+
+
+@njit(cache=True)
+def _episodes_ql(st, mdp, max_steps, n_episodes, rng, out):
+    return _episodes(K.QL, st, mdp, max_steps, n_episodes, rng, out)
+
+
+@njit(cache=True)
+def _episodes_rnql(st, mdp, max_steps, n_episodes, rng, out):
+    return _episodes(K.RNQL, st, mdp, max_steps, n_episodes, rng, out)
+
+
+@njit(cache=True)
+def _episodes_pfh(st, mdp, max_steps, n_episodes, rng, out):
+    return _episodes(K.PFH, st, mdp, max_steps, n_episodes, rng, out)
+
+
+@njit(cache=True)
+def _episodes_sarsars(st, mdp, max_steps, n_episodes, rng, out):
+    return _episodes(K.SARSARS, st, mdp, max_steps, n_episodes, rng, out)
+
+
+@njit(cache=True)
+def _episodes_haql(st, mdp, max_steps, n_episodes, rng, out):
+    return _episodes(K.HAQL, st, mdp, max_steps, n_episodes, rng, out)
+
+
+@njit(cache=True)
+def _episodes_rnhql(st, mdp, max_steps, n_episodes, rng, out):
+    return _episodes(K.RNHQL, st, mdp, max_steps, n_episodes, rng, out)
+
+
+@njit(cache=True)
+def _episodes_qlambda(st, mdp, max_steps, n_episodes, rng, out):
+    return _episodes(K.QLAMBDA, st, mdp, max_steps, n_episodes, rng, out)
+
+
+@njit(cache=True)
+def _episodes_dyna(st, mdp, max_steps, n_episodes, rng, out):
+    return _episodes(K.DYNA, st, mdp, max_steps, n_episodes, rng, out)
+
+
+EPISODE_LOOPS = {K.QL: _episodes_ql, K.RNQL: _episodes_rnql, K.PFH: _episodes_pfh,
+                 K.SARSARS: _episodes_sarsars, K.HAQL: _episodes_haql, K.RNHQL: _episodes_rnhql,
+                 K.QLAMBDA: _episodes_qlambda, K.DYNA: _episodes_dyna}
+
+
+def run_episodes(st: AgentState, model, n_episodes: int, rng: np.random.Generator,
+                 out: tuple[np.ndarray, ...]) -> int:
+    """Train ``n_episodes`` episodes in place on the tabular ``model``; returns env steps.
+
+    ``out`` = (steps int32, return float64, success bool, shaping mean, shaping
+    std), each with >= n_episodes entries; episode i writes index i. An episode
+    starts at ``draw_start(rng, model.start_states)`` and ends on entering a
+    terminal state or after ``model.max_steps`` steps (a truncation: the last
+    update still bootstraps). Returns count env rewards only, never shaping.
+    """
+    loop = EPISODE_LOOPS[int(st.ivar[K.I_KIND])]
+    mdp = (model.next_state, model.reward, model.terminal, model.start_states)
+    return int(loop(st, mdp, int(model.max_steps), int(n_episodes), rng, out))
+
+
+@njit(cache=True)
+def greedy_route(st, next_state, terminal, start, max_steps, route):
+    """Follow the exploitation policy from ``start`` for at most ``max_steps`` steps.
+
+    Writes the visited states to ``route`` (length >= max_steps + 1) and returns
+    (route length in steps or -1 if no terminal state was reached, states written).
+    A deterministic policy in a deterministic MDP that revisits a state (a bump
+    included) loops forever, so the test stops there with -1.
+    """
+    ivar, fvar, par, q, w, e, feat, imap, fmap, ilist = st
+    kind = ivar[K.I_KIND]
+    seen = np.zeros(next_state.shape[0], dtype=np.bool_)
+    s = start
+    route[0] = s
+    seen[s] = True
+    for t in range(max_steps):
+        s2 = next_state[s, exploit_action(kind, ivar, fvar, par, q, w, e, feat, imap, fmap,
+                                          ilist, s)]
+        route[t + 1] = s2
+        if terminal[s2]:
+            return t + 1, t + 2
+        if seen[s2]:
+            return -1, t + 2
+        seen[s2] = True
+        s = s2
+    return -1, max_steps + 1
+
+
+@njit(cache=True)
+def on_shortest_fraction(st, next_state, distance, states):
+    """Fraction of ``states`` whose exploitation action moves one BFS step closer to the goal."""
+    ivar, fvar, par, q, w, e, feat, imap, fmap, ilist = st
+    kind = ivar[K.I_KIND]
+    good = 0
+    for i in range(states.shape[0]):
+        s = states[i]
+        a = exploit_action(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
+        if distance[next_state[s, a]] == distance[s] - 1:
+            good += 1
+    return good / max(states.shape[0], 1)

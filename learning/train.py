@@ -1,0 +1,137 @@
+"""Training on a tabular model with the fused kernels, and the metrics of a run.
+
+:func:`train_tabular` runs the kernel in chunks of ``test_every`` episodes.
+numba cannot read a clock, so each chunk is timed from Python and its time is
+spread evenly over its episodes (``wall_time_s``); between chunks it runs a greedy
+test from S. Tests draw no random numbers, so where they happen never changes
+the training run, which is what lets a run resume from a checkpoint bit for bit.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from learning import kinds as K
+from learning.checkpoint import CheckpointError
+from learning.geometry import TabularMDP, geometry_of
+from learning.kernels import greedy_route, on_shortest_fraction, run_episodes
+from learning.methods import MethodConfig
+from learning.state import AgentState, init_state
+
+EPISODE_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std")
+_DTYPES = {"steps": np.int32, "success": np.bool_}
+
+
+@dataclass(eq=False)
+class TrainResult:
+    """Everything a run measured; arrays are per episode unless named ``test_*``."""
+
+    config: MethodConfig
+    state: AgentState  # the trained agent (tables, weights)
+    episodes: int  # episodes trained in all
+    env_steps: int  # env steps in all
+    steps: np.ndarray  # int32[n]; steps of each episode
+    success: np.ndarray  # bool[n]; reached the goal
+    returns: np.ndarray  # float64[n]; sum of env rewards (no shaping)
+    wall_time_s: np.ndarray  # float64[n]; seconds, chunk time / episodes in the chunk
+    shaping_mean: np.ndarray  # float64[n]; mean shaping term F (0 without shaping)
+    shaping_std: np.ndarray  # float64[n]
+    test_episodes: np.ndarray  # int64[m]; episodes trained when each greedy test ran
+    test_route_length: np.ndarray  # int64[m]; greedy route S->G in steps, -1 if G not reached
+    optimal_length: int  # BFS moves S->G
+    final_route: list[int]  # final greedy route from S (states, S first)
+    final_route_length: int  # its length in steps, -1 if G not reached
+    optimal_action_fraction: float  # reachable free cells whose greedy move is on a shortest route
+
+    @property
+    def reward_per_step(self) -> np.ndarray:
+        return self.returns / np.maximum(self.steps, 1)
+
+    @property
+    def final_route_excess(self) -> int | None:
+        """Final route length minus the optimum; None if G is not reached."""
+        if self.final_route_length < 0:
+            return None
+        return self.final_route_length - self.optimal_length
+
+    @property
+    def episodes_to_optimal(self) -> int | None:
+        """Episodes trained at the first greedy test whose route is a shortest one."""
+        hit = np.flatnonzero(self.test_route_length == self.optimal_length)
+        return int(self.test_episodes[hit[0]]) if len(hit) else None
+
+    def episode_arrays(self) -> dict[str, np.ndarray]:
+        return {f: getattr(self, f) for f in EPISODE_FIELDS}
+
+
+def greedy_test(st: AgentState, model: TabularMDP, start: int | None = None) -> tuple[int, list]:
+    """(route length or -1, route states) of the exploitation policy from ``start`` (S)."""
+    route = np.zeros(int(model.max_steps) + 1, dtype=np.int32)
+    s0 = int(model.start if start is None else start)
+    length, n = greedy_route(st, model.next_state, model.terminal, s0, int(model.max_steps), route)
+    return int(length), route[:n].tolist()
+
+
+def shortest_fraction(st: AgentState, model: TabularMDP) -> float:
+    return float(on_shortest_fraction(st, model.next_state, model.distance_to_goal,
+                                      model.start_states))
+
+
+def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np.random.Generator,
+                  test_every: int = 10, resume=None) -> TrainResult:
+    """Train ``cfg`` on ``model`` for ``n_episodes`` episodes in all.
+
+    ``rng`` is the only source of randomness (RN-QL's initial weights, episode
+    starts, exploration, ties, planning). ``resume`` (a
+    :class:`learning.checkpoint.Checkpoint`) continues a run: its agent state,
+    metrics and generator state are restored (``rng`` is set to the saved
+    state), and training goes on from ``resume.episodes`` to ``n_episodes``,
+    ending exactly where an uninterrupted run with the same seed would.
+    """
+    if test_every < 1:
+        raise ValueError(f"test_every must be >= 1, got {test_every}")
+    arrays = {f: np.zeros(n_episodes, dtype=_DTYPES.get(f, np.float64)) for f in EPISODE_FIELDS}
+    tests_e: list[int] = []
+    tests_l: list[int] = []
+    if resume is None:
+        st, done, env_steps = init_state(cfg, geometry_of(model), rng), 0, 0
+    else:
+        resume.check_compatible(cfg, model.next_state.shape[0])
+        st, done, env_steps = resume.state, resume.episodes, resume.env_steps
+        if done > n_episodes:
+            raise ValueError(f"checkpoint has {done} episodes, more than n_episodes={n_episodes}")
+        try:
+            rng.bit_generator.state = resume.rng_state
+        except (ValueError, TypeError, KeyError) as exc:
+            raise CheckpointError(f"{resume.path}: field 'rng_state' does not fit this run's "
+                                  f"{type(rng.bit_generator).__name__} generator ({exc}); "
+                                  "resume with numpy.random.default_rng") from None
+        for f in EPISODE_FIELDS:
+            arrays[f][:done] = resume.metrics[f][:done]
+        tests_e, tests_l = list(resume.metrics["test_episodes"]), list(
+            resume.metrics["test_route_length"])
+    # compile (or load from the JIT cache) before the clock starts: 0 episodes draw nothing
+    run_episodes(st, model, 0, rng, tuple(arrays[f][:0] for f in
+                                          ("steps", "returns", "success", "shaping_mean",
+                                           "shaping_std")))
+    while done < n_episodes:
+        n = min(test_every - done % test_every, n_episodes - done)
+        out = tuple(arrays[f][done:done + n] for f in
+                    ("steps", "returns", "success", "shaping_mean", "shaping_std"))
+        t0 = time.perf_counter()
+        env_steps += run_episodes(st, model, n, rng, out)
+        arrays["wall_time_s"][done:done + n] = (time.perf_counter() - t0) / n
+        done += n
+        tests_e.append(done)
+        tests_l.append(greedy_test(st, model)[0])
+    assert int(st.ivar[K.I_EPISODE]) == done
+    length, route = greedy_test(st, model)
+    return TrainResult(config=cfg, state=st, episodes=done, env_steps=env_steps, **arrays,
+                       test_episodes=np.asarray(tests_e, dtype=np.int64),
+                       test_route_length=np.asarray(tests_l, dtype=np.int64),
+                       optimal_length=int(model.distance_to_goal[model.start]), final_route=route,
+                       final_route_length=length,
+                       optimal_action_fraction=shortest_fraction(st, model))

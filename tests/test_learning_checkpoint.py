@@ -1,0 +1,133 @@
+"""Checkpoints: exact resume, atomic writes, and errors that name the file, field and fix."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from learning import (
+    METHODS,
+    RNHQL,
+    STQL,
+    Checkpoint,
+    CheckpointError,
+    load_checkpoint,
+    make_agent,
+    save_checkpoint,
+    train_tabular,
+)
+from learning.geometry import geometry_of
+from learning.train import EPISODE_FIELDS
+from sim.grid import build_model
+from sim.scenario import resolve_scenario
+
+RESUME_CONFIGS = [c() for c in METHODS.values()] + [RNHQL(warmup_episodes=25)]
+
+
+@pytest.mark.parametrize("cfg", RESUME_CONFIGS, ids=lambda c: c.cli)
+def test_resume_equals_uninterrupted(tmp_path, paper50_model, cfg):
+    m = paper50_model
+    full = train_tabular(cfg, m, 50, np.random.default_rng(11), test_every=10)
+    rng = np.random.default_rng(11)
+    half = train_tabular(cfg, m, 30, rng, test_every=10)
+    path = save_checkpoint(tmp_path / "run.npz", Checkpoint.of_result(half, rng))
+    ckpt = load_checkpoint(path, method=cfg.cli, n_states=m.n_states)
+    assert ckpt.episodes == 30
+    rest = train_tabular(cfg, m, 50, np.random.default_rng(999), test_every=10, resume=ckpt)
+    for name, a, b in zip(full.state._fields, full.state, rest.state, strict=True):
+        assert np.array_equal(a, b), name
+    for f in EPISODE_FIELDS:
+        if f != "wall_time_s":
+            np.testing.assert_array_equal(getattr(full, f), getattr(rest, f), err_msg=f)
+    np.testing.assert_array_equal(full.test_route_length, rest.test_route_length)
+    assert full.env_steps == rest.env_steps and full.final_route == rest.final_route
+
+
+def test_agent_round_trip(tmp_path, paper50_model):
+    geom = geometry_of(paper50_model)
+    agent = make_agent(RNHQL(), geom, np.random.default_rng(0))
+    agent.state.q[3, 2] = 7.0
+    path = save_checkpoint(tmp_path / "a.npz", Checkpoint.of_agent(agent))
+    ck = load_checkpoint(path)
+    assert ck.config == RNHQL() and ck.method == "rnh-ql" and ck.state.q[3, 2] == 7.0
+    assert ck.rng_state == agent.rng.bit_generator.state
+
+
+def test_write_is_atomic(tmp_path, paper50_model):
+    agent = make_agent(STQL(), geometry_of(paper50_model), np.random.default_rng(0))
+    path = tmp_path / "c.npz"
+    save_checkpoint(path, Checkpoint.of_agent(agent))
+    agent.state.q[0, 0] = 1.0
+    save_checkpoint(path, Checkpoint.of_agent(agent))
+    assert [p.name for p in tmp_path.iterdir()] == ["c.npz"]
+    assert load_checkpoint(path).state.q[0, 0] == 1.0
+
+
+@pytest.fixture
+def saved(tmp_path, paper50_model):
+    agent = make_agent(RNHQL(), geometry_of(paper50_model), np.random.default_rng(0))
+    return save_checkpoint(tmp_path / "r.npz", Checkpoint.of_agent(agent))
+
+
+def test_corrupt_file(tmp_path):
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"not a zip at all")
+    with pytest.raises(CheckpointError, match=r"bad\.npz.*corrupt.*delete it"):
+        load_checkpoint(bad)
+
+
+def test_truncated_file(tmp_path, saved):
+    cut = tmp_path / "cut.npz"
+    cut.write_bytes(saved.read_bytes()[:2000])
+    with pytest.raises(CheckpointError, match=r"cut\.npz"):
+        load_checkpoint(cut)
+
+
+def test_missing_field(tmp_path, saved):
+    with np.load(saved) as d:
+        payload = {k: d[k] for k in d.files if k != "state_q"}
+    p = tmp_path / "partial.npz"
+    np.savez(p, **payload)
+    with pytest.raises(CheckpointError, match=r"partial\.npz: field 'state_q' is missing"):
+        load_checkpoint(p)
+
+
+def test_wrong_dtype(tmp_path, saved):
+    with np.load(saved) as d:
+        payload = {k: d[k] for k in d.files}
+    payload["state_q"] = payload["state_q"].astype(np.float32)
+    p = tmp_path / "dtype.npz"
+    np.savez(p, **payload)
+    with pytest.raises(CheckpointError, match="field 'state_q' is float32"):
+        load_checkpoint(p)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(CheckpointError, match="no such checkpoint"):
+        load_checkpoint(tmp_path / "nope.npz")
+
+
+def test_wrong_method(saved, paper50_model):
+    with pytest.raises(CheckpointError, match=r"r\.npz: field 'method' is 'rnh-ql'.*--method"):
+        load_checkpoint(saved, method="st-ql")
+    ck = load_checkpoint(saved)
+    with pytest.raises(CheckpointError, match="field 'method'"):
+        train_tabular(STQL(), paper50_model, 10, np.random.default_rng(0), resume=ck)
+
+
+def test_wrong_config(saved, paper50_model):
+    ck = load_checkpoint(saved)
+    with pytest.raises(CheckpointError, match="field 'config' differs in alpha"):
+        train_tabular(RNHQL(alpha=0.2), paper50_model, 10, np.random.default_rng(0), resume=ck)
+
+
+def test_wrong_state_count(saved, paper50_model):
+    with pytest.raises(CheckpointError, match="field 'n_states' is 2500 but the scenario has 1600"):
+        load_checkpoint(saved, n_states=1600)
+    small = build_model(resolve_scenario("paper-40"))
+    with pytest.raises(CheckpointError, match="n_states"):
+        train_tabular(RNHQL(), small, 10, np.random.default_rng(0), resume=load_checkpoint(saved))
+
+
+def test_checkpoint_error_is_value_error():
+    assert issubclass(CheckpointError, ValueError)

@@ -93,8 +93,6 @@ def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = Non
         for i, spec in enumerate(specs):
             try:
                 rec = run_one(spec)
-            except InputError:
-                raise
             except Exception as exc:  # keep going: report with its parameters at the end
                 col.failed(i, exc)
             else:

@@ -33,3 +33,54 @@ def test_bad_input_prints_one_line_and_exits_2(capsys, argv, words):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert words in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_train_save_route_and_resume(tmp_path, capsys):
+    a, b, c = (tmp_path / f"{n}.npz" for n in "abc")
+    assert main(["train", "paper-40", "--method", "rnh-ql", "--episodes", "30", "--save",
+                 str(a), "--json", str(tmp_path / "a.json")]) == 0
+    assert main(["train", "paper-40", "--method", "rnh-ql", "--episodes", "60",
+                 "--resume", str(a), "--save", str(b), "--json", str(tmp_path / "b.json")]) == 0
+    assert main(["train", "paper-40", "--method", "rnh-ql", "--episodes", "60", "--save",
+                 str(c), "--json", str(tmp_path / "c.json")]) == 0
+    import json
+
+    resumed, straight = (json.loads((tmp_path / f"{n}.json").read_text()) for n in "bc")
+    assert resumed["steps_per_episode"] == straight["steps_per_episode"]
+    capsys.readouterr()
+    assert main(["route", "paper-40", "--agent", str(b), "--png", str(tmp_path / "r.png")]) == 0
+    out = capsys.readouterr().out
+    assert "BFS optimum: 60 moves" in out and "S" in out and (tmp_path / "r.png").exists()
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["train", "paper-40", "--method", "sarsa-xx"], "unknown method"),
+    (["train", "paper-40", "--set", "alpha"], "FIELD=NUMBER"),
+    (["train", "paper-40", "--set", "colour=1"], "has no field"),
+    (["train", "paper-40", "--set", "alpha=7"], "alpha"),
+    (["train", "paper-40", "--world", "moon"], "unknown world"),
+    (["train", "paper-40", "--episodes", "0"], "must be >= 1"),
+    (["train", "paper-40", "--save", "/nonexistent/dir/a.npz", "--episodes", "1"], "cannot write"),
+    (["compare", "paper-40", "--methods", "st-ql,nope", "--out", "x"], "unknown method"),
+    (["route", "paper-40", "--agent", "missing.npz"], "no such checkpoint"),
+])
+def test_bad_run_input_exits_2(capsys, argv, words):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err
+
+
+def test_corrupt_checkpoint_exits_2(tmp_path, capsys):
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"PK\x03\x04 not really a zip")
+    assert main(["route", "paper-40", "--agent", str(bad)]) == 2
+    assert "corrupt" in capsys.readouterr().err
+
+
+def test_console_script_exit_code(tmp_path):
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "scenarios.cli", "scenarios", "--check",
+                           str(tmp_path / "none.toml")], capture_output=True, text=True)
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1

@@ -1,0 +1,95 @@
+"""End-to-end comparisons with tiny budgets: the results.json contract, resume, failures."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from scenarios.backends import SweepError, run_local
+from scenarios.compare import PARTIAL, make_specs, run_sweep
+from scenarios.experiment import RunSpec, run_one
+from scenarios.results import summarise
+
+RUN_KEYS = {"method", "seed", "world", "episodes_to_optimal", "final_route_length",
+            "success_rate", "wall_time_s", "env_steps", "steps_per_episode", "reward_per_step"}
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cmp")
+    specs = make_specs("paper-40", ["rnh-ql", "st-ql"], [0, 1], 40, ["grid"])
+    results = run_sweep(specs, out, run_local, jobs=1)
+    return out, specs, results
+
+
+def test_results_json_contract(small):
+    out, specs, _ = small
+    data = json.loads((out / "results.json").read_text())
+    assert {"scenario", "world", "episodes", "optimal_route_length", "runs", "summary"} <= set(data)
+    assert data["episodes"] == 40 and data["world"] == "grid"
+    assert data["optimal_route_length"] == 60
+    assert len(data["runs"]) == len(specs) == 4
+    for run in data["runs"]:
+        assert RUN_KEYS <= set(run)
+        assert len(run["steps_per_episode"]) == 40 == len(run["reward_per_step"])
+        assert run["env_steps"] == sum(run["steps_per_episode"])
+    for method in ("rnh-ql", "st-ql"):
+        entry = data["summary"][method]["grid"]
+        assert entry["seeds"] == 2
+        assert {"median", "q25", "q75"} <= set(entry["wall_time_s"])
+        assert 0.0 <= entry["optimal_route_fraction"] <= 1.0
+    assert not (out / PARTIAL).exists()
+
+
+def test_summary_and_figures_written(small):
+    out, _, _ = small
+    md = (out / "summary.md").read_text()
+    assert "| rnh-ql | grid | 2 |" in md and "RNH-QL" in md
+    for name in ("steps_per_episode", "reward_per_step", "time_per_episode", "routes"):
+        assert (out / f"{name}.png").stat().st_size > 5000
+
+
+def test_same_seed_same_record():
+    spec = RunSpec("paper-40", "rnh-ql", 3, 30)
+    a, b = run_one(spec), run_one(spec)
+    for rec in (a, b):
+        rec.pop("wall_time_s")
+        rec.pop("wall_time_per_episode_s")
+    assert a == b
+
+
+def test_resume_skips_finished_runs(tmp_path):
+    specs = make_specs("paper-40", ["st-ql"], [0, 1, 2], 20, ["grid"])
+    first = run_one(specs[0])
+    (tmp_path / PARTIAL).write_text(json.dumps(first) + "\n{torn line")
+    seen = []
+
+    def execute(todo, on_result=None):
+        seen.extend(s.key for s in todo)
+        return run_local(todo, jobs=1, on_result=on_result)
+
+    results = run_sweep(specs, tmp_path, execute, resume=True, figures=False)
+    assert seen == [specs[1].key, specs[2].key]
+    assert [r["seed"] for r in results["runs"]] == [0, 1, 2]
+
+
+def test_a_failed_run_is_reported_and_the_others_kept(tmp_path):
+    good = make_specs("paper-40", ["st-ql"], [0], 10, ["grid"])
+    bad = RunSpec("paper-40", "st-ql", 1, 10, world="moon")
+    with pytest.raises(SweepError) as info:
+        run_sweep([*good, bad], tmp_path, run_local, jobs=1, figures=False)
+    assert "world" in str(info.value) and bad.key in str(info.value)
+    saved = [json.loads(line) for line in (tmp_path / PARTIAL).read_text().splitlines()]
+    assert [r["key"] for r in saved] == [good[0].key]
+
+
+def test_summary_counts_unreached_routes_as_never():
+    runs = [{"method": "m", "world": "grid", "episodes_to_optimal": e, "final_route_length": n,
+             "final_route_optimal": n == 10, "success_rate": 0.5, "wall_time_s": 1.0,
+             "env_steps": 5, "optimal_action_fraction": 0.5}
+            for e, n in ((None, -1), (100, 10), (300, 10))]
+    e = summarise(runs)["m"]["grid"]
+    assert e["episodes_to_optimal"]["median"] == 300
+    assert e["optimal_route_fraction"] == pytest.approx(2 / 3)
+    assert e["reached_goal_fraction"] == pytest.approx(2 / 3)

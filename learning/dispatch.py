@@ -81,7 +81,7 @@ def exploit_action(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
 
 
 @njit(cache=True, inline="always")
-def _rnhql_update(ivar, fvar, par, q, w, e, feat, s, a, r, s2, terminated):
+def _rnhql_update(ivar, fvar, par, q, w, e, feat, fmap, ilist, s, a, r, s2, terminated):
     """RNH-QL: TD(lambda) on V_NN, then Q-learning + F = gamma*Phi(s') - Phi(s).
 
     Phi(s') is V_NN(s') evaluated as s' is entered, with the weights before this
@@ -97,7 +97,11 @@ def _rnhql_update(ivar, fvar, par, q, w, e, feat, s, a, r, s2, terminated):
     if ivar[K.I_SHAPING] != 0:
         f = gamma * phi_s2 - fvar[K.F_PHI]
         record_shaping(ivar, fvar, f)
-    q_learning(q, s, a, r, s2, terminated, par[K.P_ALPHA], gamma, f)
+    if par[K.P_QMODE] == K.QMODE_LAMBDA:
+        q_lambda(q, fmap, ilist, ivar, s, a, r, s2, terminated, par[K.P_ALPHA], gamma,
+                 par[K.P_LAMBDA], 1e-8, f)
+    else:
+        q_learning(q, s, a, r, s2, terminated, par[K.P_ALPHA], gamma, f)
     fvar[K.F_PHI] = phi_s2
 
 
@@ -109,7 +113,7 @@ def update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2,
     if kind == K.QL or kind == K.HAQL:
         q_learning(q, s, a, r, s2, terminated, alpha, gamma, 0.0)
     elif kind == K.RNHQL:
-        _rnhql_update(ivar, fvar, par, q, w, e, feat, s, a, r, s2, terminated)
+        _rnhql_update(ivar, fvar, par, q, w, e, feat, fmap, ilist, s, a, r, s2, terminated)
     elif kind == K.PFH:
         f = static_shaping(feat, s, s2, terminated, gamma)
         record_shaping(ivar, fvar, f)
@@ -122,8 +126,8 @@ def update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2,
                  gamma, par[K.P_OMEGA], par[K.P_ALPHA_V])
         ivar[K.I_PENDING] = a2
     elif kind == K.QLAMBDA:
-        q_lambda(q, e, ilist, ivar, s, a, r, s2, terminated, alpha, gamma,
-                 par[K.P_LAMBDA], par[K.P_TRACE_MIN])
+        q_lambda(q, fmap, ilist, ivar, s, a, r, s2, terminated, alpha, gamma,
+                 par[K.P_LAMBDA], par[K.P_TRACE_MIN], 0.0)
     elif kind == K.DYNA:
         dyna_q(q, imap, fmap, ilist, ivar, s, a, r, s2, terminated, alpha, gamma,
                int(par[K.P_NPLAN]), rng)
@@ -141,8 +145,8 @@ def begin_episode(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
     fvar[K.F_FSQ] = 0.0
     fvar[K.F_R] = 0.0
     fvar[K.F_GK] = 1.0
-    if kind == K.QLAMBDA:
-        clear_traces(e, ilist, ivar)
+    if kind == K.QLAMBDA or (kind == K.RNHQL and par[K.P_QMODE] == K.QMODE_LAMBDA):
+        clear_traces(fmap, ilist, ivar)
     elif kind == K.RNQL or kind == K.RNHQL:
         e[:] = 0.0
     if kind == K.RNHQL:

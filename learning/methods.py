@@ -206,9 +206,11 @@ class RNHQL(MethodConfig):
     warmup_episodes: int = 300  # shaping starts at this 0-based episode index
     freeze_after_episodes: int | None = None  # stop training V_NN from this episode (None: never)
 
+    q_mode: ClassVar[int] = K.QMODE_ONESTEP  # the Q-table's update rule
+
     def extra(self) -> tuple[float, ...]:
         freeze = math.inf if self.freeze_after_episodes is None else self.freeze_after_episodes
-        return (self.beta, float(self.warmup_episodes), float(freeze))
+        return (self.beta, float(self.warmup_episodes), float(freeze), float(self.q_mode))
 
 
 METHODS: dict[str, type[MethodConfig]] = {
@@ -221,3 +223,12 @@ def config_from_fields(cli: str, fields: dict[str, object]) -> MethodConfig:
     if cli not in METHODS:
         raise ValueError(f"unknown method {cli!r}; known: {', '.join(METHODS)}")
     return METHODS[cli](**fields)
+
+
+@dataclass(frozen=True)
+class RNHQLLambda(RNHQL):
+    """RNH-QL whose Q-table learns by Watkins Q(lambda) (shaped TD errors along traces)."""
+
+    name: ClassVar[str] = "RNH-Q(lambda)"
+    cli: ClassVar[str] = "rnh-q-lambda"
+    q_mode: ClassVar[int] = K.QMODE_LAMBDA

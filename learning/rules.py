@@ -109,18 +109,20 @@ def record_shaping(ivar, fvar, f):
 # ---------------------------------------------------------------- Watkins Q(lambda)
 @njit(cache=True)
 def clear_traces(e, tl, ivar):
+    n_a = e.shape[1]
     for i in range(ivar[K.I_NTRACE]):
-        e[tl[i]] = 0.0
+        e[tl[i] // n_a, tl[i] % n_a] = 0.0
     ivar[K.I_NTRACE] = 0
 
 
 @njit(cache=True)
-def q_lambda(q, e, tl, ivar, s, a, r, s2, terminated, alpha, gamma, lam, trace_min):
-    """Tabular Watkins Q(lambda), replacing traces over the flat index s*nA + a.
+def q_lambda(q, e, tl, ivar, s, a, r, s2, terminated, alpha, gamma, lam, trace_min, f):
+    """Tabular Watkins Q(lambda), replacing traces ``e[nS, nA]``; ``f`` is a shaping term.
 
     Cutting the traces when the action *taken* is non-greedy (before its trace
     is set) is Sutton & Barto's "cut when the next action is exploratory".
-    Only the touched pairs ``tl[:n]`` are visited; traces < trace_min are dropped.
+    Only the touched pairs ``tl[:n]`` (flat s*nA + a) are visited; traces below
+    trace_min are dropped.
     """
     n_a = q.shape[1]
     n = ivar[K.I_NTRACE]
@@ -132,26 +134,25 @@ def q_lambda(q, e, tl, ivar, s, a, r, s2, terminated, alpha, gamma, lam, trace_m
         m = 0
         for i in range(n):
             j = tl[i]
-            v = e[j] * gl
+            v = e[j // n_a, j % n_a] * gl
             if v < trace_min:
-                e[j] = 0.0
+                e[j // n_a, j % n_a] = 0.0
             else:
-                e[j] = v
+                e[j // n_a, j % n_a] = v
                 tl[m] = j
                 m += 1
         n = m
-    sa = s * n_a + a
-    if e[sa] == 0.0:
-        tl[n] = sa
+    if e[s, a] == 0.0:
+        tl[n] = s * n_a + a
         n += 1
-    e[sa] = 1.0
-    target = r
+    e[s, a] = 1.0
+    target = r + f
     if not terminated:
         target += gamma * row_max(q, s2)
     step = alpha * (target - q[s, a])
     for i in range(n):
         j = tl[i]
-        q[j // n_a, j % n_a] += step * e[j]
+        q[j // n_a, j % n_a] += step * e[j // n_a, j % n_a]
     ivar[K.I_NTRACE] = n
 
 

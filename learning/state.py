@@ -73,7 +73,7 @@ def init_state(cfg: MethodConfig, geom: Geometry, rng: np.random.Generator) -> A
     if kind == K.QL:
         q[:] = cfg.q0
     elif kind == K.QLAMBDA:
-        e, ilist = _f(n_s * n_a), _i(n_s * n_a)
+        fmap, ilist = _f(n_s, n_a), _i(n_s * n_a)
     elif kind == K.RNQL:
         q = _f(0, n_a)
         w = mlp.init_weights(n_a, RNQL_HIDDEN, cfg.init_range, rng)
@@ -95,6 +95,8 @@ def init_state(cfg: MethodConfig, geom: Geometry, rng: np.random.Generator) -> A
         feat = rbf.rbf_features(geom.coords, geom.bounds_m, cfg.k)
         w, e = _f(feat.shape[1]), _f(feat.shape[1])
         fvar[K.F_STEP_V] = cfg.beta / float(np.mean(np.sum(feat * feat, axis=1)))
+        if cfg.q_mode == K.QMODE_LAMBDA:
+            fmap, ilist = _f(n_s, n_a), _i(n_s * n_a)
     else:
         raise ValueError(f"{type(cfg).__name__} has unknown rule family {kind}")
     return AgentState(ivar=ivar, fvar=fvar, par=cfg.params(), q=q, w=w, e=e,

@@ -88,7 +88,8 @@ def drive_greedy(agent_or_policy: Any, sc: Scenario, max_steps: int | None = Non
         traj.append(info["trajectory"])
         contacts += len(info["contacts"])
     pts = np.concatenate(traj)
-    metres = float(np.hypot(*np.diff(pts[:, :2], axis=0).T).sum())
+    # per primitive: after a bump the robot is *placed* back, and that jump is not driven
+    metres = float(sum(np.hypot(*np.diff(t[:, :2], axis=0).T).sum() for t in traj))
     env.close()
     return DrivenRoute(states, pts, bool(term), contacts, float(info["time_s"]), metres)
 

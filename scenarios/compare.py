@@ -31,9 +31,9 @@ def version() -> str:
 
 def make_specs(scenario: str, methods: Sequence[str], seeds: Sequence[int], episodes: int,
                worlds: Sequence[str], overrides: tuple[tuple[str, float], ...] = (),
-               start=None, goal=None) -> list[RunSpec]:
+               start=None, goal=None, drive_final: bool = False) -> list[RunSpec]:
     return [RunSpec(scenario=scenario, method=m, seed=s, episodes=episodes, world=w,
-                    overrides=overrides, start=start, goal=goal)
+                    overrides=overrides, start=start, goal=goal, drive_final=drive_final)
             for w in worlds for m in methods for s in seeds]
 
 

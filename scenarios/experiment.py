@@ -41,6 +41,7 @@ class RunSpec:
     start: Cell | None = None  # for a .map (Moving AI frame)
     goal: Cell | None = None
     test_every: int = 10  # greedy test from S every N episodes
+    drive_final: bool = False  # grid runs: also drive the final greedy policy in physics
 
     @property
     def key(self) -> str:
@@ -118,6 +119,13 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     rng = np.random.default_rng(spec.seed)
     if spec.world == "grid":
         result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every)
+        if spec.drive_final:
+            from learning.agent import StepAgent
+            from learning.geometry import geometry_of
+            from scenarios.physics_runs import drive_greedy
+
+            agent = StepAgent(cfg, geometry_of(model), rng, result.state)
+            result.world_extras = drive_greedy(agent, sc).extras()
     elif spec.world == "physics":
         from scenarios.physics_runs import train_physics
 

@@ -67,7 +67,9 @@ class DrivenRoute:
     metres: float  # path length driven [m]
 
     def extras(self) -> dict[str, Any]:
+        xy = np.round(self.trajectory[::2, :2], 3)
         return {"physics_route_length": len(self.states) - 1 if self.reached else -1,
+                "physics_route_xy": xy.tolist(),
                 "physics_route_metres": round(self.metres, 4),
                 "physics_route_contacts": self.contacts,
                 "physics_route_sim_time_s": round(self.sim_time_s, 4)}

@@ -8,6 +8,7 @@ duck-typed :class:`TabularMDP` (fused kernels) or a gymnasium env plus a
 from learning.agent import EpisodeLog, StepAgent, make_agent, run_env_episodes
 from learning.checkpoint import Checkpoint, CheckpointError, load_checkpoint, save_checkpoint
 from learning.geometry import Geometry, TabularMDP, geometry_of
+from learning.jitcache import drop_stale_cache
 from learning.methods import (
     HAQL,
     METHODS,
@@ -24,6 +25,8 @@ from learning.methods import (
 )
 from learning.state import AgentState, init_state
 from learning.train import TrainResult, greedy_test, train_tabular
+
+drop_stale_cache()  # numba reads its cache at a function's first call, which is later
 
 __all__ = [
     "HAQL", "METHODS", "PFHRL", "RNHQL", "RNQL", "STQL", "AgentState", "Checkpoint",

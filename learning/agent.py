@@ -63,7 +63,7 @@ class StepAgent:
                         bool(terminated), bool(truncated), self.rng)
 
     def end_episode(self) -> None:
-        dispatch.end_episode(self.kind, *self.state)
+        dispatch.end_episode(self.state.ivar, self.state.fvar)
 
     def greedy_action(self, s: int) -> int:
         return int(dispatch.exploit_action(self.kind, *self.state, int(s)))

@@ -1,47 +1,44 @@
-"""One entry point per agent event, switching on the rule family: the code both drivers run.
+"""Routing each agent event to its rule family: the one code path both drivers run.
 
-The fused kernels (:mod:`learning.kernels`) call these inside their loops; the
-step-by-step agent (:mod:`learning.agent`) calls the very same compiled
-functions from Python, one event at a time. Every random number either driver
-uses is drawn inside these functions (or :func:`draw_start`) from the one
-injected generator, so equal seeds give equal runs.
+Two doors onto the same per-family functions of :mod:`learning.steps`:
 
-Draw order per step: ``act`` (one ``random()``, then ``integers(0, nA)`` when
-exploring or ``integers(0, n_ties)`` on a greedy tie; SARSA-RS draws nothing
-when it replays the action chosen at the previous update), then ``update``
+* ``act``, ``update``, ``begin_episode``, ``end_episode``, ``exploit_action``
+  are compiled functions the step agent (:mod:`learning.agent`) calls from
+  Python with the family id ``kind`` as a run-time int (a switch);
+* ``act_k``, ``update_k``, ``begin_k``, ``exploit_k`` are for compiled callers:
+  given ``kind`` as a compile-time constant (the kernels' per-family wrappers),
+  numba types and inlines only that family's function, so a kernel holds no
+  switch and compiles only its own rules (cold compile ~3 s per family instead
+  of 5-8 s with every family's rules inlined behind a switch).
+
+Every random number either driver uses is drawn inside these functions (or
+:func:`draw_start`) from the one injected generator, so equal seeds give equal
+runs. Draw order per step: ``act`` (one ``random()``, then ``integers(0, nA)``
+when exploring or ``integers(0, n_ties)`` on a greedy tie; SARSA-RS draws
+nothing when it replays the action chosen at its last update), then ``update``
 (SARSA-RS: the next action's draws unless terminated; Dyna-Q: ``n_planning``
 ``integers(0, n_seen)``). Per episode: ``draw_start`` first (one ``integers``).
 
-Calling convention, for speed (measured on paper-50, st-ql): the agent state
-is passed as its ten arrays (``*state``), not as the tuple (numba passes a
-tuple field by field to a non-inlined callee: 4x slower), and ``kind`` is an
-argument: the kernels pass it as a constant into these ``inline="always"``
-functions, so LLVM folds the switch away (2.5x faster than reading it from
-``ivar``). Called from Python, they compile once with ``kind`` a runtime int.
+The agent state is passed as its ten arrays (``*state``): a tuple argument is
+passed field by field to a compiled callee, which measured 4x slower.
 """
 
 from __future__ import annotations
 
 import math
 
-from numba import njit
+from numba import njit, types
+from numba.extending import overload
 
 from learning import kinds as K
-from learning.mlp import net_row, q_lambda_net
-from learning.rbf import td_lambda, value
-from learning.rules import (
-    argmax_first,
-    clear_traces,
-    dyna_q,
-    eps_greedy,
-    haql_first,
-    haql_greedy,
-    is_greedy,
-    q_lambda,
-    q_learning,
-    record_shaping,
-)
-from learning.shaping import sarsa_rs, static_shaping
+from learning import steps as S
+
+_ACT = {K.SARSARS: S.act_sarsars, K.HAQL: S.act_haql, K.RNQL: S.act_rnql}
+_EXPLOIT = {K.HAQL: S.exploit_haql, K.RNQL: S.exploit_rnql}
+_UPDATE = {K.QL: S.update_ql, K.HAQL: S.update_ql, K.PFH: S.update_pfh,
+           K.RNHQL: S.update_rnhql, K.SARSARS: S.update_sarsars, K.QLAMBDA: S.update_qlambda,
+           K.DYNA: S.update_dyna, K.RNQL: S.update_rnql}
+_BEGIN = {K.QLAMBDA: S.begin_qlambda, K.RNQL: S.begin_rnql, K.RNHQL: S.begin_rnhql}
 
 
 @njit(cache=True, inline="always")
@@ -50,114 +47,72 @@ def draw_start(rng, start_states):
     return start_states[rng.integers(0, start_states.shape[0])]
 
 
-@njit(cache=True, inline="always")
+# ---------------------------------------------------------------- run-time switches (Python)
+
+
+@njit(cache=True)
 def act(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng):
     """The behaviour policy's action at s (epsilon-greedy around the method's greedy choice)."""
-    eps = par[K.P_EPS]
     if kind == K.SARSARS:
-        a = ivar[K.I_PENDING]
-        if a >= 0:
-            ivar[K.I_PENDING] = -1
-            return a
-    elif kind == K.HAQL:
-        if rng.random() < eps:
-            return rng.integers(0, q.shape[1])
-        return haql_greedy(q, s, imap[s, 0], par[K.P_XI], par[K.P_BETA_H], par[K.P_ETA], rng)
-    elif kind == K.RNQL:
-        net_row(w, feat, s, fmap)
-        return eps_greedy(fmap, 0, eps, rng)
-    return eps_greedy(q, s, eps, rng)
+        return S.act_sarsars(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
+    if kind == K.HAQL:
+        return S.act_haql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
+    if kind == K.RNQL:
+        return S.act_rnql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
+    return S.act_eps_greedy(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def exploit_action(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
     """The method's own exploitation policy, no exploration, ties to the lowest index."""
     if kind == K.HAQL:
-        return haql_first(q, s, imap[s, 0], par[K.P_XI], par[K.P_BETA_H], par[K.P_ETA])
+        return S.exploit_haql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
     if kind == K.RNQL:
-        net_row(w, feat, s, fmap)
-        return argmax_first(fmap, 0)
-    return argmax_first(q, s)
+        return S.exploit_rnql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
+    return S.exploit_q(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
 
 
-@njit(cache=True, inline="always")
-def _rnhql_update(ivar, fvar, par, q, w, e, feat, fmap, ilist, s, a, r, s2, terminated):
-    """RNH-QL: TD(lambda) on V_NN, then Q-learning + F = gamma*Phi(s') - Phi(s).
-
-    Phi(s') is V_NN(s') evaluated as s' is entered, with the weights before this
-    step's V_NN update, and cached (fvar[F_PHI]) until s' is left; Phi(goal) = 0.
-    """
-    gamma = par[K.P_GAMMA]
-    greedy = is_greedy(q, s, a)
-    phi_s2 = 0.0 if terminated else value(feat, s2, w)
-    if ivar[K.I_TRAIN_V] != 0:
-        td_lambda(w, e, feat, s, r, phi_s2, greedy, gamma, par[K.P_LAMBDA],
-                  fvar[K.F_STEP_V])
-    f = 0.0
-    if ivar[K.I_SHAPING] != 0:
-        f = gamma * phi_s2 - fvar[K.F_PHI]
-        record_shaping(ivar, fvar, f)
-    if par[K.P_QMODE] == K.QMODE_LAMBDA:
-        q_lambda(q, fmap, ilist, ivar, s, a, r, s2, terminated, par[K.P_ALPHA], gamma,
-                 par[K.P_LAMBDA], 1e-8, f)
-    else:
-        q_learning(q, s, a, r, s2, terminated, par[K.P_ALPHA], gamma, f)
-    fvar[K.F_PHI] = phi_s2
-
-
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
            truncated, rng):
     """Learn from (s, a, r, s'). ``truncated`` steps bootstrap like any non-terminal step."""
-    alpha, gamma = par[K.P_ALPHA], par[K.P_GAMMA]
     if kind == K.QL or kind == K.HAQL:
-        q_learning(q, s, a, r, s2, terminated, alpha, gamma, 0.0)
+        S.update_ql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated, rng)
     elif kind == K.RNHQL:
-        _rnhql_update(ivar, fvar, par, q, w, e, feat, fmap, ilist, s, a, r, s2, terminated)
+        S.update_rnhql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+                       rng)
     elif kind == K.PFH:
-        f = static_shaping(feat, s, s2, terminated, gamma)
-        record_shaping(ivar, fvar, f)
-        q_learning(q, s, a, r, s2, terminated, alpha, gamma, f)
+        S.update_pfh(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+                     rng)
     elif kind == K.SARSARS:
-        a2 = -1
-        if not terminated:
-            a2 = eps_greedy(q, s2, par[K.P_EPS], rng)
-        sarsa_rs(q, w, imap, ivar, fvar, s, a, r, s2, a2, terminated, alpha,
-                 gamma, par[K.P_OMEGA], par[K.P_ALPHA_V])
-        ivar[K.I_PENDING] = a2
+        S.update_sarsars(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2,
+                         terminated, rng)
     elif kind == K.QLAMBDA:
-        q_lambda(q, fmap, ilist, ivar, s, a, r, s2, terminated, alpha, gamma,
-                 par[K.P_LAMBDA], par[K.P_TRACE_MIN], 0.0)
+        S.update_qlambda(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2,
+                         terminated, rng)
     elif kind == K.DYNA:
-        dyna_q(q, imap, fmap, ilist, ivar, s, a, r, s2, terminated, alpha, gamma,
-               int(par[K.P_NPLAN]), rng)
+        S.update_dyna(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+                      rng)
     elif kind == K.RNQL:
-        q_lambda_net(w, e, feat, s, a, r, s2, terminated, alpha, gamma, par[K.P_LAMBDA],
-                     par[K.P_QSCALE], fmap)
+        S.update_rnql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+                      rng)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def begin_episode(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
     """Reset per-episode state: traces, pending action, SMDP sums, shaping flags, Phi(s0)."""
-    ivar[K.I_PENDING] = -1
-    ivar[K.I_NF] = 0
-    fvar[K.F_FSUM] = 0.0
-    fvar[K.F_FSQ] = 0.0
-    fvar[K.F_R] = 0.0
-    fvar[K.F_GK] = 1.0
-    if kind == K.QLAMBDA or (kind == K.RNHQL and par[K.P_QMODE] == K.QMODE_LAMBDA):
-        clear_traces(fmap, ilist, ivar)
-    elif kind == K.RNQL or kind == K.RNHQL:
-        e[:] = 0.0
-    if kind == K.RNHQL:
-        ep = ivar[K.I_EPISODE]
-        ivar[K.I_SHAPING] = 1 if ep >= par[K.P_WARMUP] else 0
-        ivar[K.I_TRAIN_V] = 1 if ep < par[K.P_FREEZE] else 0
-        fvar[K.F_PHI] = value(feat, s0, w)
+    if kind == K.QLAMBDA:
+        S.begin_qlambda(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0)
+    elif kind == K.RNQL:
+        S.begin_rnql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0)
+    elif kind == K.RNHQL:
+        S.begin_rnhql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0)
+    else:
+        S.begin_plain(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0)
 
 
 @njit(cache=True, inline="always")
-def end_episode(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist):
+def end_episode(ivar, fvar):
     """Close the episode: shaping mean/std into fvar[F_FMEAN/F_FSTD], count it."""
     n = ivar[K.I_NF]
     if n > 0:
@@ -168,3 +123,69 @@ def end_episode(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist):
         fvar[K.F_FMEAN] = 0.0
         fvar[K.F_FSTD] = 0.0
     ivar[K.I_EPISODE] += 1
+
+
+# ---------------------------------------------------------------- compile-time selection
+
+
+def _family(kind, table, default):
+    """The family's function when ``kind`` is a compile-time constant, else None (numba then
+    retries the call with the constant's literal type; a run-time kind does not type)."""
+    if isinstance(kind, types.IntegerLiteral):
+        return table.get(kind.literal_value, default)
+    return None
+
+
+def act_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng):
+    raise NotImplementedError("compiled code only; from Python call act()")
+
+
+def exploit_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
+    raise NotImplementedError("compiled code only; from Python call exploit_action()")
+
+
+def update_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+             rng):
+    raise NotImplementedError("compiled code only; from Python call update()")
+
+
+def begin_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
+    raise NotImplementedError("compiled code only; from Python call begin_episode()")
+
+
+@overload(act_k, inline="always")
+def _act_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng):
+    f = _family(kind, _ACT, S.act_eps_greedy)
+    if f is None:
+        return None
+    return lambda kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng: f(
+        ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
+
+
+@overload(exploit_k, inline="always")
+def _exploit_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
+    f = _family(kind, _EXPLOIT, S.exploit_q)
+    if f is None:
+        return None
+    return lambda kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s: f(
+        ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
+
+
+@overload(update_k, inline="always")
+def _update_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+              rng):
+    f = _family(kind, _UPDATE, None)
+    if f is None:
+        return None
+    return lambda kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, \
+        terminated, rng: f(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2,
+                           terminated, rng)
+
+
+@overload(begin_k, inline="always")
+def _begin_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
+    f = _family(kind, _BEGIN, S.begin_plain)
+    if f is None:
+        return None
+    return lambda kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0: f(
+        ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0)

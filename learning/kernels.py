@@ -2,14 +2,14 @@
 
 :func:`run_episodes` picks a compiled loop per rule family: each is a two-line
 ``cache=True`` wrapper that inlines the shared loop with its family id as a
-constant, so the switch in :mod:`learning.dispatch` folds away and each
-method's loop holds only its own rule. numba cannot read a clock, so wall time
-is measured from Python around calls of :func:`run_episodes`
-(see :mod:`learning.train`).
+compile-time constant, so :mod:`learning.dispatch` selects that family's
+functions while compiling and each loop holds only its own rules. numba cannot
+read a clock, so wall time is measured from Python around calls of
+:func:`run_episodes` (see :mod:`learning.train`).
 
-Cache caveat: numba checks only the defining file of each cached function. After
-editing a callee in another ``learning`` module, delete ``learning/__pycache__``
-(fresh clones and CI are unaffected).
+numba's cache sees only the defining file of each function, and these loops
+inline code from other modules: :mod:`learning.jitcache` drops the package's
+cache whenever any ``learning/*.py`` changed.
 """
 
 from __future__ import annotations
@@ -18,7 +18,8 @@ import numpy as np
 from numba import njit
 
 from learning import kinds as K
-from learning.dispatch import act, begin_episode, draw_start, end_episode, exploit_action, update
+from learning.dispatch import act_k, begin_k, draw_start, end_episode, exploit_action, update_k
+from learning.kinds import DYNA, HAQL, PFH, QL, QLAMBDA, RNHQL, RNQL, SARSARS
 from learning.state import AgentState
 
 
@@ -30,23 +31,23 @@ def _episodes(kind, st, mdp, max_steps, n_episodes, rng, out):
     total = 0
     for i in range(n_episodes):
         s = draw_start(rng, start_states)
-        begin_episode(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
+        begin_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
         ret = 0.0
         t = 0
         done = False
         while t < max_steps:
-            a = act(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
+            a = act_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
             s2 = next_state[s, a]
             r = reward[s, a]
             done = terminal[s2]
             t += 1
-            update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, done,
-                   t >= max_steps and not done, rng)
+            update_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, done,
+                     rng)
             ret += r
             s = s2
             if done:
                 break
-        end_episode(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist)
+        end_episode(ivar, fvar)
         out_steps[i] = t
         out_return[i] = ret
         out_success[i] = done
@@ -56,44 +57,46 @@ def _episodes(kind, st, mdp, max_steps, n_episodes, rng, out):
     return total
 
 
+# Family ids are imported names, not ``K.QL``: numba types a global int as a literal
+# (which learning.dispatch needs to pick the family), a module attribute as int64.
 @njit(cache=True)
 def _episodes_ql(st, mdp, max_steps, n_episodes, rng, out):
-    return _episodes(K.QL, st, mdp, max_steps, n_episodes, rng, out)
+    return _episodes(QL, st, mdp, max_steps, n_episodes, rng, out)
 
 
 @njit(cache=True)
 def _episodes_rnql(st, mdp, max_steps, n_episodes, rng, out):
-    return _episodes(K.RNQL, st, mdp, max_steps, n_episodes, rng, out)
+    return _episodes(RNQL, st, mdp, max_steps, n_episodes, rng, out)
 
 
 @njit(cache=True)
 def _episodes_pfh(st, mdp, max_steps, n_episodes, rng, out):
-    return _episodes(K.PFH, st, mdp, max_steps, n_episodes, rng, out)
+    return _episodes(PFH, st, mdp, max_steps, n_episodes, rng, out)
 
 
 @njit(cache=True)
 def _episodes_sarsars(st, mdp, max_steps, n_episodes, rng, out):
-    return _episodes(K.SARSARS, st, mdp, max_steps, n_episodes, rng, out)
+    return _episodes(SARSARS, st, mdp, max_steps, n_episodes, rng, out)
 
 
 @njit(cache=True)
 def _episodes_haql(st, mdp, max_steps, n_episodes, rng, out):
-    return _episodes(K.HAQL, st, mdp, max_steps, n_episodes, rng, out)
+    return _episodes(HAQL, st, mdp, max_steps, n_episodes, rng, out)
 
 
 @njit(cache=True)
 def _episodes_rnhql(st, mdp, max_steps, n_episodes, rng, out):
-    return _episodes(K.RNHQL, st, mdp, max_steps, n_episodes, rng, out)
+    return _episodes(RNHQL, st, mdp, max_steps, n_episodes, rng, out)
 
 
 @njit(cache=True)
 def _episodes_qlambda(st, mdp, max_steps, n_episodes, rng, out):
-    return _episodes(K.QLAMBDA, st, mdp, max_steps, n_episodes, rng, out)
+    return _episodes(QLAMBDA, st, mdp, max_steps, n_episodes, rng, out)
 
 
 @njit(cache=True)
 def _episodes_dyna(st, mdp, max_steps, n_episodes, rng, out):
-    return _episodes(K.DYNA, st, mdp, max_steps, n_episodes, rng, out)
+    return _episodes(DYNA, st, mdp, max_steps, n_episodes, rng, out)
 
 
 EPISODE_LOOPS = {K.QL: _episodes_ql, K.RNQL: _episodes_rnql, K.PFH: _episodes_pfh,

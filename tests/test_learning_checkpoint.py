@@ -16,6 +16,7 @@ from learning import (
     save_checkpoint,
     train_tabular,
 )
+from learning import kinds as K
 from learning.geometry import geometry_of
 from learning.train import EPISODE_FIELDS
 from sim.grid import build_model
@@ -131,3 +132,31 @@ def test_wrong_state_count(saved, paper50_model):
 
 def test_checkpoint_error_is_value_error():
     assert issubclass(CheckpointError, ValueError)
+
+
+def test_env_agent_checkpoint_resumes_in_the_kernel(tmp_path, paper50_model):
+    """20 episodes through gymnasium, saved, then 20 more in the kernel == 40 in the kernel."""
+    import gymnasium as gym
+
+    import sim.envs  # noqa: F401
+    from learning import RNHQL, run_env_episodes
+
+    cfg = RNHQL(warmup_episodes=10)
+    env = gym.make("rnhql/GridRoute-v0")
+    agent = make_agent(cfg, geometry_of(env.unwrapped.model), np.random.default_rng(5))
+    run_env_episodes(agent, env, 20)
+    ck = load_checkpoint(save_checkpoint(tmp_path / "env.npz", Checkpoint.of_agent(agent)))
+    q_saved = ck.state.q.copy()
+    rest = train_tabular(cfg, paper50_model, 40, np.random.default_rng(0), resume=ck)
+    full = train_tabular(cfg, paper50_model, 40, np.random.default_rng(5))
+    for name, a, b in zip(full.state._fields, full.state, rest.state, strict=True):
+        assert np.array_equal(a, b), name
+    np.testing.assert_array_equal(full.steps[20:], rest.steps[20:])
+    assert np.array_equal(ck.state.q, q_saved)  # resuming does not mutate the checkpoint
+
+
+def test_more_episodes_than_asked(saved, paper50_model):
+    ck = load_checkpoint(saved)
+    ck.state.ivar[K.I_EPISODE] = 50
+    with pytest.raises(CheckpointError, match="field 'episodes' is 50"):
+        train_tabular(RNHQL(), paper50_model, 10, np.random.default_rng(0), resume=ck)

@@ -104,3 +104,13 @@ def test_episodes_to_optimal(paper50_model):
 def test_bad_test_every():
     with pytest.raises(ValueError, match="test_every"):
         train_tabular(STQL(), tiny_grid(), 5, np.random.default_rng(0), test_every=0)
+
+
+def test_paper_protocol_learning_sanity(paper50_model):
+    """Loose regression bounds on one seed of the paper protocol (paper-50, 3000 episodes)."""
+    r = train_tabular(RNHQL(), paper50_model, 3000, np.random.default_rng(0))
+    assert r.success[-300:].mean() > 0.9  # reaches G from random starts
+    assert r.optimal_action_fraction > 0.6
+    assert np.all(r.shaping_mean[:300] == 0) and np.any(r.shaping_std[300:] > 0)
+    st = train_tabular(STQL(), paper50_model, 3000, np.random.default_rng(0))
+    assert st.success[-300:].mean() < r.success[-300:].mean()  # shaping helps

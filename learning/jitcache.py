@@ -1,0 +1,51 @@
+"""Drop numba's on-disk cache of this package when any of its sources changed.
+
+numba keys a cached function on its own file's timestamp only. The kernels
+inline rules from other modules, so after an edit of, say, ``rules.py`` the
+cached kernels in ``kernels.py`` would silently run the old rule. On import,
+:func:`drop_stale_cache` hashes every ``learning/*.py`` and, if the hash differs
+from the one stamped in ``__pycache__``, deletes the package's ``.nbi``/``.nbc``
+files there (numba recompiles on demand). With ``NUMBA_CACHE_DIR`` set the cache
+lives elsewhere and is left alone (use a fresh directory per source version).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parent
+STAMP = "learning-sources.sha256"
+
+
+def sources_digest(package: Path = PACKAGE) -> str:
+    h = hashlib.sha256()
+    for p in sorted(package.glob("*.py")):
+        h.update(p.name.encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()
+
+
+def drop_stale_cache(package: Path = PACKAGE) -> bool:
+    """Delete the package's numba cache files if the sources changed; True if it did."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return False
+    cache = package / "__pycache__"
+    digest = sources_digest(package)
+    stamp = cache / STAMP
+    try:
+        if stamp.read_text() == digest:
+            return False
+    except OSError:
+        pass
+    try:
+        cache.mkdir(exist_ok=True)
+        for f in [*cache.glob("*.nbi"), *cache.glob("*.nbc")]:
+            f.unlink(missing_ok=True)
+        tmp = cache / f".{STAMP}.{os.getpid()}"
+        tmp.write_text(digest)
+        os.replace(tmp, stamp)
+    except OSError:  # read-only install: numba falls back to its own cache locations
+        return False
+    return True

@@ -1,0 +1,340 @@
+"""Rerun recordings of training runs: batched, columnar, safe to interrupt.
+
+API (all arrays are numpy; nothing is logged per step)::
+
+    rec = Recorder.create(path, scenario, model, method="rnh-ql", config=asdict(cfg), seed=0,
+                          world="grid")          # metadata + static scene + blueprint
+    rec.log_episode_trajectory(episode, states, poses=None, contacts=None, sim_time_s=None,
+                               kind="train", contact_steps=None)
+    rec.log_episode_metrics(episodes, steps, success, returns, reward_per_step=None,
+                            wall_time_s=None, shaping_mean=None, shaping_std=None)
+    rec.log_values(episode, q, greedy=None, v_nn=None)   # every K episodes
+    rec.log_route("greedy-final", states)                # e.g. the final greedy route
+    rec.close()                                          # idempotent; also `with Recorder...`
+
+``states[k]`` is the state after ``k`` moves (``states[0]`` the start), so an
+episode of ``n`` moves has ``n + 1`` states; ``poses`` (physics: x, y, heading
+[m, m, rad]) and ``sim_time_s`` [s] have one row per state. In the grid world
+poses come from ``model.coords`` and the heading from the last move.
+``contacts`` are (k, 2) points [m] with optional ``contact_steps``; left out in
+the grid world, the bumps (moves that left the state unchanged) are shown.
+
+Cost: the ``log_*`` calls only copy arrays into a buffer; when
+``flush_rows`` rows are pending or ``flush_interval_s`` has passed (and on
+``close``), the buffer becomes one ``send_columns`` call per entity, built
+vectorised over all buffered episodes (:mod:`scenarios.recording_batch`).
+Measure with ``python -m scenarios.recording_bench``.
+
+Files: :class:`RecordingFile` owns an explicit ``rr.RecordingStream`` writing to
+``<path>.part``; ``close`` flushes, writes the footer and renames it to ``path``,
+so a finished ``.rrd`` always passes ``rerun rrd verify``. Ctrl-C is a
+``KeyboardInterrupt``: ``with`` blocks (and an ``atexit`` hook) close the file,
+so an interrupted run leaves a verified recording of everything logged so far.
+A hard kill (SIGKILL, power loss) leaves ``<path>.part`` without a footer; it
+still opens in the viewer and passes ``rerun rrd verify --check-footers false``.
+
+Entity paths (``P`` = ``prefix``, empty for a single run); [timelines]::
+
+    P/meta                      TextDocument: versions, git commit, scenario, method, config
+    P/world                     static Transform3D y-flip; everything below in metres, y up
+    P/world/arena|grid|occupancy|obstacles|start|goal|legend   static scene
+    P/world/routes/bfs          static BFS shortest route; routes/<name> from log_route
+    P/world/robot               Points2D disc + Arrows2D heading, a row per state
+                                                                [step, episode, sim_time]
+    P/world/train|greedy/trajectory|visited|contacts   a row per episode [step, episode]
+    P/world/train|greedy/events TextLog: a summary per episode, given contacts [step, episode]
+    P/world/values/v_nn|max_q   DepthImage heat maps (viridis) + /legend; values/policy
+                                Arrows2D; values/mask static blocked cells [episode, step]
+    P/metrics/...               Scalars: steps/episode, steps/optimal, success, success_rate,
+                                return, reward_per_step, wall_time_ms, shaping/mean,
+                                shaping/std, policy_optimal                      [episode]
+
+Timelines: ``episode`` (training episode; the latest recorded trajectory, heat
+maps and curves follow it), ``step`` (the recorded episodes played back to back,
+one row per state), ``sim_time`` (the same in simulated seconds, physics world).
+
+Comparisons (methods x seeds): each run is a subtree ``runs/<method>/s<seed>``
+(:func:`run_prefix`); see :mod:`scenarios.recording_compare`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import rerun as rr
+
+from scenarios import recording_scene as scene
+from scenarios.recording_batch import EpisodeRecord, ValueFrame, send_episodes, send_values
+from scenarios.recording_file import RecordingFile, rerun_cli, verify_recording
+from sim.grid import TabularModel
+from sim.planning import ACTION_DELTAS
+from sim.scenario import Scenario
+
+__all__ = ["Recorder", "RecordingFile", "rerun_cli", "run_prefix", "verify_recording"]
+
+SUCCESS_WINDOW = scene.SUCCESS_WINDOW
+
+
+def run_prefix(method: str, seed: int) -> str:
+    return f"runs/{rr.escape_entity_path_part(method)}/s{seed}"
+
+
+class Recorder:
+    """Everything one training run logs; see the module docstring."""
+
+    def __init__(self, file: RecordingFile, prefix: str, scenario: Scenario,
+                 model: TabularModel, *, world: str, owns_file: bool,
+                 flush_rows: int = 100_000, flush_interval_s: float = 5.0) -> None:
+        self.file, self.stream, self.prefix = file, file.stream, prefix.strip("/")
+        self.scenario, self.model, self.world = scenario, model, world
+        self.owns_file = owns_file
+        self.flush_rows, self.flush_interval_s = flush_rows, flush_interval_s
+        self._scalars: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}  # entity -> rows
+        self._rows = 0
+        self._last_flush = time.monotonic()
+        self._step = 0  # next value of the `step` playback timeline
+        self._sim = 0.0  # next value of `sim_time` [s]
+        self._episodes: list[EpisodeRecord] = []
+        self._values: list[ValueFrame] = []
+        self._deltas = np.asarray(ACTION_DELTAS, dtype=np.float64) * model.cell_size_m
+        self._success_tail = np.zeros(0)
+        self._free = np.flatnonzero(~model.blocked.ravel())
+        self._reachable = np.flatnonzero(model.distance_to_goal > 0)
+        self._n_routes = 0
+        self.closed = False
+        file._recorders.append(self)
+
+    # ---------------------------------------------------------------- creation
+    @classmethod
+    def create(cls, path: str | Path | None, scenario: Scenario, model: TabularModel, *,
+               method: str, config: dict[str, Any] | Any, seed: int, world: str = "grid",
+               application_id: str = "rnhql", recording_name: str | None = None,
+               prefix: str = "", file: RecordingFile | None = None,
+               recording_id: str | None = None, blueprint: bool = True,
+               flush_rows: int = 100_000, flush_interval_s: float = 5.0) -> Recorder:
+        """Open (or join ``file``) and log metadata, the static scene and the blueprint.
+
+        ``config`` is a dict or a config dataclass. With ``file`` (a shared
+        :class:`RecordingFile`) ``path`` is ignored and the run logs under ``prefix``.
+        """
+        if world not in ("grid", "physics"):
+            raise ValueError(f"world must be 'grid' or 'physics', got {world!r}")
+        owns = file is None
+        if file is None:
+            if path is None:
+                raise ValueError("give a path or a shared RecordingFile")
+            name = recording_name or f"{scenario.name} · {method} · s{seed} · {world}"
+            file = RecordingFile(path, application_id=application_id,
+                                 recording_id=recording_id, recording_name=name)
+        rec = cls(file, prefix, scenario, model, world=world, owns_file=owns,
+                  flush_rows=flush_rows, flush_interval_s=flush_interval_s)
+        st = rec.stream
+        if dataclasses.is_dataclass(config) and not isinstance(config, type):
+            config = dataclasses.asdict(config)
+        meta = scene.run_metadata(scenario, model, method=method, config=config, seed=seed,
+                                  world=world)
+        st.log(rec._p("meta"), rr.TextDocument(scene.meta_markdown(meta, scenario, rec.prefix),
+                                                media_type="text/markdown"), static=True)
+        props = {k: (v if isinstance(v, int | float | str) else json.dumps(v, default=str))
+                 for k, v in meta.items()}
+        st.send_property(f"rnhql/{rec.prefix}" if rec.prefix else "rnhql",
+                         rr.AnyValues(**props))
+        scene.log_scene(st, rec.prefix, scenario, model)
+        if rec.prefix:  # one of several runs in a file: label and colour its curves
+            scene.log_series_styles(st, rec.prefix, label=f"{method} s{seed}",
+                                    colour=scene.method_colour(method))
+        else:
+            scene.log_series_styles(st, rec.prefix)
+        if blueprint:
+            st.send_blueprint(scene.run_blueprint(rec.prefix, scenario), make_active=True,
+                              make_default=True)
+        return rec
+
+    def _p(self, rest: str) -> str:
+        return scene.path(self.prefix, rest)
+
+    # ---------------------------------------------------------------- buffering
+    def _add_scalars(self, name: str, episodes: np.ndarray, values: np.ndarray) -> None:
+        rows = (episodes, np.asarray(values, dtype=np.float64).reshape(-1))
+        self._scalars.setdefault(self._p(f"metrics/{name}"), []).append(rows)
+        self._rows += len(episodes)
+
+    def _maybe_flush(self) -> None:
+        if (self._rows >= self.flush_rows
+                or time.monotonic() - self._last_flush >= self.flush_interval_s):
+            self.flush()
+
+    def flush(self) -> None:
+        """Send everything buffered (one send_columns call per entity)."""
+        episodes, self._episodes = self._episodes, []
+        if episodes:
+            send_episodes(self.stream, self.prefix, self.model, self.world, episodes)
+        frames, self._values = self._values, []
+        if frames:
+            send_values(self.stream, self.prefix, self.model, frames)
+        while self._scalars:
+            entity, rows = self._scalars.popitem()
+            self.stream.send_columns(
+                entity, indexes=[rr.TimeColumn("episode",
+                                               sequence=np.concatenate([r[0] for r in rows]))],
+                columns=rr.Scalars.columns(scalars=np.concatenate([r[1] for r in rows])))
+        self._rows = 0
+        self._last_flush = time.monotonic()
+
+    # ---------------------------------------------------------------- per episode
+    def log_episode_trajectory(self, episode: int, states: np.ndarray,
+                               poses: np.ndarray | None = None,
+                               contacts: np.ndarray | None = None,
+                               sim_time_s: np.ndarray | None = None, kind: str = "train",
+                               contact_steps: np.ndarray | None = None) -> None:
+        """One episode: robot per step, trajectory, visited cells, contacts, events.
+
+        Only copies the arrays; the columns are built for many episodes at once
+        when the buffer is flushed. ``contact_steps`` (one per contact, moves
+        into the episode) places each contact's event on the ``step`` timeline.
+        """
+        states = np.array(states, dtype=np.int64)
+        n = len(states)
+        if n == 0:
+            return
+        if poses is not None:
+            poses = np.array(poses, dtype=np.float64).reshape(-1, 3)
+            if len(poses) != n:
+                raise ValueError(f"poses has {len(poses)} rows, states {n}: one pose per state")
+        t = None
+        sim0 = self._sim
+        if sim_time_s is not None:
+            t = np.array(sim_time_s, dtype=np.float64)
+            if len(t) != n:
+                raise ValueError(f"sim_time_s has {len(t)} values, states {n}")
+            self._sim += float(t[-1] - t[0]) + (float(t[-1] - t[-2]) if n > 1 else 0.0)
+        if contacts is not None:
+            contacts = np.array(contacts, dtype=np.float64).reshape(-1, 2)
+            if contact_steps is not None:
+                contact_steps = np.array(contact_steps, dtype=np.int64).reshape(-1)
+                if len(contact_steps) != len(contacts):
+                    raise ValueError("contact_steps needs one step per contact")
+        self._episodes.append(EpisodeRecord(int(episode), kind, states, poses, contacts,
+                                            contact_steps, t, self._step, sim0))
+        self._step += n
+        self._rows += n
+        self._maybe_flush()
+
+    def log_episode_metrics(self, episodes: np.ndarray, steps: np.ndarray,
+                            success: np.ndarray, returns: np.ndarray,
+                            reward_per_step: np.ndarray | None = None,
+                            wall_time_s: np.ndarray | None = None,
+                            shaping_mean: np.ndarray | None = None,
+                            shaping_std: np.ndarray | None = None) -> None:
+        """Per-episode curves on the `episode` timeline (a batch of consecutive episodes)."""
+        ep = np.asarray(episodes, dtype=np.int64).reshape(-1)
+        if len(ep) == 0:
+            return
+        given = {"steps": steps, "success": success, "returns": returns,
+                 "reward_per_step": reward_per_step, "wall_time_s": wall_time_s,
+                 "shaping_mean": shaping_mean, "shaping_std": shaping_std}
+        for name, arr in given.items():
+            if arr is not None and np.size(arr) != len(ep):
+                raise ValueError(f"{name} has {np.size(arr)} values for {len(ep)} episodes")
+        steps_f = np.asarray(steps, dtype=np.float64)
+        succ = np.asarray(success, dtype=np.float64)
+        ret = np.asarray(returns, dtype=np.float64)
+        rps = (ret / np.maximum(steps_f, 1.0) if reward_per_step is None
+               else np.asarray(reward_per_step, dtype=np.float64))
+        hist = np.concatenate([self._success_tail, succ])
+        cs = np.concatenate([[0.0], np.cumsum(hist)])
+        idx = np.arange(len(self._success_tail), len(hist)) + 1
+        lo = np.maximum(idx - SUCCESS_WINDOW, 0)
+        rate = (cs[idx] - cs[lo]) / (idx - lo)
+        self._success_tail = hist[-(SUCCESS_WINDOW - 1):]
+        series: dict[str, np.ndarray | None] = {
+            "steps/episode": steps_f,
+            "steps/optimal": np.full(len(ep), float(self.model.optimal_route_length)),
+            "success": succ, "success_rate": rate, "return": ret, "reward_per_step": rps,
+            "wall_time_ms": None if wall_time_s is None else 1e3 * np.asarray(wall_time_s),
+            "shaping/mean": shaping_mean, "shaping/std": shaping_std}
+        for name, values in series.items():
+            if values is not None:
+                self._add_scalars(name, ep, values)
+        self._maybe_flush()
+
+    # ---------------------------------------------------------------- every K episodes
+    def _heat(self, values: np.ndarray, value_range: tuple[float, float] | None
+              ) -> tuple[np.ndarray, float, float]:
+        m = self.model
+        v = np.asarray(values, dtype=np.float64).reshape(-1)
+        free_v = v[self._free]
+        lo, hi = value_range or (float(free_v.min()), float(free_v.max()))
+        hi = hi if hi > lo else lo + 1.0
+        img = np.where(m.blocked.ravel(), lo, v).reshape(m.ny, m.nx).astype(np.float32)
+        return img, lo, hi
+
+    def log_values(self, episode: int, q: np.ndarray, greedy: np.ndarray | None = None,
+                   v_nn: np.ndarray | None = None,
+                   value_range: tuple[float, float] | None = None) -> None:
+        """Heat maps of V_NN and max_a Q, and the greedy policy as arrows (reachable cells).
+
+        ``greedy`` defaults to argmax Q (first of ties); ``value_range`` fixes the
+        colour scale (default: min..max over the free cells of each frame). Sent
+        with the next flush, like the episodes.
+        """
+        m = self.model
+        q = np.asarray(q, dtype=np.float64)
+        greedy = np.argmax(q, axis=1) if greedy is None else np.asarray(greedy, np.int64)
+        s = self._reachable
+        g = greedy[s]
+        d = self._deltas[g]
+        ok = m.distance_to_goal[m.next_state[s, g]] == m.distance_to_goal[s] - 1
+        self._values.append(ValueFrame(
+            episode=int(episode), step=max(self._step - 1, 0),
+            v_nn=None if v_nn is None else self._heat(v_nn, value_range),
+            max_q=self._heat(q.max(axis=1), value_range),
+            origins=(m.coords[s] - 0.3 * d).astype(np.float32),
+            vectors=(0.6 * d).astype(np.float32), optimal=ok))
+        self._add_scalars("policy_optimal", np.array([episode], np.int64),
+                          np.array([float(ok.mean()) if len(s) else 0.0]))
+        self._rows += m.n_states // 10
+        self._maybe_flush()
+
+    def log_route(self, name: str, states: Sequence[int] | np.ndarray,
+                  episode: int | None = None) -> None:
+        """A route as a labelled line (static, or at ``episode``)."""
+        pts = scene.route_points(self.model, states)
+        colour = scene.ROUTE_PALETTE[self._n_routes % len(scene.ROUTE_PALETTE)]
+        self._n_routes += 1
+        strip = rr.LineStrips2D([pts], radii=0.1 * self.scenario.cell_size_m, colors=[colour],
+                                labels=[f"{name}: {len(pts) - 1} moves"], show_labels=True,
+                                draw_order=scene.Z_ROUTE + 1)
+        ent = self._p(f"world/routes/{rr.escape_entity_path_part(name)}")
+        if episode is None:
+            self.stream.log(ent, strip, static=True)
+            return
+        self.stream.set_time("episode", sequence=int(episode))
+        try:
+            self.stream.log(ent, strip)
+        finally:
+            self.stream.disable_timeline("episode")
+
+    # ---------------------------------------------------------------- closing
+    def close(self) -> None:
+        """Flush; close the file if this recorder opened it. Safe to call twice."""
+        if self.closed:
+            return
+        self.closed = True
+        try:
+            self.flush()
+        finally:
+            if self.owns_file:
+                self.file.close()
+
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,70 @@
+"""Comparisons (methods x seeds) in one recording; see :mod:`scenarios.recording`.
+
+Each run logs under its own subtree ``runs/<method>/s<seed>`` (:func:`run_prefix`).
+
+* One process: open one :class:`~scenarios.recording.RecordingFile`, create a
+  recorder per run with ``file=f, prefix=run_prefix(m, s), blueprint=False``,
+  and send :func:`~scenarios.recording_scene.comparison_blueprint` once.
+* Worker processes (``rnhql compare`` runs seeds in a pool): every worker
+  records ``<out>.parts/<method>-s<seed>.rrd`` with the shared ``recording_id``
+  and ``blueprint=False``; the parent calls :func:`gather_comparison`, which
+  adds a header (comparison table + blueprint) and merges everything with
+  ``rerun rrd merge`` into one ``.rrd``. Parts with the same recording id also
+  open together in the viewer (``rerun parts/*.rrd``) without merging.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import subprocess
+from collections.abc import Sequence
+from pathlib import Path
+
+import rerun as rr
+
+from scenarios import recording_scene as scene
+from scenarios.recording import RecordingFile, rerun_cli, run_prefix
+from sim.scenario import Scenario
+
+
+def write_comparison_header(path: str | Path, scenario: Scenario,
+                            runs: Sequence[tuple[str, int]], *, recording_id: str,
+                            application_id: str = "rnhql", title: str | None = None) -> Path:
+    """A small part holding the comparison's name, description and blueprint."""
+    with RecordingFile(path, application_id=application_id, recording_id=recording_id,
+                       recording_name=title or f"{scenario.name} · compare") as f:
+        table = "\n".join(f"| {m} | {s} | `{run_prefix(m, s)}` |" for m, s in runs)
+        f.stream.log("meta", rr.TextDocument(
+            f"# rnhql comparison on {scenario.name}\n\n| method | seed | subtree |\n"
+            f"|---|---|---|\n{table}\n", media_type="text/markdown"), static=True)
+        f.stream.send_blueprint(scene.comparison_blueprint(runs, scenario, run_prefix),
+                                make_active=True, make_default=True)
+    return Path(path)
+
+
+def gather_recordings(parts: Sequence[str | Path], out: str | Path) -> Path:
+    """Merge part files (same recording id) into one verified ``.rrd`` via ``rerun rrd merge``."""
+    out = Path(out)
+    tmp = out.with_name(out.name + ".part")
+    res = subprocess.run([rerun_cli(), "rrd", "merge", *map(str, parts), "-o", str(tmp)],
+                         capture_output=True, text=True, timeout=600)
+    if res.returncode != 0:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+        raise RuntimeError(f"rerun rrd merge failed: {res.stderr.strip()}")
+    os.replace(tmp, out)
+    return out
+
+
+def gather_comparison(out: str | Path, parts: Sequence[str | Path], scenario: Scenario,
+                      runs: Sequence[tuple[str, int]], *, recording_id: str,
+                      application_id: str = "rnhql") -> Path:
+    """Header (blueprint) + per-run parts -> one ``.rrd``; the parts are left in place."""
+    out = Path(out)
+    header = write_comparison_header(out.with_name(out.stem + ".header.rrd"), scenario, runs,
+                                     recording_id=recording_id, application_id=application_id)
+    try:
+        return gather_recordings([header, *parts], out)
+    finally:
+        header.unlink(missing_ok=True)

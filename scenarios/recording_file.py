@@ -1,0 +1,99 @@
+"""The file side of a recording: an explicit stream, a ``.part`` file, a safe close.
+
+See :mod:`scenarios.recording` for the recording API.
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import uuid
+import warnings
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Protocol
+
+import rerun as rr
+
+
+class _Flushable(Protocol):
+    prefix: str
+
+    def flush(self) -> None: ...
+
+
+def rerun_cli() -> str:
+    """The ``rerun`` executable of this environment."""
+    local = Path(sys.executable).with_name("rerun")
+    return str(local) if local.exists() else (shutil.which("rerun") or "rerun")
+
+
+def verify_recording(path: str | Path, check_footers: bool = True) -> tuple[bool, str]:
+    """Run ``rerun rrd verify`` on a file; (ok, combined output)."""
+    cmd = [rerun_cli(), "rrd", "verify", f"--check-footers={str(check_footers).lower()}",
+           str(path)]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    return out.returncode == 0, (out.stdout + out.stderr).strip()
+
+
+@contextlib.contextmanager
+def _no_sigint() -> Iterator[None]:
+    """Ignore Ctrl-C for the moment it takes to finish a file (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+class RecordingFile:
+    """An explicit RecordingStream with a file sink at ``<path>.part``, renamed on close."""
+
+    def __init__(self, path: str | Path, *, application_id: str = "rnhql",
+                 recording_id: str | None = None, recording_name: str | None = None) -> None:
+        self.path = Path(path)
+        self.part = self.path.with_name(self.path.name + ".part")
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.stream = rr.RecordingStream(application_id,
+                                         recording_id=recording_id or str(uuid.uuid4()))
+        self.stream.set_log_tick_enabled(False)
+        self.stream.set_log_time_enabled(False)
+        self.stream.save(self.part)
+        if recording_name:
+            self.stream.send_recording_name(recording_name)
+        self._recorders: list[_Flushable] = []  # flushed before the file is closed
+        self._pid = os.getpid()  # a forked child must not finish the parent's file
+        self.closed = False
+        atexit.register(self.close)
+
+    def close(self) -> None:
+        """Flush every attached recorder, write the footer, rename. Safe to call twice."""
+        if self.closed or os.getpid() != self._pid:
+            return
+        self.closed = True
+        with _no_sigint():  # a second Ctrl-C must not leave the file half-finished
+            for r in self._recorders:
+                try:
+                    r.flush()
+                except Exception as exc:  # keep going: the file must still be finished
+                    warnings.warn(f"recording: could not flush {r.prefix or 'run'}: {exc}",
+                                  stacklevel=2)
+            self.stream.flush()
+            self.stream.disconnect()
+            os.replace(self.part, self.path)
+        atexit.unregister(self.close)
+
+    def __enter__(self) -> RecordingFile:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,58 @@
+"""The method registry and configs: paper defaults, validation, packing, round trips."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+
+from learning import METHODS, RNHQL, STQL, config_from_fields
+from learning import kinds as K
+
+
+def test_registry_names():
+    assert list(METHODS) == ["st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "rnh-ql", "q-opt",
+                             "q-lambda", "dyna-q"]
+    assert METHODS["rnh-ql"].name == "RNH-QL" and METHODS["st-ql"].name == "ST-QL"
+    for cli, cls in METHODS.items():
+        assert cls.cli == cli and cls.kind >= 0
+
+
+@pytest.mark.parametrize("cls", list(METHODS.values()), ids=list(METHODS))
+def test_paper_defaults_and_round_trip(cls):
+    cfg = cls()
+    assert (cfg.eps, cfg.alpha, cfg.gamma) == (0.1, 0.1, 0.95)
+    if hasattr(cfg, "lam"):
+        assert cfg.lam == 0.85
+    assert config_from_fields(cls.cli, cfg.fields()) == cfg
+    p = cfg.params()
+    assert p.shape == (K.N_PARAMS,) and p[K.P_EPS] == 0.1 and p[K.P_GAMMA] == 0.95
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cfg.eps = 0.2
+
+
+def test_rnh_ql_defaults_and_packing():
+    cfg = RNHQL()
+    assert (cfg.k, cfg.warmup_episodes, cfg.freeze_after_episodes) == (10, 300, None)
+    p = cfg.params()
+    assert p[K.P_WARMUP] == 300 and math.isinf(p[K.P_FREEZE])
+    assert RNHQL(freeze_after_episodes=500).params()[K.P_FREEZE] == 500
+
+
+@pytest.mark.parametrize("bad", [dict(eps=1.5), dict(alpha=0.0), dict(gamma=1.2)])
+def test_invalid_common_fields(bad):
+    with pytest.raises(ValueError, match=next(iter(bad))):
+        STQL(**bad)
+
+
+@pytest.mark.parametrize("bad", [dict(lam=-0.1), dict(k=0), dict(beta=0.0),
+                                 dict(warmup_episodes=-1), dict(freeze_after_episodes=-5)])
+def test_invalid_rnh_ql_fields(bad):
+    with pytest.raises(ValueError, match=f"RNHQL.{next(iter(bad))}"):
+        RNHQL(**bad)
+
+
+def test_unknown_method():
+    with pytest.raises(ValueError, match="unknown method 'nope'"):
+        config_from_fields("nope", {})

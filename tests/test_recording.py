@@ -1,0 +1,230 @@
+"""Rerun recordings: files verify, data round-trips, Ctrl-C leaves a good file, merging."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+import uuid
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from scenarios.recording import Recorder, RecordingFile, run_prefix, verify_recording
+from scenarios.recording_batch import grid_poses
+from scenarios.recording_compare import gather_comparison
+from scenarios.recording_demo import record_synthetic
+from scenarios.recording_scene import git_commit
+from sim.planning import bfs_route
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def read_table(path: Path, contents: list[str], index: str | None):
+    """The recording as an Arrow table via the catalog API (needs rerun-sdk[catalog]).
+
+    ``index=None`` reads the static data.
+    """
+    pytest.importorskip("datafusion")
+    import rerun as rr
+
+    with rr.server.Server(host="127.0.0.1", datasets={"d": [str(path)]}) as server:
+        ds = server.client().get_dataset("d")
+        return ds.filter_contents(contents).reader(index=index).to_arrow_table()
+
+
+def positions(table, entity: str) -> np.ndarray:
+    col = table.column(f"{entity}:Points2D:positions").to_pylist()
+    return np.array([row[0] for row in col], dtype=np.float64)
+
+
+@pytest.fixture(scope="module")
+def synthetic(tmp_path_factory, paper50, paper50_model):
+    path = tmp_path_factory.mktemp("rec") / "run.rrd"
+    out = record_synthetic(path, paper50, paper50_model, episodes=40, record_every=10,
+                           values_every=20)
+    return path, out
+
+
+def test_recording_verifies_and_part_is_renamed(synthetic):
+    path, _ = synthetic
+    ok, msg = verify_recording(path)
+    assert ok, msg
+    assert not path.with_name(path.name + ".part").exists()
+
+
+def test_robot_positions_round_trip(synthetic, paper50_model):
+    path, out = synthetic
+    table = read_table(path, ["/world/robot"], "step")
+    got = positions(table, "/world/robot")
+    trajs = [out["trajectories"][k] for k in sorted(out["trajectories"])]
+    want = np.concatenate([paper50_model.coords[s] for s in trajs])
+    np.testing.assert_allclose(got, want, atol=1e-5)  # float32 in the file
+    episodes = np.array(table.column("episode").to_pylist())
+    np.testing.assert_array_equal(
+        episodes, np.concatenate([np.full(len(out["trajectories"][k]), k)
+                                  for k in sorted(out["trajectories"])]))
+    np.testing.assert_array_equal(table.column("step").to_pylist(), np.arange(len(want)))
+
+
+def test_metrics_round_trip(synthetic, paper50_model):
+    path, _ = synthetic
+    table = read_table(path, ["/metrics/steps/**"], "episode")
+    assert table.num_rows == 40
+    optimal = [v[0] for v in table.column("/metrics/steps/optimal:Scalars:scalars").to_pylist()]
+    assert set(optimal) == {paper50_model.optimal_route_length}
+    heat = read_table(path, ["/world/values/max_q", "/world/values/policy"], "episode")
+    assert heat.column("episode").to_pylist() == [19, 39]  # every 20 episodes
+    arrows = heat.column("/world/values/policy:Arrows2D:vectors").to_pylist()
+    assert len(arrows[0]) == int((paper50_model.distance_to_goal > 0).sum())
+
+
+def test_static_scene_has_bfs_route(synthetic, paper50_model):
+    path, _ = synthetic
+    table = read_table(path, ["/world/routes/bfs"], None)
+    strip = table.column("/world/routes/bfs:LineStrips2D:strips").to_pylist()[0][0]
+    m = paper50_model
+    want = m.coords[bfs_route(m.next_state, m.distance_to_goal, m.start)]
+    np.testing.assert_allclose(np.array(strip), want, atol=1e-5)
+
+
+def test_physics_poses_sim_time_and_contacts(tmp_path, paper50, paper50_model):
+    m = paper50_model
+    path = tmp_path / "phys.rrd"
+    states = np.array([m.start, m.start, m.next_state[m.start, 3], m.next_state[m.start, 3]])
+    poses = np.column_stack([m.coords[states] + 0.1, [0.0, 0.5, 1.0, 1.5]])
+    with Recorder.create(path, paper50, m, method="rnh-ql", config={"a": 1}, seed=3,
+                         world="physics") as rec:
+        for ep in range(2):
+            rec.log_episode_trajectory(ep, states, poses=poses, sim_time_s=[0.0, 0.2, 0.4, 0.6],
+                                       contacts=[[1.0, 2.0]], contact_steps=[1])
+    assert verify_recording(path)[0]
+    table = read_table(path, ["/world/robot"], "sim_time")
+    np.testing.assert_allclose(positions(table, "/world/robot"),
+                               np.concatenate([poses[:, :2]] * 2), atol=1e-5)
+    t = np.array(table.column("sim_time").to_pylist(), dtype="timedelta64[ns]")
+    np.testing.assert_allclose(t.astype(np.int64) / 1e9, [0, .2, .4, .6, .8, 1.0, 1.2, 1.4])
+    events = read_table(path, ["/world/train/events"], "step")
+    texts = [r[0] for r in events.column("/world/train/events:TextLog:text").to_pylist()]
+    assert any("contact at (1.00, 2.00) m, step 1" in t for t in texts)
+
+
+def test_grid_heading_follows_last_move(paper50_model):
+    m = paper50_model
+    s0 = m.start
+    up, right = m.next_state[s0, 0], m.next_state[s0, 3]
+    states = np.array([s0, s0, up, up, s0, s0, right])  # ep 1: [s0 s0 up up], ep 2: [s0 s0 right]
+    _, vec = grid_poses(m, states, np.array([0, 4]))
+    c = m.cell_size_m
+    np.testing.assert_allclose(vec, [[0, c], [0, c], [0, c], [0, c], [c, 0], [c, 0], [c, 0]])
+
+
+def test_close_is_idempotent_and_bad_input_is_rejected(tmp_path, paper50, paper50_model):
+    rec = Recorder.create(tmp_path / "x.rrd", paper50, paper50_model, method="st-ql",
+                          config={}, seed=0)
+    with pytest.raises(ValueError, match="one pose per state"):
+        rec.log_episode_trajectory(0, [1, 2, 3], poses=np.zeros((2, 3)))
+    rec.log_episode_trajectory(0, [paper50_model.start])
+    rec.close()
+    rec.close()
+    assert verify_recording(tmp_path / "x.rrd")[0]
+    with pytest.raises(ValueError, match="world"):
+        Recorder.create(tmp_path / "y.rrd", paper50, paper50_model, method="st-ql", config={},
+                        seed=0, world="moon")
+
+
+def test_metadata_names_versions_and_commit(synthetic):
+    path, _ = synthetic
+    table = read_table(path, ["/meta"], None)
+    doc = table.column("/meta:TextDocument:text").to_pylist()[0][0]
+    for word in ("rnh-ql", "paper-50", "rerun-sdk", "git_commit", "alpha"):
+        assert word in doc
+    commit = git_commit(REPO)
+    assert commit is None or len(commit.split("+")[0]) == 40
+    assert git_commit(Path("/")) is None or True  # tolerated outside a repository
+
+
+def test_comparison_parts_gather_into_one_file(tmp_path, paper50, paper50_model):
+    rid = str(uuid.uuid4())
+    runs = [("rnh-ql", 0), ("st-ql", 0)]
+    parts = []
+    for method, seed in runs:
+        part = tmp_path / f"{method}-s{seed}.rrd"
+        record_synthetic(part, paper50, paper50_model, episodes=20, record_every=10,
+                         values_every=10, method=method, seed=seed,
+                         prefix=run_prefix(method, seed), recording_id=rid, blueprint=False)
+        parts.append(part)
+    out = gather_comparison(tmp_path / "compare.rrd", parts, paper50, runs, recording_id=rid)
+    assert verify_recording(out)[0]
+    for method, seed in runs:
+        ent = f"/{run_prefix(method, seed)}/world/robot"
+        assert len(positions(read_table(out, [ent], "step"), ent)) > 0
+
+
+def test_runs_share_one_file_in_process(tmp_path, paper50, paper50_model):
+    path = tmp_path / "shared.rrd"
+    with RecordingFile(path) as f:
+        for method in ("rnh-ql", "haql"):
+            rec = Recorder.create(None, paper50, paper50_model, method=method, config={},
+                                  seed=1, file=f, prefix=run_prefix(method, 1), blueprint=False)
+            rec.log_episode_trajectory(0, [paper50_model.start,
+                                           paper50_model.next_state[paper50_model.start, 0]])
+    assert verify_recording(path)[0]
+    table = read_table(path, ["/runs/haql/s1/world/robot"], "step")
+    assert table.num_rows == 2
+
+
+CHILD = textwrap.dedent("""
+    import signal, sys, time
+    import numpy as np
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # even if the parent ignores it
+    from scenarios.recording import Recorder
+    from sim.grid import build_model
+    from sim.scenario import resolve_scenario
+    sc = resolve_scenario("paper-50")
+    m = build_model(sc)
+    rng = np.random.default_rng(0)
+    rec = Recorder.create(sys.argv[1], sc, m, method="rnh-ql", config={}, seed=0,
+                          flush_interval_s=0.2)
+    def train():
+        ep = 0
+        while True:
+            states = m.next_state[m.start, rng.integers(0, 4, 600)]
+            rec.log_episode_trajectory(ep, np.concatenate([[m.start], states]))
+            rec.log_episode_metrics([ep], [600], [False], [600.0])
+            if ep == 20:
+                print("ready", flush=True)
+            ep += 1
+            time.sleep(0.005)
+    if sys.argv[2] == "with":
+        with rec:
+            train()
+    else:
+        train()  # no handler at all: the atexit hook closes the file
+""")
+
+
+@pytest.mark.parametrize("mode", ["with", pytest.param("atexit", marks=pytest.mark.slow)])
+def test_ctrl_c_leaves_a_verified_recording(tmp_path, mode):
+    path = tmp_path / "interrupted.rrd"
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    child = subprocess.Popen([sys.executable, "-c", CHILD, str(path), mode], cwd=REPO, env=env,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "ready", child.stderr.read()
+        time.sleep(0.3)
+        child.send_signal(signal.SIGINT)
+        _, err = child.communicate(timeout=60)
+    finally:
+        if child.poll() is None:
+            child.kill()
+    assert "KeyboardInterrupt" in err
+    assert path.exists() and not path.with_name(path.name + ".part").exists()
+    ok, msg = verify_recording(path)
+    assert ok, msg
+    table = read_table(path, ["/world/robot"], "step")
+    assert table.num_rows >= 21 * 601

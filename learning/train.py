@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from learning import kinds as K
 from learning.checkpoint import Checkpoint, CheckpointError
 from learning.geometry import TabularMDP, geometry_of
-from learning.kernels import greedy_route, on_shortest_fraction, run_episodes
+from learning.kernels import NO_TRACE, greedy_route, on_shortest_fraction, run_episodes
 from learning.methods import MethodConfig
 from learning.state import AgentState, copy_state, init_state
 
@@ -105,8 +106,21 @@ def _resume(ck: Checkpoint, cfg: MethodConfig, model: TabularMDP, n_episodes: in
     return copy_state(ck.state), done, ck.env_steps
 
 
+class TrainObserver(Protocol):
+    """Watches a run between kernel chunks (e.g. a recorder); never draws random numbers."""
+
+    def trace_chunk(self, first_episode: int, n: int) -> bool:
+        """Whether the states of episodes ``first_episode .. first_episode + n - 1`` are wanted."""
+
+    def after_chunk(self, first_episode: int, n: int, trace: np.ndarray | None,
+                    arrays: dict[str, np.ndarray], state: AgentState,
+                    test: tuple[int, list[int]]) -> None:
+        """After a chunk: its traces (or None), the metric arrays so far, the greedy test."""
+
+
 def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np.random.Generator,
-                  test_every: int = 10, resume: Checkpoint | None = None) -> TrainResult:
+                  test_every: int = 10, resume: Checkpoint | None = None,
+                  observer: TrainObserver | None = None) -> TrainResult:
     """Train ``cfg`` on ``model`` for ``n_episodes`` episodes in all.
 
     ``rng`` is the only source of randomness (RN-QL's initial weights, episode
@@ -115,6 +129,8 @@ def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np
     metrics and generator state are restored (``rng`` is set to the saved
     state), and training goes on from ``resume.episodes`` to ``n_episodes``,
     ending exactly where an uninterrupted run with the same seed would.
+    ``observer`` sees each chunk (outside the timed region) and may ask for the
+    chunk's state traces; it changes nothing about the run.
     """
     if test_every < 1:
         raise ValueError(f"test_every must be >= 1, got {test_every}")
@@ -132,12 +148,19 @@ def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np
     while done < n_episodes:
         n = min(test_every - done % test_every, n_episodes - done)
         out = tuple(arrays[f][done:done + n] for f in KERNEL_OUT)
+        trace = NO_TRACE
+        if observer is not None and observer.trace_chunk(done, n):
+            trace = np.full((n, int(model.max_steps) + 1), -1, dtype=np.int32)
         t0 = time.perf_counter()
-        env_steps += run_episodes(st, model, n, rng, out)
+        env_steps += run_episodes(st, model, n, rng, out, trace)
         arrays["wall_time_s"][done:done + n] = (time.perf_counter() - t0) / n
         done += n
+        test = greedy_test(st, model)
         tests_e.append(done)
-        tests_l.append(greedy_test(st, model)[0])
+        tests_l.append(test[0])
+        if observer is not None:
+            observer.after_chunk(done - n, n, trace if trace.shape[0] else None, arrays, st,
+                                 test)
     assert int(st.ivar[K.I_EPISODE]) == done
     length, route = greedy_test(st, model)
     return TrainResult(config=cfg, state=st, episodes=done, env_steps=env_steps, **arrays,

@@ -8,6 +8,7 @@ with status 2; anything else is a bug and keeps its traceback.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 
@@ -31,6 +32,15 @@ def add_scenario_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", help="built-in name (see `rnhql scenarios`), a .toml, or a .map")
     p.add_argument("--start", help="X,Y start for a .map (Moving AI frame: y counts down)")
     p.add_argument("--goal", help="X,Y goal for a .map (Moving AI frame: y counts down)")
+
+
+def add_record_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--record", nargs="?", const="", default=None, metavar="PATH.rrd",
+                   help="write a Rerun recording (default: recordings/<scenario>-<method>-"
+                        "<world>-s<seed>.rrd; compare: recordings/<scenario>-compare.rrd)")
+    p.add_argument("--record-every", type=int, default=10, metavar="N",
+                   help="record every N-th episode in full (always the first, the last and "
+                        "the greedy tests; default 10)")
 
 
 def scenario_from_args(args: argparse.Namespace):  # -> Scenario
@@ -82,6 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--save", metavar="AGENT.npz", help="save the trained agent")
     p.add_argument("--resume", metavar="AGENT.npz", help="continue a saved grid run")
     p.add_argument("--json", metavar="FILE", help="also write the run's record as JSON")
+    add_record_args(p)
     p.set_defaults(func=c.cmd_train)
 
     p = sub.add_parser("route", help="print and draw a saved agent's greedy route from S")
@@ -89,6 +100,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--agent", required=True, metavar="AGENT.npz")
     p.add_argument("--world", default="grid", help="grid (default) or physics (drive it)")
     p.add_argument("--png", metavar="FILE", help="also draw the routes to a PNG")
+    p.add_argument("--record", nargs="?", const="", default=None, metavar="PATH.rrd",
+                   help="record the route to Rerun (default recordings/<scenario>-route-...)")
     p.set_defaults(func=c.cmd_route)
 
     p = sub.add_parser("compare", help="methods x seeds (x worlds): results, summary, figures")
@@ -105,6 +118,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--address", default=None, help="Ray cluster: auto or ray://host:port")
     p.add_argument("--out", required=True, metavar="DIR")
     p.add_argument("--resume", action="store_true", help="skip runs already finished in DIR")
+    add_record_args(p)
     p.set_defaults(func=c.cmd_compare)
 
     p = sub.add_parser("view", help="open a .rrd recording in the Rerun viewer")
@@ -143,6 +157,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("rnhql: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # output piped into e.g. `head`: not an error
+        sys.stderr = open(os.devnull, "w")
+        return 0
 
 
 if __name__ == "__main__":

@@ -90,6 +90,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg = make_config(args.method, parse_overrides(args.set))
     spec = RunSpec(name, args.method, args.seed, args.episodes, args.world, start=start,
                    goal=goal)
+    record = _record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
     rng = np.random.default_rng(args.seed)
     if args.save:
         _check_writable(Path(args.save), "--save")
@@ -97,19 +98,38 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.resume and args.world == "grid":
         resume = load_checkpoint(args.resume, args.method, model.n_states)
     print(f"{cfg.name} on {sc.name} ({args.world}), seed {args.seed}, {args.episodes} episodes")
-    if args.world == "grid":
-        result = train_tabular(cfg, model, args.episodes, rng, resume=resume)
-        if args.save:
-            save_checkpoint(args.save, Checkpoint.of_result(result, rng))
-    else:
-        if args.resume:
-            raise ExperimentError("command line", "--resume", "is only supported for grid runs",
-                                  "drop --resume or use --world grid")
-        from scenarios.physics_runs import train_physics
+    recorder = plan = observer = None
+    if record is not None:
+        from scenarios.recorded_runs import GridRecorder, RecordPlan
+        from scenarios.recording import Recorder
 
-        result = train_physics(cfg, sc, model, args.episodes, rng)
-        if args.save:
-            save_checkpoint(args.save, Checkpoint.of_agent(result.agent))
+        plan = RecordPlan(args.episodes, every=_positive(args.record_every, "--record-every"))
+        recorder = Recorder.create(record, sc, model, method=args.method, config=cfg,
+                                   seed=args.seed, world=args.world)
+        observer = GridRecorder(recorder, plan)
+    try:
+        if args.world == "grid":
+            result = train_tabular(cfg, model, args.episodes, rng, resume=resume,
+                                   observer=observer)
+            if args.save:
+                save_checkpoint(args.save, Checkpoint.of_result(result, rng))
+        else:
+            if args.resume:
+                raise ExperimentError("command line", "--resume", "is only supported for grid "
+                                      "runs", "drop --resume or use --world grid")
+            from scenarios.physics_runs import train_physics
+
+            result = train_physics(cfg, sc, model, args.episodes, rng, recorder=recorder,
+                                   plan=plan)
+            if args.save:
+                save_checkpoint(args.save, Checkpoint.of_agent(result.agent))
+        if recorder is not None:
+            recorder.log_route("greedy final", result.final_route)
+    finally:
+        if recorder is not None:
+            recorder.close()  # also on Ctrl-C: the recording keeps what was logged
+    if record is not None:
+        print(f"  recording             {record}  (open: rnhql view {record})")
     rec = run_record(spec, cfg, result, model)
     print_run(rec, model.optimal_route_length)
     if args.save:
@@ -119,6 +139,19 @@ def cmd_train(args: argparse.Namespace) -> int:
 
         atomic_write_text(args.json, json.dumps(rec, indent=1))
     return 0
+
+
+def _record_path(args: argparse.Namespace, scenario: str, rest: str) -> str | None:
+    """``--record`` given: its path, or the default under recordings/; else None."""
+    if args.record is None:
+        return None
+    path = Path(args.record or f"recordings/{scenario}-{rest}.rrd")
+    if path.suffix != ".rrd":
+        raise ExperimentError("command line", "--record", f"{path} does not end in .rrd",
+                              "name the recording e.g. run.rrd")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    _check_writable(path, "--record")
+    return str(path)
 
 
 def _check_writable(path: Path, flag: str) -> None:
@@ -140,7 +173,7 @@ def cmd_route(args: argparse.Namespace) -> int:
     ckpt = load_checkpoint(args.agent, None, model.n_states)
     optimum = bfs_route(model.next_state, model.distance_to_goal, model.start)
     length, route = greedy_test(ckpt.state, model)
-    trajectory = None
+    trajectory = driven = None
     print(f"{ckpt.config.name} agent {args.agent} ({ckpt.episodes} episodes) on {sc.name}")
     if args.world == "physics":
         from learning.agent import StepAgent
@@ -154,6 +187,20 @@ def cmd_route(args: argparse.Namespace) -> int:
         print(f"  driven in physics: {'reached G' if driven.reached else 'did not reach G'}, "
               f"{driven.metres:.1f} m, {driven.contacts} contacts, {driven.sim_time_s:.1f} s "
               "sim time")
+    record = _record_path(args, sc.name, f"route-{ckpt.method}-{args.world}")
+    if record is not None:
+        from learning.readout import greedy_actions, potential, q_table
+        from scenarios.recording import Recorder
+
+        with Recorder.create(record, sc, model, method=ckpt.method, config=ckpt.config,
+                             seed=-1, world=args.world) as rec:
+            poses = driven.poses if args.world == "physics" else None
+            rec.log_episode_trajectory(ckpt.episodes, np.asarray(route), poses=poses,
+                                       kind="greedy-test")
+            rec.log_values(ckpt.episodes, q_table(ckpt.state), greedy_actions(ckpt.state),
+                           potential(ckpt.state))
+            rec.log_route("greedy", route)
+        print(f"recording: {record}")
     print(ascii_routes(model, route, optimum))
     shown = "G not reached" if length < 0 else f"{length} moves"
     verdict = "optimal" if length == len(optimum) - 1 else "not optimal"
@@ -181,8 +228,18 @@ def cmd_compare(args: argparse.Namespace) -> int:
     execute, kwargs = _backend(args)
     from scenarios.backends import Progress
 
+    record = _record_path(args, name.rsplit("/", 1)[-1].removesuffix(".toml"), "compare")
+    if record is not None:
+        from scenarios.compare import with_recording
+
+        specs = with_recording(specs, record, _positive(args.record_every, "--record-every"))
     results = run_sweep(specs, Path(args.out), execute, resume=args.resume,
                         progress=Progress(len(specs)), **kwargs)
+    if record is not None:
+        from scenarios.compare import gather_parts
+
+        gather_parts(specs, record)
+        print(f"recording: {record}  (open: rnhql view {record})")
     print((Path(args.out) / "summary.md").read_text())
     print(f"wrote {args.out}/results.json, summary.md and figures")
     del results

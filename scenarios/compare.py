@@ -37,6 +37,46 @@ def make_specs(scenario: str, methods: Sequence[str], seeds: Sequence[int], epis
             for w in worlds for m in methods for s in seeds]
 
 
+def run_label(spec: RunSpec, worlds: set[str]) -> str:
+    """A run's name in a comparison recording: the method, plus the world if several."""
+    return spec.method if len(worlds) == 1 else f"{spec.method}-{spec.world}"
+
+
+def with_recording(specs: Sequence[RunSpec], record: str, every: int) -> list[RunSpec]:
+    """Each run records a part file under ``<record>.parts/`` in its own subtree."""
+    import dataclasses
+    import uuid
+
+    from scenarios.recording import run_prefix
+
+    parts = Path(record + ".parts")
+    parts.mkdir(parents=True, exist_ok=True)
+    rid = str(uuid.uuid4())
+    worlds = {s.world for s in specs}
+    out = []
+    for s in specs:
+        label = run_label(s, worlds)
+        out.append(dataclasses.replace(
+            s, record_path=str(parts / f"{label}-s{s.seed}.rrd"), record_every=every,
+            record_prefix=run_prefix(label, s.seed), recording_id=rid))
+    return out
+
+
+def gather_parts(specs: Sequence[RunSpec], record: str) -> Path:
+    """Merge the runs' part files into one recording with a comparison blueprint."""
+    import shutil
+
+    from scenarios.recording_compare import gather_comparison
+
+    worlds = {s.world for s in specs}
+    sc, _ = load(specs[0].scenario, specs[0].start, specs[0].goal)
+    parts = [Path(s.record_path) for s in specs if s.record_path and Path(s.record_path).exists()]
+    runs = [(run_label(s, worlds), s.seed) for s in specs]
+    out = gather_comparison(record, parts, sc, runs, recording_id=specs[0].recording_id)
+    shutil.rmtree(record + ".parts", ignore_errors=True)
+    return out
+
+
 def assemble(specs: Sequence[RunSpec], runs: list[dict[str, Any]]) -> dict[str, Any]:
     """The results.json payload for finished runs, in spec order."""
     spec0 = specs[0]

@@ -42,6 +42,11 @@ class RunSpec:
     goal: Cell | None = None
     test_every: int = 10  # greedy test from S every N episodes
     drive_final: bool = False  # grid runs: also drive the final greedy policy in physics
+    # recording (not part of the key: a recorded run equals an unrecorded one)
+    record_path: str | None = None  # .rrd to write; None = no recording
+    record_every: int = 10  # episodes recorded in full: first, every N-th, last
+    record_prefix: str = ""  # entity subtree (comparisons: runs/<label>/s<seed>)
+    recording_id: str | None = None  # shared by the parts of one comparison
 
     @property
     def key(self) -> str:
@@ -112,25 +117,48 @@ def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dic
 
 def run_one(spec: RunSpec) -> dict[str, Any]:
     """Train one run in this process and return its results.json record."""
-    from learning.train import train_tabular
-
     sc, model = load(spec.scenario, spec.start, spec.goal)
     cfg = make_config(spec.method, spec.overrides)
-    rng = np.random.default_rng(spec.seed)
-    if spec.world == "grid":
-        result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every)
-        if spec.drive_final:
-            from learning.agent import StepAgent
-            from learning.geometry import geometry_of
-            from scenarios.physics_runs import drive_greedy
-
-            agent = StepAgent(cfg, geometry_of(model), rng, result.state)
-            result.world_extras = drive_greedy(agent, sc).extras()
-    elif spec.world == "physics":
-        from scenarios.physics_runs import train_physics
-
-        result = train_physics(cfg, sc, model, spec.episodes, rng, test_every=spec.test_every)
-    else:
+    if spec.world not in WORLDS:
         raise ExperimentError("command line", "--world", f"unknown world {spec.world!r}",
                               f"use one of: {', '.join(WORLDS)}")
-    return run_record(spec, cfg, result, model)
+    if spec.record_path is None:
+        return run_record(spec, cfg, _train(spec, sc, model, cfg), model)
+    from scenarios.recorded_runs import RecordPlan
+    from scenarios.recording import Recorder
+
+    plan = RecordPlan(spec.episodes, every=max(1, spec.record_every))
+    with Recorder.create(spec.record_path, sc, model, method=spec.method, config=cfg,
+                         seed=spec.seed, world=spec.world, prefix=spec.record_prefix,
+                         recording_id=spec.recording_id,
+                         blueprint=not spec.record_prefix) as rec:
+        result = _train(spec, sc, model, cfg, rec, plan)
+        rec.log_route("greedy final", result.final_route)
+        return run_record(spec, cfg, result, model)
+
+
+def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder: Any = None,
+           plan: Any = None) -> Any:
+    rng = np.random.default_rng(spec.seed)
+    if spec.world == "physics":
+        from scenarios.physics_runs import train_physics
+
+        return train_physics(cfg, sc, model, spec.episodes, rng, test_every=spec.test_every,
+                             recorder=recorder, plan=plan)
+    from learning.train import train_tabular
+
+    observer = None
+    if recorder is not None:
+        from scenarios.recorded_runs import GridRecorder
+
+        observer = GridRecorder(recorder, plan)
+    result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every,
+                           observer=observer)
+    if spec.drive_final:
+        from learning.agent import StepAgent
+        from learning.geometry import geometry_of
+        from scenarios.physics_runs import drive_greedy
+
+        agent = StepAgent(cfg, geometry_of(model), rng, result.state)
+        result.world_extras = drive_greedy(agent, sc).extras()
+    return result

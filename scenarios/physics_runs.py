@@ -65,6 +65,7 @@ class DrivenRoute:
     contacts: int
     sim_time_s: float
     metres: float  # path length driven [m]
+    poses: np.ndarray  # (len(states), 3): the pose after each primitive [m, m, rad]
 
     def extras(self) -> dict[str, Any]:
         xy = np.round(self.trajectory[::2, :2], 3)
@@ -82,18 +83,20 @@ def drive_greedy(agent_or_policy: Any, sc: Scenario, max_steps: int | None = Non
     env = gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
                    max_episode_steps=max_steps or sc.steps_per_episode)
     s, info = env.reset(seed=0)
-    states, traj = [int(s)], [info["trajectory"]]
+    states, traj, poses = [int(s)], [info["trajectory"]], [info["pose"]]
     contacts, term, trunc = 0, False, False
     while not (term or trunc):
         s, _, term, trunc, info = env.step(policy(int(s)))
         states.append(int(s))
         traj.append(info["trajectory"])
+        poses.append(info["pose"])
         contacts += len(info["contacts"])
     pts = np.concatenate(traj)
     # per primitive: after a bump the robot is *placed* back, and that jump is not driven
     metres = float(sum(np.hypot(*np.diff(t[:, :2], axis=0).T).sum() for t in traj))
     env.close()
-    return DrivenRoute(states, pts, bool(term), contacts, float(info["time_s"]), metres)
+    return DrivenRoute(states, pts, bool(term), contacts, float(info["time_s"]), metres,
+                       np.asarray(poses, dtype=np.float64))
 
 
 @dataclass(eq=False)
@@ -123,28 +126,49 @@ class PhysicsTrainResult:
 
 
 def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
-                  rng: np.random.Generator, test_every: int = 10) -> PhysicsTrainResult:
-    env = ContactCounter(gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
-                                  max_episode_steps=sc.steps_per_episode))
+                  rng: np.random.Generator, test_every: int = 10,
+                  recorder: Any = None, plan: Any = None) -> PhysicsTrainResult:
+    """Train the step agent in PhysicsRoute-v0; optionally record (see recorded_runs)."""
+    from scenarios.recorded_runs import EpisodeTap, log_checkpoint_views, log_chunk_metrics
+
+    counter = ContactCounter(gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
+                                      max_episode_steps=sc.steps_per_episode))
+    env = EpisodeTap(counter)
     agent = make_agent(cfg, geometry_of(model), rng)
     logs, walls, tests_e, tests_l = [], [], [], []
     done = 0
     while done < n_episodes:
         n = min(test_every, n_episodes - done)
-        t0 = time.perf_counter()
-        logs.append(run_env_episodes(agent, env, n))
-        walls.append(np.full(n, (time.perf_counter() - t0) / n))
+        # segments of the chunk: each recorded episode alone, the rest together
+        marks = [plan is not None and plan.wants(done + i) for i in range(n)]
+        i = 0
+        while i < n:
+            j = i + 1 if marks[i] else next((k for k in range(i, n) if marks[k]), n)
+            env.armed = marks[i]
+            t0 = time.perf_counter()
+            logs.append(run_env_episodes(agent, env, j - i))
+            walls.append(np.full(j - i, (time.perf_counter() - t0) / (j - i)))
+            if marks[i] and recorder is not None:
+                env.log_to(recorder, done + i)
+            i = j
         done += n
+        test = greedy_test(agent.state, model)
         tests_e.append(done)
-        tests_l.append(greedy_test(agent.state, model)[0])
-    env.flush()
+        tests_l.append(test[0])
+        if recorder is not None:
+            arrays = {k: np.concatenate([getattr(lg, k) for lg in logs])
+                      for k in ("steps", "returns", "success", "shaping_mean", "shaping_std")}
+            arrays["wall_time_s"] = np.concatenate(walls)
+            log_chunk_metrics(recorder, done - n, n, arrays)
+            log_checkpoint_views(recorder, plan, done, agent.state, test[1])
+    counter.flush()
     env.close()
     length, route = greedy_test(agent.state, model)
     driven = drive_greedy(agent, sc)
     cat = {k: np.concatenate([getattr(lg, k) for lg in logs])
            for k in ("steps", "returns", "success", "shaping_mean", "shaping_std")}
-    extras = {"contacts_per_episode": env.contacts[-n_episodes:],
-              "sim_time_per_episode_s": np.round(env.sim_time_s[-n_episodes:], 4).tolist(),
+    extras = {"contacts_per_episode": counter.contacts[-n_episodes:],
+              "sim_time_per_episode_s": np.round(counter.sim_time_s[-n_episodes:], 4).tolist(),
               **driven.extras()}
     return PhysicsTrainResult(agent=agent, **cat, wall_time_s=np.concatenate(walls),
                               test_episodes=np.asarray(tests_e),

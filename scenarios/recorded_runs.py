@@ -1,0 +1,126 @@
+"""``--record``: connect training runs to :mod:`scenarios.recording`.
+
+Which episodes are recorded in full (``--record-every N``): the first, every
+N-th, the last, and every greedy test from S. Curves are logged for every
+episode, value heat maps every ``values_every`` episodes. In the grid world
+the fused kernel writes the states of the chunks that hold a recorded episode
+into a trace buffer (one store per step, no draws, so a recorded run equals
+an unrecorded one); in physics an env wrapper taps poses, contacts and sim
+time from ``info`` while a recorded episode runs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from learning.readout import greedy_actions, potential, q_table
+from learning.state import AgentState
+from scenarios.recording import Recorder
+
+
+@dataclass(frozen=True)
+class RecordPlan:
+    n_episodes: int  # episodes in the run
+    every: int = 10  # record every N-th episode in full (plus the first and the last)
+    values_every: int = 100  # value heat maps every K episodes [episodes]
+
+    def wants(self, episode: int) -> bool:
+        return episode == 0 or episode == self.n_episodes - 1 or episode % self.every == 0
+
+    def wants_values(self, episodes_done: int) -> bool:
+        return episodes_done % self.values_every == 0 or episodes_done == self.n_episodes
+
+
+def default_path(scenario: str, method: str, world: str, seed: int) -> Path:
+    return Path("recordings") / f"{scenario}-{method}-{world}-s{seed}.rrd"
+
+
+def log_chunk_metrics(rec: Recorder, first: int, n: int, arrays: dict[str, np.ndarray]) -> None:
+    sl = slice(first, first + n)
+    steps = arrays["steps"][sl]
+    rec.log_episode_metrics(np.arange(first, first + n), steps, arrays["success"][sl],
+                            arrays["returns"][sl],
+                            reward_per_step=arrays["returns"][sl] / np.maximum(steps, 1),
+                            wall_time_s=arrays["wall_time_s"][sl],
+                            shaping_mean=arrays["shaping_mean"][sl],
+                            shaping_std=arrays["shaping_std"][sl])
+
+
+def log_checkpoint_views(rec: Recorder, plan: RecordPlan, done: int, st: AgentState,
+                         test_route: list[int]) -> None:
+    """After a chunk: the greedy test from S, and the value heat maps when due."""
+    rec.log_episode_trajectory(done - 1, np.asarray(test_route), kind="greedy-test")
+    if plan.wants_values(done):
+        rec.log_values(done - 1, q_table(st), greedy_actions(st), potential(st))
+
+
+class GridRecorder:
+    """A :class:`learning.train.TrainObserver` that records a fused-kernel run."""
+
+    def __init__(self, rec: Recorder, plan: RecordPlan) -> None:
+        self.rec, self.plan = rec, plan
+
+    def trace_chunk(self, first_episode: int, n: int) -> bool:
+        return any(self.plan.wants(e) for e in range(first_episode, first_episode + n))
+
+    def after_chunk(self, first_episode: int, n: int, trace: np.ndarray | None,
+                    arrays: dict[str, np.ndarray], state: AgentState,
+                    test: tuple[int, list[int]]) -> None:
+        log_chunk_metrics(self.rec, first_episode, n, arrays)
+        if trace is not None:
+            for i in range(n):
+                ep = first_episode + i
+                if self.plan.wants(ep):
+                    k = int(arrays["steps"][ep])
+                    self.rec.log_episode_trajectory(ep, trace[i, :k + 1], kind="train")
+        log_checkpoint_views(self.rec, self.plan, first_episode + n, state, test[1])
+
+
+class EpisodeTap(gym.Wrapper):
+    """Captures states, poses, sim time and contact points of an episode while ``armed``."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.armed = False
+        self._clear()
+
+    def _clear(self) -> None:
+        self.states: list[int] = []
+        self.poses: list[tuple[float, float, float]] = []
+        self.times: list[float] = []
+        self.contacts: list[tuple[float, float]] = []
+        self.contact_steps: list[int] = []
+
+    def reset(self, **kwargs: Any):
+        obs, info = self.env.reset(**kwargs)
+        self._clear()
+        if self.armed:
+            self.states.append(int(obs))
+            self.poses.append(info["pose"])
+            self.times.append(info["time_s"])
+        return obs, info
+
+    def step(self, action: int):
+        obs, r, term, trunc, info = self.env.step(action)
+        if self.armed:
+            self.states.append(int(obs))
+            self.poses.append(info["pose"])
+            self.times.append(info["time_s"])
+            for c in info["contacts"]:
+                self.contacts.append((c.x_m, c.y_m))
+                self.contact_steps.append(len(self.states) - 1)
+        return obs, r, term, trunc, info
+
+    def log_to(self, rec: Recorder, episode: int) -> None:
+        if not self.states:
+            return
+        rec.log_episode_trajectory(
+            episode, np.asarray(self.states), poses=np.asarray(self.poses),
+            contacts=np.asarray(self.contacts).reshape(-1, 2),
+            sim_time_s=np.asarray(self.times), kind="train",
+            contact_steps=np.asarray(self.contact_steps, dtype=np.int64))

@@ -1,0 +1,47 @@
+"""--record on the commands: recordings verify, and recording never changes a run."""
+
+from __future__ import annotations
+
+import json
+
+from scenarios.cli import main
+from scenarios.experiment import RunSpec, run_one
+from scenarios.recording import verify_recording
+
+
+def test_recorded_run_equals_unrecorded_run(tmp_path):
+    plain = run_one(RunSpec("paper-40", "rnh-ql", 2, 40))
+    recorded = run_one(RunSpec("paper-40", "rnh-ql", 2, 40, record_path=str(tmp_path / "r.rrd"),
+                               record_every=3))
+    for rec in (plain, recorded):
+        rec.pop("wall_time_s")
+        rec.pop("wall_time_per_episode_s")
+    assert plain == recorded
+    ok, msg = verify_recording(tmp_path / "r.rrd")
+    assert ok, msg
+
+
+def test_train_route_compare_record(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["train", "paper-40", "--episodes", "20", "--save", "a.npz", "--record"]) == 0
+    assert main(["route", "paper-40", "--agent", "a.npz", "--record", "route.rrd"]) == 0
+    assert main(["compare", "paper-40", "--methods", "st-ql,rnh-ql", "--seeds", "1",
+                 "--episodes", "20", "--jobs", "1", "--out", "cmp", "--record", "cmp.rrd"]) == 0
+    for path in ("recordings/paper-40-rnh-ql-grid-s0.rrd", "route.rrd", "cmp.rrd"):
+        ok, msg = verify_recording(tmp_path / path)
+        assert ok, (path, msg)
+    assert not (tmp_path / "cmp.rrd.parts").exists()
+    assert json.loads((tmp_path / "cmp" / "results.json").read_text())["episodes"] == 20
+
+
+def test_physics_train_record(tmp_path, capsys):
+    out = tmp_path / "p.rrd"
+    assert main(["train", "paper-40", "--world", "physics", "--episodes", "3", "--record",
+                 str(out), "--record-every", "2"]) == 0
+    ok, msg = verify_recording(out)
+    assert ok, msg
+
+
+def test_bad_record_path_exits_2(capsys):
+    assert main(["train", "paper-40", "--episodes", "2", "--record", "x.txt"]) == 2
+    assert "does not end in .rrd" in capsys.readouterr().err

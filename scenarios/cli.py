@@ -38,9 +38,9 @@ def add_record_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--record", nargs="?", const="", default=None, metavar="PATH.rrd",
                    help="write a Rerun recording (default: recordings/<scenario>-<method>-"
                         "<world>-s<seed>.rrd; compare: recordings/<scenario>-compare.rrd)")
-    p.add_argument("--record-every", type=int, default=10, metavar="N",
+    p.add_argument("--record-every", type=int, default=None, metavar="N",
                    help="record every N-th episode in full (always the first, the last and "
-                        "the greedy tests; default 10)")
+                        "the greedy tests; default 10, in a comparison 100)")
 
 
 def scenario_from_args(args: argparse.Namespace):  # -> Scenario

@@ -103,7 +103,9 @@ def cmd_train(args: argparse.Namespace) -> int:
         from scenarios.recorded_runs import GridRecorder, RecordPlan
         from scenarios.recording import Recorder
 
-        plan = RecordPlan(args.episodes, every=_positive(args.record_every, "--record-every"))
+        plan = RecordPlan(args.episodes,
+                          every=_positive(10 if args.record_every is None else args.record_every,
+                                            "--record-every"))
         recorder = Recorder.create(record, sc, model, method=args.method, config=cfg,
                                    seed=args.seed, world=args.world)
         observer = GridRecorder(recorder, plan)
@@ -232,7 +234,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if record is not None:
         from scenarios.compare import with_recording
 
-        specs = with_recording(specs, record, _positive(args.record_every, "--record-every"))
+        specs = with_recording(specs, record,
+                               _positive(100 if args.record_every is None else args.record_every,
+                                         "--record-every"))
     results = run_sweep(specs, Path(args.out), execute, resume=args.resume,
                         progress=Progress(len(specs)), **kwargs)
     if record is not None:

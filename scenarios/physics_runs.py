@@ -129,12 +129,13 @@ def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
                   rng: np.random.Generator, test_every: int = 10,
                   recorder: Any = None, plan: Any = None) -> PhysicsTrainResult:
     """Train the step agent in PhysicsRoute-v0; optionally record (see recorded_runs)."""
-    from scenarios.recorded_runs import EpisodeTap, log_checkpoint_views, log_chunk_metrics
+    from scenarios.recorded_runs import ChunkLogger, EpisodeTap
 
     counter = ContactCounter(gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
                                       max_episode_steps=sc.steps_per_episode))
     env = EpisodeTap(counter)
     agent = make_agent(cfg, geometry_of(model), rng)
+    views = ChunkLogger(recorder, plan) if recorder is not None else None
     logs, walls, tests_e, tests_l = [], [], [], []
     done = 0
     while done < n_episodes:
@@ -155,12 +156,11 @@ def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
         test = greedy_test(agent.state, model)
         tests_e.append(done)
         tests_l.append(test[0])
-        if recorder is not None:
+        if views is not None:
             arrays = {k: np.concatenate([getattr(lg, k) for lg in logs])
                       for k in ("steps", "returns", "success", "shaping_mean", "shaping_std")}
             arrays["wall_time_s"] = np.concatenate(walls)
-            log_chunk_metrics(recorder, done - n, n, arrays)
-            log_checkpoint_views(recorder, plan, done, agent.state, test[1])
+            views.after_chunk(done, arrays, agent.state, test[1])
     counter.flush()
     env.close()
     length, route = greedy_test(agent.state, model)

@@ -51,12 +51,24 @@ def log_chunk_metrics(rec: Recorder, first: int, n: int, arrays: dict[str, np.nd
                             shaping_std=arrays["shaping_std"][sl])
 
 
-def log_checkpoint_views(rec: Recorder, plan: RecordPlan, done: int, st: AgentState,
-                         test_route: list[int]) -> None:
-    """After a chunk: the greedy test from S, and the value heat maps when due."""
-    rec.log_episode_trajectory(done - 1, np.asarray(test_route), kind="greedy-test")
-    if plan.wants_values(done):
-        rec.log_values(done - 1, q_table(st), greedy_actions(st), potential(st))
+class ChunkLogger:
+    """What every chunk logs: its greedy test; every ``values_every`` episodes, the
+    curves of the episodes since the last batch and the value heat maps.
+
+    Curves go out in batches (one call per ~100 episodes, not per chunk): with
+    0.06 ms training episodes, a call per 10-episode chunk cost 25 % extra time.
+    """
+
+    def __init__(self, rec: Recorder, plan: RecordPlan, first_episode: int = 0) -> None:
+        self.rec, self.plan, self.logged = rec, plan, first_episode
+
+    def after_chunk(self, done: int, arrays: dict[str, np.ndarray], st: AgentState,
+                    test_route: list[int]) -> None:
+        self.rec.log_episode_trajectory(done - 1, np.asarray(test_route), kind="greedy-test")
+        if self.plan.wants_values(done):
+            log_chunk_metrics(self.rec, self.logged, done - self.logged, arrays)
+            self.logged = done
+            self.rec.log_values(done - 1, q_table(st), greedy_actions(st), potential(st))
 
 
 class GridRecorder:
@@ -64,6 +76,7 @@ class GridRecorder:
 
     def __init__(self, rec: Recorder, plan: RecordPlan) -> None:
         self.rec, self.plan = rec, plan
+        self.views = ChunkLogger(rec, plan)
 
     def trace_chunk(self, first_episode: int, n: int) -> bool:
         return any(self.plan.wants(e) for e in range(first_episode, first_episode + n))
@@ -71,14 +84,13 @@ class GridRecorder:
     def after_chunk(self, first_episode: int, n: int, trace: np.ndarray | None,
                     arrays: dict[str, np.ndarray], state: AgentState,
                     test: tuple[int, list[int]]) -> None:
-        log_chunk_metrics(self.rec, first_episode, n, arrays)
         if trace is not None:
             for i in range(n):
                 ep = first_episode + i
                 if self.plan.wants(ep):
                     k = int(arrays["steps"][ep])
                     self.rec.log_episode_trajectory(ep, trace[i, :k + 1], kind="train")
-        log_checkpoint_views(self.rec, self.plan, first_episode + n, state, test[1])
+        self.views.after_chunk(first_episode + n, arrays, state, test[1])
 
 
 class EpisodeTap(gym.Wrapper):

@@ -1,0 +1,41 @@
+"""Runs per second of one sweep on the local process pool and on a local Ray runtime.
+
+    python -m scenarios.bench_backends [--cpus 2]
+
+Both backends run the same 24 independent runs (paper-40, three methods x
+8 seeds x 1000 episodes); the figure includes each backend's start-up (worker
+processes importing numba and loading the JIT cache; Ray starting its runtime).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+from scenarios.backends import run_local, run_ray
+from scenarios.compare import make_specs, run_sweep
+
+
+def run_bench(cpus: int = 2) -> dict:
+    os.environ.setdefault("RAY_AUTH_MODE", "disabled")
+    specs = make_specs("paper-40", ["rnh-ql", "st-ql", "dyna-q"], list(range(8)), 1000, ["grid"])
+    out: dict = {"runs": len(specs), "cpus": cpus}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, execute, kw in (("local", run_local, {"jobs": cpus}),
+                                  ("ray", run_ray, {"num_cpus": cpus})):
+            t0 = time.perf_counter()
+            run_sweep(specs, Path(tmp) / name, execute, figures=False, **kw)
+            dt = time.perf_counter() - t0
+            out[f"{name}_s"] = dt
+            out[f"{name}_runs_per_s"] = len(specs) / dt
+    return out
+
+
+if __name__ == "__main__":
+    p = argparse.ArgumentParser()
+    p.add_argument("--cpus", type=int, default=2)
+    print(json.dumps(run_bench(p.parse_args().cpus), indent=1))

@@ -41,6 +41,9 @@ def add_record_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--record-every", type=int, default=None, metavar="N",
                    help="record every N-th episode in full (always the first, the last and "
                         "the greedy tests; default 10, in a comparison 100)")
+    p.add_argument("--record-values-every", type=int, default=300, metavar="K",
+                   help="log the V_NN / max Q heat maps and the policy every K episodes "
+                        "(default 300)")
 
 
 def scenario_from_args(args: argparse.Namespace):  # -> Scenario

@@ -105,7 +105,9 @@ def cmd_train(args: argparse.Namespace) -> int:
 
         plan = RecordPlan(args.episodes,
                           every=_positive(10 if args.record_every is None else args.record_every,
-                                            "--record-every"))
+                                            "--record-every"),
+                          values_every=_positive(args.record_values_every,
+                                                 "--record-values-every"))
         recorder = Recorder.create(record, sc, model, method=args.method, config=cfg,
                                    seed=args.seed, world=args.world)
         observer = GridRecorder(recorder, plan)
@@ -236,7 +238,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
         specs = with_recording(specs, record,
                                _positive(100 if args.record_every is None else args.record_every,
-                                         "--record-every"))
+                                         "--record-every"),
+                               _positive(args.record_values_every, "--record-values-every"))
     results = run_sweep(specs, Path(args.out), execute, resume=args.resume,
                         progress=Progress(len(specs)), **kwargs)
     if record is not None:

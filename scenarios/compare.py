@@ -42,7 +42,8 @@ def run_label(spec: RunSpec, worlds: set[str]) -> str:
     return spec.method if len(worlds) == 1 else f"{spec.method}-{spec.world}"
 
 
-def with_recording(specs: Sequence[RunSpec], record: str, every: int) -> list[RunSpec]:
+def with_recording(specs: Sequence[RunSpec], record: str, every: int,
+                   values_every: int = 300) -> list[RunSpec]:
     """Each run records a part file under ``<record>.parts/`` in its own subtree."""
     import dataclasses
     import uuid
@@ -58,6 +59,7 @@ def with_recording(specs: Sequence[RunSpec], record: str, every: int) -> list[Ru
         label = run_label(s, worlds)
         out.append(dataclasses.replace(
             s, record_path=str(parts / f"{label}-s{s.seed}.rrd"), record_every=every,
+            record_values_every=values_every,
             record_prefix=run_prefix(label, s.seed), recording_id=rid))
     return out
 

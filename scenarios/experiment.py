@@ -45,6 +45,7 @@ class RunSpec:
     # recording (not part of the key: a recorded run equals an unrecorded one)
     record_path: str | None = None  # .rrd to write; None = no recording
     record_every: int = 10  # episodes recorded in full: first, every N-th, last
+    record_values_every: int = 300  # value heat maps every K episodes
     record_prefix: str = ""  # entity subtree (comparisons: runs/<label>/s<seed>)
     recording_id: str | None = None  # shared by the parts of one comparison
 
@@ -127,7 +128,8 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     from scenarios.recorded_runs import RecordPlan
     from scenarios.recording import Recorder
 
-    plan = RecordPlan(spec.episodes, every=max(1, spec.record_every))
+    plan = RecordPlan(spec.episodes, every=max(1, spec.record_every),
+                      values_every=max(1, spec.record_values_every))
     with Recorder.create(spec.record_path, sc, model, method=spec.method, config=cfg,
                          seed=spec.seed, world=spec.world, prefix=spec.record_prefix,
                          recording_id=spec.recording_id,

@@ -27,7 +27,7 @@ from scenarios.recording import Recorder
 class RecordPlan:
     n_episodes: int  # episodes in the run
     every: int = 10  # record every N-th episode in full (plus the first and the last)
-    values_every: int = 100  # value heat maps every K episodes [episodes]
+    values_every: int = 300  # value heat maps (and a batch of curves) every K episodes
 
     def wants(self, episode: int) -> bool:
         return episode == 0 or episode == self.n_episodes - 1 or episode % self.every == 0
@@ -55,7 +55,7 @@ class ChunkLogger:
     """What every chunk logs: its greedy test; every ``values_every`` episodes, the
     curves of the episodes since the last batch and the value heat maps.
 
-    Curves go out in batches (one call per ~100 episodes, not per chunk): with
+    Curves go out in batches (one call per ``values_every`` episodes): with
     0.06 ms training episodes, a call per 10-episode chunk cost 25 % extra time.
     """
 

@@ -62,44 +62,46 @@ def _episodes(kind, st, mdp, max_steps, n_episodes, rng, out, trace):
     return total
 
 
+# nogil: the loops touch no Python objects, so another thread (the Rerun recorder
+# encoding recorded episodes) can run on a second core while they train.
 # Family ids are imported names, not ``K.QL``: numba types a global int as a literal
 # (which learning.dispatch needs to pick the family), a module attribute as int64.
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _episodes_ql(st, mdp, max_steps, n_episodes, rng, out, trace):
     return _episodes(QL, st, mdp, max_steps, n_episodes, rng, out, trace)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _episodes_rnql(st, mdp, max_steps, n_episodes, rng, out, trace):
     return _episodes(RNQL, st, mdp, max_steps, n_episodes, rng, out, trace)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _episodes_pfh(st, mdp, max_steps, n_episodes, rng, out, trace):
     return _episodes(PFH, st, mdp, max_steps, n_episodes, rng, out, trace)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _episodes_sarsars(st, mdp, max_steps, n_episodes, rng, out, trace):
     return _episodes(SARSARS, st, mdp, max_steps, n_episodes, rng, out, trace)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _episodes_haql(st, mdp, max_steps, n_episodes, rng, out, trace):
     return _episodes(HAQL, st, mdp, max_steps, n_episodes, rng, out, trace)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _episodes_rnhql(st, mdp, max_steps, n_episodes, rng, out, trace):
     return _episodes(RNHQL, st, mdp, max_steps, n_episodes, rng, out, trace)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _episodes_qlambda(st, mdp, max_steps, n_episodes, rng, out, trace):
     return _episodes(QLAMBDA, st, mdp, max_steps, n_episodes, rng, out, trace)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _episodes_dyna(st, mdp, max_steps, n_episodes, rng, out, trace):
     return _episodes(DYNA, st, mdp, max_steps, n_episodes, rng, out, trace)
 

@@ -63,6 +63,7 @@ import dataclasses
 import json
 import time
 from collections.abc import Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -90,7 +91,7 @@ class Recorder:
 
     def __init__(self, file: RecordingFile, prefix: str, scenario: Scenario,
                  model: TabularModel, *, world: str, owns_file: bool,
-                 flush_rows: int = 100_000, flush_interval_s: float = 5.0) -> None:
+                 flush_rows: int = 20_000, flush_interval_s: float = 5.0) -> None:
         self.file, self.stream, self.prefix = file, file.stream, prefix.strip("/")
         self.scenario, self.model, self.world = scenario, model, world
         self.owns_file = owns_file
@@ -107,6 +108,8 @@ class Recorder:
         self._free = np.flatnonzero(~model.blocked.ravel())
         self._reachable = np.flatnonzero(model.distance_to_goal > 0)
         self._n_routes = 0
+        self._pool: ThreadPoolExecutor | None = None
+        self._pending: Future | None = None
         self.closed = False
         file._recorders.append(self)
 
@@ -117,7 +120,7 @@ class Recorder:
                application_id: str = "rnhql", recording_name: str | None = None,
                prefix: str = "", file: RecordingFile | None = None,
                recording_id: str | None = None, blueprint: bool = True,
-               flush_rows: int = 100_000, flush_interval_s: float = 5.0) -> Recorder:
+               flush_rows: int = 20_000, flush_interval_s: float = 5.0) -> Recorder:
         """Open (or join ``file``) and log metadata, the static scene and the blueprint.
 
         ``config`` is a dict or a config dataclass. With ``file`` (a shared
@@ -168,24 +171,51 @@ class Recorder:
     def _maybe_flush(self) -> None:
         if (self._rows >= self.flush_rows
                 or time.monotonic() - self._last_flush >= self.flush_interval_s):
-            self.flush()
+            self._flush_background()
 
-    def flush(self) -> None:
-        """Send everything buffered (one send_columns call per entity)."""
-        episodes, self._episodes = self._episodes, []
+    def _take(self) -> tuple[list[EpisodeRecord], list[ValueFrame], dict[str, list]]:
+        """Hand over everything buffered and start a new buffer."""
+        batch = (self._episodes, self._values, self._scalars)
+        self._episodes, self._values, self._scalars = [], [], {}
+        self._rows = 0
+        self._last_flush = time.monotonic()
+        return batch
+
+    def _send(self, episodes: list[EpisodeRecord], frames: list[ValueFrame],
+              scalars: dict[str, list]) -> None:
+        """Build the columns and send them (one send_columns call per entity)."""
         if episodes:
             send_episodes(self.stream, self.prefix, self.model, self.world, episodes)
-        frames, self._values = self._values, []
         if frames:
             send_values(self.stream, self.prefix, self.model, frames)
-        while self._scalars:
-            entity, rows = self._scalars.popitem()
+        for entity, rows in scalars.items():
             self.stream.send_columns(
                 entity, indexes=[rr.TimeColumn("episode",
                                                sequence=np.concatenate([r[0] for r in rows]))],
                 columns=rr.Scalars.columns(scalars=np.concatenate([r[1] for r in rows])))
-        self._rows = 0
-        self._last_flush = time.monotonic()
+
+    def _flush_background(self) -> None:
+        """Send the buffer from a worker thread while training goes on.
+
+        The fused kernels release the GIL (``nogil``), so on a second core the
+        column building overlaps training. One batch is in flight at a time:
+        memory stays bounded and batches arrive in order.
+        """
+        if self._pool is None:
+            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rnhql-rec")
+        batch = self._take()
+        self._wait()
+        self._pending = self._pool.submit(self._send, *batch)
+
+    def _wait(self) -> None:
+        if self._pending is not None:
+            pending, self._pending = self._pending, None
+            pending.result()  # re-raises an error from the worker
+
+    def flush(self) -> None:
+        """Send everything buffered now, after any batch still in flight."""
+        self._wait()
+        self._send(*self._take())
 
     # ---------------------------------------------------------------- per episode
     def log_episode_trajectory(self, episode: int, states: np.ndarray,
@@ -330,6 +360,8 @@ class Recorder:
         try:
             self.flush()
         finally:
+            if self._pool is not None:
+                self._pool.shutdown(wait=True)
             if self.owns_file:
                 self.file.close()
 

@@ -338,8 +338,12 @@ class Recorder:
         pts = scene.route_points(self.model, states)
         colour = scene.ROUTE_PALETTE[self._n_routes % len(scene.ROUTE_PALETTE)]
         self._n_routes += 1
+        states = np.asarray(states)
+        reached = len(states) > 0 and int(states[-1]) == self.model.goal
+        label = (f"{name}: {len(pts) - 1} moves" if reached
+                 else f"{name}: G not reached (loops after {len(pts) - 1} moves)")
         strip = rr.LineStrips2D([pts], radii=0.1 * self.scenario.cell_size_m, colors=[colour],
-                                labels=[f"{name}: {len(pts) - 1} moves"], show_labels=True,
+                                labels=[label], show_labels=True,
                                 draw_order=scene.Z_ROUTE + 1)
         ent = self._p(f"world/routes/{rr.escape_entity_path_part(name)}")
         if episode is None:

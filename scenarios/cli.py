@@ -122,6 +122,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR")
     p.add_argument("--resume", action="store_true", help="skip runs already finished in DIR")
     add_record_args(p)
+    p.add_argument("--record-seeds", type=int, default=1, metavar="N",
+                   help="record the first N seeds of each method in full, the others as "
+                        "curves only (default 1)")
     p.set_defaults(func=c.cmd_compare)
 
     p = sub.add_parser("view", help="open a .rrd recording in the Rerun viewer")

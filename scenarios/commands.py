@@ -239,7 +239,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         specs = with_recording(specs, record,
                                _positive(100 if args.record_every is None else args.record_every,
                                          "--record-every"),
-                               _positive(args.record_values_every, "--record-values-every"))
+                               _positive(args.record_values_every, "--record-values-every"),
+                               _positive(args.record_seeds, "--record-seeds"))
     results = run_sweep(specs, Path(args.out), execute, resume=args.resume,
                         progress=Progress(len(specs)), **kwargs)
     if record is not None:

@@ -43,8 +43,14 @@ def run_label(spec: RunSpec, worlds: set[str]) -> str:
 
 
 def with_recording(specs: Sequence[RunSpec], record: str, every: int,
-                   values_every: int = 300) -> list[RunSpec]:
-    """Each run records a part file under ``<record>.parts/`` in its own subtree."""
+                   values_every: int = 300, detail_seeds: int = 1) -> list[RunSpec]:
+    """Each run records a part file under ``<record>.parts/`` in its own subtree.
+
+    The first ``detail_seeds`` seeds of each method and world are recorded in
+    full; the others record their curves only. A 90-run comparison recorded in
+    full is >100 MB, more than the viewer draws comfortably, and the comparison
+    blueprint shows each method's first seed on the map anyway.
+    """
     import dataclasses
     import uuid
 
@@ -54,12 +60,13 @@ def with_recording(specs: Sequence[RunSpec], record: str, every: int,
     parts.mkdir(parents=True, exist_ok=True)
     rid = str(uuid.uuid4())
     worlds = {s.world for s in specs}
+    first_seeds = sorted({s.seed for s in specs})[:detail_seeds]
     out = []
     for s in specs:
         label = run_label(s, worlds)
         out.append(dataclasses.replace(
             s, record_path=str(parts / f"{label}-s{s.seed}.rrd"), record_every=every,
-            record_values_every=values_every,
+            record_values_every=values_every, record_detail=s.seed in first_seeds,
             record_prefix=run_prefix(label, s.seed), recording_id=rid))
     return out
 

@@ -46,6 +46,7 @@ class RunSpec:
     record_path: str | None = None  # .rrd to write; None = no recording
     record_every: int = 10  # episodes recorded in full: first, every N-th, last
     record_values_every: int = 300  # value heat maps every K episodes
+    record_detail: bool = True  # False: curves only (comparisons, beyond the first seeds)
     record_prefix: str = ""  # entity subtree (comparisons: runs/<label>/s<seed>)
     recording_id: str | None = None  # shared by the parts of one comparison
 
@@ -129,13 +130,16 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     from scenarios.recording import Recorder
 
     plan = RecordPlan(spec.episodes, every=max(1, spec.record_every),
-                      values_every=max(1, spec.record_values_every))
+                      values_every=max(1, spec.record_values_every),
+                      detail=spec.record_detail)
     with Recorder.create(spec.record_path, sc, model, method=spec.method, config=cfg,
                          seed=spec.seed, world=spec.world, prefix=spec.record_prefix,
                          recording_id=spec.recording_id,
-                         blueprint=not spec.record_prefix) as rec:
+                         blueprint=not spec.record_prefix,
+                         with_scene=spec.record_detail) as rec:
         result = _train(spec, sc, model, cfg, rec, plan)
-        rec.log_route("greedy final", result.final_route)
+        if spec.record_detail:
+            rec.log_route("greedy final", result.final_route)
         return run_record(spec, cfg, result, model)
 
 

@@ -28,9 +28,11 @@ class RecordPlan:
     n_episodes: int  # episodes in the run
     every: int = 10  # record every N-th episode in full (plus the first and the last)
     values_every: int = 300  # value heat maps (and a batch of curves) every K episodes
+    detail: bool = True  # False: curves only (no trajectories, greedy tests or heat maps)
 
     def wants(self, episode: int) -> bool:
-        return episode == 0 or episode == self.n_episodes - 1 or episode % self.every == 0
+        return self.detail and (episode == 0 or episode == self.n_episodes - 1
+                                or episode % self.every == 0)
 
     def wants_values(self, episodes_done: int) -> bool:
         return episodes_done % self.values_every == 0 or episodes_done == self.n_episodes
@@ -64,11 +66,14 @@ class ChunkLogger:
 
     def after_chunk(self, done: int, arrays: dict[str, np.ndarray], st: AgentState,
                     test_route: list[int]) -> None:
-        self.rec.log_episode_trajectory(done - 1, np.asarray(test_route), kind="greedy-test")
+        if self.plan.detail:
+            self.rec.log_episode_trajectory(done - 1, np.asarray(test_route),
+                                            kind="greedy-test")
         if self.plan.wants_values(done):
             log_chunk_metrics(self.rec, self.logged, done - self.logged, arrays)
             self.logged = done
-            self.rec.log_values(done - 1, q_table(st), greedy_actions(st), potential(st))
+            if self.plan.detail:
+                self.rec.log_values(done - 1, q_table(st), greedy_actions(st), potential(st))
 
 
 class GridRecorder:

@@ -119,7 +119,7 @@ class Recorder:
                method: str, config: dict[str, Any] | Any, seed: int, world: str = "grid",
                application_id: str = "rnhql", recording_name: str | None = None,
                prefix: str = "", file: RecordingFile | None = None,
-               recording_id: str | None = None, blueprint: bool = True,
+               recording_id: str | None = None, blueprint: bool = True, with_scene: bool = True,
                flush_rows: int = 20_000, flush_interval_s: float = 5.0) -> Recorder:
         """Open (or join ``file``) and log metadata, the static scene and the blueprint.
 
@@ -148,7 +148,8 @@ class Recorder:
                  for k, v in meta.items()}
         st.send_property(f"rnhql/{rec.prefix}" if rec.prefix else "rnhql",
                          rr.AnyValues(**props))
-        scene.log_scene(st, rec.prefix, scenario, model)
+        if with_scene:  # a curves-only run in a comparison needs no map of its own
+            scene.log_scene(st, rec.prefix, scenario, model)
         if rec.prefix:  # one of several runs in a file: label and colour its curves
             scene.log_series_styles(st, rec.prefix, label=f"{method} s{seed}",
                                     colour=scene.method_colour(method))

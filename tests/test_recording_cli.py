@@ -45,3 +45,18 @@ def test_physics_train_record(tmp_path, capsys):
 def test_bad_record_path_exits_2(capsys):
     assert main(["train", "paper-40", "--episodes", "2", "--record", "x.txt"]) == 2
     assert "does not end in .rrd" in capsys.readouterr().err
+
+
+def test_comparison_records_first_seeds_in_full_and_the_rest_as_curves(tmp_path):
+    from scenarios.compare import make_specs, with_recording
+
+    specs = make_specs("paper-40", ["st-ql", "rnh-ql"], [0, 1, 2], 5, ["grid"])
+    rec = with_recording(specs, str(tmp_path / "c.rrd"), every=10, detail_seeds=2)
+    assert {(s.seed, s.record_detail) for s in rec} == {(0, True), (1, True), (2, False)}
+    assert len({s.recording_id for s in rec}) == 1
+    assert {s.record_prefix for s in rec if s.method == "st-ql"} == {
+        "runs/st-ql/s0", "runs/st-ql/s1", "runs/st-ql/s2"}
+    out = run_one(rec[2])  # a curves-only part still verifies
+    assert out["seed"] == 2
+    ok, msg = verify_recording(rec[2].record_path)
+    assert ok, msg

@@ -31,6 +31,10 @@ SLOT_TYPES = {"ivar": (np.int64, 1), "fvar": (np.float64, 1), "par": (np.float64
 METRIC_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std",
                  "test_episodes", "test_route_length")
 
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+_FILE_MODE = 0o666 & ~_UMASK  # what open() would have given the file
+
 
 class CheckpointError(ValueError):
     """A checkpoint that cannot be used: unreadable, or not for this run."""
@@ -104,6 +108,7 @@ def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
             np.savez(f, **payload)
             f.flush()
             os.fsync(f.fileno())
+        os.chmod(tmp, _FILE_MODE)  # mkstemp makes 0600; give the usual mode
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -27,6 +27,13 @@ KERNEL_OUT = ("steps", "returns", "success", "shaping_mean", "shaping_std")  # r
 _DTYPES = {"steps": np.int32, "success": np.bool_}
 
 
+def first_optimal_test(test_episodes: np.ndarray, test_route_length: np.ndarray,
+                       optimal_length: int) -> int | None:
+    """Episodes trained at the first greedy test whose route has the optimal length."""
+    hit = np.flatnonzero(np.asarray(test_route_length) == optimal_length)
+    return int(test_episodes[hit[0]]) if len(hit) else None
+
+
 @dataclass(eq=False)
 class TrainResult:
     """Everything a run measured; arrays are per episode unless named ``test_*``."""
@@ -62,8 +69,8 @@ class TrainResult:
     @property
     def episodes_to_optimal(self) -> int | None:
         """Episodes trained at the first greedy test whose route is a shortest one."""
-        hit = np.flatnonzero(self.test_route_length == self.optimal_length)
-        return int(self.test_episodes[hit[0]]) if len(hit) else None
+        return first_optimal_test(self.test_episodes, self.test_route_length,
+                                  self.optimal_length)
 
     def episode_arrays(self) -> dict[str, np.ndarray]:
         return {f: getattr(self, f) for f in EPISODE_FIELDS}

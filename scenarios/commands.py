@@ -241,8 +241,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                          "--record-every"),
                                _positive(args.record_values_every, "--record-values-every"),
                                _positive(args.record_seeds, "--record-seeds"))
-    results = run_sweep(specs, Path(args.out), execute, resume=args.resume,
-                        progress=Progress(len(specs)), **kwargs)
+    run_sweep(specs, Path(args.out), execute, resume=args.resume,
+              progress=Progress(len(specs)), **kwargs)
     if record is not None:
         from scenarios.compare import gather_parts
 
@@ -250,7 +250,6 @@ def cmd_compare(args: argparse.Namespace) -> int:
         print(f"recording: {record}  (open: rnhql view {record})")
     print((Path(args.out) / "summary.md").read_text())
     print(f"wrote {args.out}/results.json, summary.md and figures")
-    del results
     return 0
 
 

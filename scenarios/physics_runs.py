@@ -23,7 +23,7 @@ import numpy as np
 import sim.envs  # noqa: F401  (registers the ids)
 from learning.agent import StepAgent, make_agent, run_env_episodes
 from learning.geometry import geometry_of
-from learning.train import greedy_test, shortest_fraction
+from learning.train import first_optimal_test, greedy_test, shortest_fraction
 from sim.grid import TabularModel
 from sim.scenario import Scenario
 
@@ -121,8 +121,8 @@ class PhysicsTrainResult:
 
     @property
     def episodes_to_optimal(self) -> int | None:
-        hit = np.flatnonzero(self.test_route_length == self.optimal_length)
-        return int(self.test_episodes[hit[0]]) if len(hit) else None
+        return first_optimal_test(self.test_episodes, self.test_route_length,
+                                  self.optimal_length)
 
 
 def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,

@@ -32,6 +32,10 @@ import numpy as np
 SUMMARY_FIGURES = ("episodes_to_optimal", "final_route_length", "success_rate", "wall_time_s",
                    "env_steps", "optimal_action_fraction")
 
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+_FILE_MODE = 0o666 & ~_UMASK  # what open() would have given the file
+
 
 def atomic_write_text(path: str | Path, text: str) -> None:
     """Write via a temp file in the same directory and ``os.replace``: never half a file."""
@@ -41,6 +45,7 @@ def atomic_write_text(path: str | Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
+        os.chmod(tmp, _FILE_MODE)  # mkstemp makes 0600; give the usual mode
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -93,3 +93,24 @@ def test_summary_counts_unreached_routes_as_never():
     assert e["episodes_to_optimal"]["median"] == 300
     assert e["optimal_route_fraction"] == pytest.approx(2 / 3)
     assert e["reached_goal_fraction"] == pytest.approx(2 / 3)
+
+
+def test_atomic_writes_get_the_usual_file_mode(tmp_path):
+    import os
+
+    import numpy as np
+
+    from learning.checkpoint import Checkpoint, save_checkpoint
+    from learning.train import train_tabular
+    from scenarios.experiment import load, make_config
+    from scenarios.results import atomic_write_text
+
+    umask = os.umask(0)
+    os.umask(umask)
+    atomic_write_text(tmp_path / "r.json", "{}")
+    _, model = load("paper-40")
+    rng = np.random.default_rng(0)
+    result = train_tabular(make_config("st-ql"), model, 2, rng)
+    save_checkpoint(tmp_path / "a.npz", Checkpoint.of_result(result, rng))
+    for name in ("r.json", "a.npz"):  # mkstemp alone would leave 0o600
+        assert (tmp_path / name).stat().st_mode & 0o777 == 0o666 & ~umask

@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 import tomllib
 from dataclasses import dataclass, field, replace
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -226,7 +225,7 @@ class _Table:
     def __init__(self, data: dict[str, Any], path: str, source: str) -> None:
         if not isinstance(data, dict):
             raise ScenarioError(source, path or "<top>", f"expected a table, got {data!r}",
-                                "see scenarios/paper-50.toml for the layout")
+                                "see scenarios/builtin/paper-50.toml for the layout")
         self.data, self.path, self.source, self.used = data, path, source, set()
 
     def _fld(self, key: str) -> str:
@@ -238,7 +237,7 @@ class _Table:
         if key not in self.data:
             if required:
                 raise ScenarioError(self.source, self._fld(key), "is missing",
-                                    f"add '{key} = ...' (see scenarios/paper-50.toml)")
+                                    f"add '{key} = ...' (see scenarios/builtin/paper-50.toml)")
             return default
         value = self.data[key]
         if kind is float and isinstance(value, int) and not isinstance(value, bool):
@@ -289,7 +288,7 @@ def _dataclass_from_table(cls: type, tbl: _Table) -> Any:
 
 
 def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenario:
-    """Build and validate a Scenario from parsed TOML (see scenarios/paper-50.toml)."""
+    """Build and validate a Scenario from parsed TOML (see scenarios/builtin/paper-50.toml)."""
     top = _Table(data, "", source)
     name = top.get("name", str, Path(source).stem)
     description = top.get("description", str, "")
@@ -400,8 +399,12 @@ def scenario_from_map(path: str | Path, start_xy: Cell, goal_xy: Cell,
 
 
 def builtin_dir() -> Path:
-    """Directory of the built-in scenario TOMLs (shipped in the ``scenarios`` package)."""
-    return Path(str(resources.files("scenarios")))
+    """Directory of the built-in scenario TOMLs, shipped as data in ``scenarios/builtin``.
+
+    Found by path beside this package (installed or editable alike), so ``sim``
+    reads the data without importing any code of the layer above it.
+    """
+    return Path(__file__).resolve().parent.parent / "scenarios" / "builtin"
 
 
 def builtin_names() -> list[str]:

@@ -10,7 +10,7 @@ from sim.grid import build_model
 from sim.scenario import resolve_scenario
 
 REPO = Path(__file__).resolve().parent.parent
-MAPS = REPO / "scenarios" / "maps"
+MAPS = REPO / "scenarios" / "builtin" / "maps"
 
 
 @pytest.fixture(scope="session")

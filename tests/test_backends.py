@@ -7,8 +7,8 @@ import os
 
 import pytest
 
-from scenarios.backends import BackendError, run_local, run_ray
-from scenarios.compare import make_specs, run_sweep
+from scenarios.experiments.compare import make_specs, run_sweep
+from scenarios.runs.backends import BackendError, run_local, run_ray
 
 TIMING = ("wall_time_s", "wall_time_per_episode_s")
 

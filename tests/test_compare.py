@@ -6,10 +6,10 @@ import json
 
 import pytest
 
-from scenarios.backends import SweepError, run_local
-from scenarios.compare import PARTIAL, make_specs, run_sweep
-from scenarios.experiment import RunSpec, run_one
-from scenarios.results import summarise
+from scenarios.experiments.compare import PARTIAL, make_specs, run_sweep
+from scenarios.runs.backends import SweepError, run_local
+from scenarios.runs.results import summarise
+from scenarios.runs.spec import RunSpec, run_one
 
 RUN_KEYS = {"method", "seed", "world", "episodes_to_optimal", "final_route_length",
             "success_rate", "wall_time_s", "env_steps", "steps_per_episode", "reward_per_step"}
@@ -102,8 +102,8 @@ def test_atomic_writes_get_the_usual_file_mode(tmp_path):
 
     from learning.checkpoint import Checkpoint, save_checkpoint
     from learning.train import train_tabular
-    from scenarios.experiment import load, make_config
-    from scenarios.results import atomic_write_text
+    from scenarios.runs.results import atomic_write_text
+    from scenarios.runs.spec import load, make_config
 
     umask = os.umask(0)
     os.umask(umask)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
-from scenarios import continuous_vs_grid
 from scenarios.cli import main
+from scenarios.experiments import continuous_vs_grid
 
 
 def test_continuous_vs_grid_writes_table_and_overlay(tmp_path, capsys):

@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from scenarios.recording import Recorder, RecordingFile, run_prefix, verify_recording
-from scenarios.recording_batch import grid_poses
-from scenarios.recording_compare import gather_comparison
-from scenarios.recording_demo import record_synthetic
-from scenarios.recording_scene import git_commit
+from scenarios.recording.batch import grid_poses
+from scenarios.recording.comparison import gather_comparison
+from scenarios.recording.demo import record_synthetic
+from scenarios.recording.recorder import Recorder, RecordingFile, run_prefix, verify_recording
+from scenarios.recording.scene import git_commit
 from sim.planning import bfs_route
 
 REPO = Path(__file__).resolve().parent.parent
@@ -182,7 +182,7 @@ CHILD = textwrap.dedent("""
     import signal, sys, time
     import numpy as np
     signal.signal(signal.SIGINT, signal.default_int_handler)  # even if the parent ignores it
-    from scenarios.recording import Recorder
+    from scenarios.recording.recorder import Recorder
     from sim.grid import build_model
     from sim.scenario import resolve_scenario
     sc = resolve_scenario("paper-50")

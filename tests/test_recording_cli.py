@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 
 from scenarios.cli import main
-from scenarios.experiment import RunSpec, run_one
-from scenarios.recording import verify_recording
+from scenarios.recording.recorder import verify_recording
+from scenarios.runs.spec import RunSpec, run_one
 
 
 def test_recorded_run_equals_unrecorded_run(tmp_path):
@@ -48,7 +48,7 @@ def test_bad_record_path_exits_2(capsys):
 
 
 def test_comparison_records_first_seeds_in_full_and_the_rest_as_curves(tmp_path):
-    from scenarios.compare import make_specs, with_recording
+    from scenarios.experiments.compare import make_specs, with_recording
 
     specs = make_specs("paper-40", ["st-ql", "rnh-ql"], [0, 1, 2], 5, ["grid"])
     rec = with_recording(specs, str(tmp_path / "c.rrd"), every=10, detail_seeds=2)

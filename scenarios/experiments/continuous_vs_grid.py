@@ -1,6 +1,6 @@
 """The same methods and seeds in the grid and in physics, side by side.
 
-    python -m scenarios.continuous_vs_grid paper-50 --methods rnh-ql,st-ql --seeds 3 \\
+    python -m scenarios.experiments.continuous_vs_grid paper-50 --methods rnh-ql,st-ql --seeds 3 \\
         --episodes 3000 --out results/cvg
 
 Writes the usual ``results.json`` / ``summary.md`` / figures of a two-world
@@ -21,10 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from scenarios.backends import Progress, run_local
-from scenarios.compare import make_specs, run_sweep
-from scenarios.experiment import load
-from scenarios.results import atomic_write_text
+from scenarios.experiments.compare import make_specs, run_sweep
+from scenarios.runs.backends import Progress, run_local
+from scenarios.runs.results import atomic_write_text
+from scenarios.runs.spec import load
 
 
 def _median(values: list[float], digits: int = 1) -> str:
@@ -71,7 +71,7 @@ def overlay(results: dict[str, Any], scenario: str, method: str, path: Path) -> 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from scenarios.plots import draw_map
+    from scenarios.figures.plots import draw_map
     from sim.planning import bfs_route
 
     sc, model = load(scenario)
@@ -120,7 +120,8 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args.out)
     results = run_sweep(specs, out, run_local, jobs=args.jobs, progress=Progress(len(specs)))
     text = (f"# {results['scenario']['name']}: continuous vs gridded\n\n"
-            f"Command: `python -m scenarios.continuous_vs_grid {args.scenario} --methods "
+            "Command: `python -m scenarios.experiments.continuous_vs_grid "
+            f"{args.scenario} --methods "
             f"{args.methods} --seeds {args.seeds} --episodes {args.episodes}`\n\n"
             "Medians over seeds. Episodes to optimal and the final route (cells) come from "
             "greedy tests on the grid model for both worlds; `driven` columns drive the final "

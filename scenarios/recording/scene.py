@@ -1,6 +1,6 @@
 """What a recording looks like: colours, the static scene, metadata and the blueprints.
 
-Used by :mod:`scenarios.recording` (the API); see its docstring for the entity
+Used by :mod:`scenarios.recording.recorder` (the API); see its docstring for the entity
 paths and timelines. Everything spatial lives under ``<prefix>/world`` in metres,
 x right and y up; a static ``Transform3D(scale=[1, -1, 1])`` at ``<prefix>/world``
 turns the viewer's y-down 2-D views the right way up (views are rooted above it,

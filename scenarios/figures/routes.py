@@ -37,7 +37,7 @@ def route_png(sc: Scenario, model: TabularModel, route: Sequence[int], path: Pat
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from scenarios.plots import draw_map
+    from scenarios.figures.plots import draw_map
 
     optimum = model.coords[bfs_route(model.next_state, model.distance_to_goal, model.start)]
     pts = model.coords[np.asarray(route, dtype=int)]

@@ -1,6 +1,6 @@
 """Benchmarks of the learners (issue 3): kernel throughput, the paper protocol, JIT cold start.
 
-Run: ``python -m scenarios.bench`` (prints JSON). Measures, on paper-50:
+Run: ``python -m scenarios.bench.learners`` (prints JSON). Measures, on paper-50:
 
 * env steps/s of the fused kernels for st-ql and rnh-ql (100 centres), training
   3000 episodes from scratch (the paper protocol's mix of long exploring and
@@ -43,7 +43,7 @@ from learning import (
     train_tabular,
 )
 from learning.kernels import run_episodes
-from scenarios.bench_grid import python_q_learning_steps_per_s
+from scenarios.bench.grid import python_q_learning_steps_per_s
 from sim.grid import build_model
 from sim.scenario import resolve_scenario
 

@@ -2,7 +2,7 @@
 
 Each spec is run in a worker process (the scenario is resolved again there:
 specs are small and picklable, models are cached per process), and becomes one
-``runs[]`` record of ``results.json`` (see :mod:`scenarios.results`). The
+``runs[]`` record of ``results.json`` (see :mod:`scenarios.runs.results`). The
 backend only decides *where* :func:`run_one` executes, so the local pool and
 Ray produce the same records for the same seeds.
 """
@@ -126,8 +126,8 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
                               f"use one of: {', '.join(WORLDS)}")
     if spec.record_path is None:
         return run_record(spec, cfg, _train(spec, sc, model, cfg), model)
-    from scenarios.recorded_runs import RecordPlan
-    from scenarios.recording import Recorder
+    from scenarios.recording.hooks import RecordPlan
+    from scenarios.recording.recorder import Recorder
 
     plan = RecordPlan(spec.episodes, every=max(1, spec.record_every),
                       values_every=max(1, spec.record_values_every),
@@ -147,7 +147,7 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
            plan: Any = None) -> Any:
     rng = np.random.default_rng(spec.seed)
     if spec.world == "physics":
-        from scenarios.physics_runs import train_physics
+        from scenarios.runs.physics import train_physics
 
         return train_physics(cfg, sc, model, spec.episodes, rng, test_every=spec.test_every,
                              recorder=recorder, plan=plan)
@@ -155,7 +155,7 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
 
     observer = None
     if recorder is not None:
-        from scenarios.recorded_runs import GridRecorder
+        from scenarios.recording.hooks import GridRecorder
 
         observer = GridRecorder(recorder, plan)
     result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every,
@@ -163,7 +163,7 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
     if spec.drive_final:
         from learning.agent import StepAgent
         from learning.geometry import geometry_of
-        from scenarios.physics_runs import drive_greedy
+        from scenarios.runs.physics import drive_greedy
 
         agent = StepAgent(cfg, geometry_of(model), rng, result.state)
         result.world_extras = drive_greedy(agent, sc).extras()

@@ -129,7 +129,7 @@ def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
                   rng: np.random.Generator, test_every: int = 10,
                   recorder: Any = None, plan: Any = None) -> PhysicsTrainResult:
     """Train the step agent in PhysicsRoute-v0; optionally record (see recorded_runs)."""
-    from scenarios.recorded_runs import ChunkLogger, EpisodeTap
+    from scenarios.recording.hooks import ChunkLogger, EpisodeTap
 
     counter = ContactCounter(gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
                                       max_episode_steps=sc.steps_per_episode))

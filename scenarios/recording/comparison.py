@@ -1,4 +1,4 @@
-"""Comparisons (methods x seeds) in one recording; see :mod:`scenarios.recording`.
+"""Comparisons (methods x seeds) in one recording; see :mod:`scenarios.recording.recorder`.
 
 Each run logs under its own subtree ``runs/<method>/s<seed>`` (:func:`run_prefix`).
 
@@ -23,8 +23,7 @@ from pathlib import Path
 
 import rerun as rr
 
-from scenarios import recording_scene as scene
-from scenarios.recording import RecordingFile, rerun_cli, run_prefix
+from scenarios.recording.recorder import RecordingFile, rerun_cli, run_prefix, scene
 from sim.scenario import Scenario
 
 

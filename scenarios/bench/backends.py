@@ -1,6 +1,6 @@
 """Runs per second of one sweep on the local process pool and on a local Ray runtime.
 
-    python -m scenarios.bench_backends [--cpus 2]
+    python -m scenarios.bench.backends [--cpus 2]
 
 Both backends run the same 24 independent runs (paper-40, three methods x
 8 seeds x 1000 episodes); the figure includes each backend's start-up (worker
@@ -16,8 +16,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from scenarios.backends import run_local, run_ray
-from scenarios.compare import make_specs, run_sweep
+from scenarios.experiments.compare import make_specs, run_sweep
+from scenarios.runs.backends import run_local, run_ray
 
 
 def run_bench(cpus: int = 2) -> dict:

@@ -14,8 +14,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-from scenarios.experiment import RunSpec, load
-from scenarios.results import summarise, write_results
+from scenarios.runs.results import summarise, write_results
+from scenarios.runs.spec import RunSpec, load
 
 ALL_METHODS = ("rnh-ql", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt", "q-lambda",
                "dyna-q")
@@ -54,7 +54,7 @@ def with_recording(specs: Sequence[RunSpec], record: str, every: int,
     import dataclasses
     import uuid
 
-    from scenarios.recording import run_prefix
+    from scenarios.recording.recorder import run_prefix
 
     parts = Path(record + ".parts")
     parts.mkdir(parents=True, exist_ok=True)
@@ -75,7 +75,7 @@ def gather_parts(specs: Sequence[RunSpec], record: str) -> Path:
     """Merge the runs' part files into one recording with a comparison blueprint."""
     import shutil
 
-    from scenarios.recording_compare import gather_comparison
+    from scenarios.recording.comparison import gather_comparison
 
     worlds = {s.world for s in specs}
     sc, _ = load(specs[0].scenario, specs[0].start, specs[0].goal)
@@ -123,7 +123,7 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
               execute: Callable[..., list[dict[str, Any]]], resume: bool = False,
               figures: bool = True, **execute_kwargs: Any) -> dict[str, Any]:
     """Run the specs not finished yet with ``execute`` (a backend), then write everything."""
-    from scenarios.plots import all_figures
+    from scenarios.figures.plots import all_figures
 
     out_dir.mkdir(parents=True, exist_ok=True)
     done = read_partial(out_dir) if resume else {}

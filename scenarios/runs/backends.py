@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
 
-from scenarios.experiment import RunSpec, run_one
+from scenarios.runs.spec import RunSpec, run_one
 from sim.errors import InputError
 
 OnResult = Callable[[dict[str, Any]], None] | None

@@ -12,61 +12,10 @@ import os
 import sys
 from collections.abc import Sequence
 
+from scenarios.cli import bench, catalog, compare, route, train, view
+from scenarios.cli.args import add_record_args, add_scenario_args
+from scenarios.runs.backends import SweepError
 from sim.errors import InputError
-
-
-class CliError(InputError):
-    """Bad command-line input that no lower layer can name better."""
-
-
-def parse_cell(text: str, flag: str) -> tuple[int, int]:
-    try:
-        x, y = (int(v) for v in text.split(","))
-    except ValueError:
-        raise CliError("command line", flag, f"expected X,Y integers, got {text!r}",
-                       f"write e.g. {flag} 3,5") from None
-    return x, y
-
-
-def add_scenario_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scenario", help="built-in name (see `rnhql scenarios`), a .toml, or a .map")
-    p.add_argument("--start", help="X,Y start for a .map (Moving AI frame: y counts down)")
-    p.add_argument("--goal", help="X,Y goal for a .map (Moving AI frame: y counts down)")
-
-
-def add_record_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--record", nargs="?", const="", default=None, metavar="PATH.rrd",
-                   help="write a Rerun recording (default: recordings/<scenario>-<method>-"
-                        "<world>-s<seed>.rrd; compare: recordings/<scenario>-compare.rrd)")
-    p.add_argument("--record-every", type=int, default=None, metavar="N",
-                   help="record every N-th episode in full (always the first, the last and "
-                        "the greedy tests; default 10, in a comparison 100)")
-    p.add_argument("--record-values-every", type=int, default=300, metavar="K",
-                   help="log the V_NN / max Q heat maps and the policy every K episodes "
-                        "(default 300)")
-
-
-def scenario_from_args(args: argparse.Namespace):  # -> Scenario
-    from sim.scenario import resolve_scenario
-
-    start = parse_cell(args.start, "--start") if args.start else None
-    goal = parse_cell(args.goal, "--goal") if args.goal else None
-    return resolve_scenario(args.scenario, start, goal)
-
-
-def cmd_scenarios(args: argparse.Namespace) -> int:
-    from scenarios.catalog import HEADER, builtin_facts, facts, format_table
-
-    if args.check:
-        args.scenario = args.check
-        f = facts(scenario_from_args(args))
-        print(f"{args.check}: OK")
-        print(format_table([f.row()], HEADER))
-        return 0
-    rows = builtin_facts()
-    print(format_table([f.row() for f in rows], HEADER))
-    print("\noptimal = BFS moves from start to goal for the inflated robot (4-connected).")
-    return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -80,9 +29,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--check", metavar="FILE", help="validate a .toml or .map and print its facts")
     p.add_argument("--start", help="X,Y start for a .map (Moving AI frame: y counts down)")
     p.add_argument("--goal", help="X,Y goal for a .map (Moving AI frame: y counts down)")
-    p.set_defaults(func=cmd_scenarios)
-
-    from scenarios import commands as c
+    p.set_defaults(func=catalog.cmd_scenarios)
 
     p = sub.add_parser("train", help="train one method on one scenario")
     add_scenario_args(p)
@@ -96,7 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", metavar="AGENT.npz", help="continue a saved grid run")
     p.add_argument("--json", metavar="FILE", help="also write the run's record as JSON")
     add_record_args(p)
-    p.set_defaults(func=c.cmd_train)
+    p.set_defaults(func=train.cmd_train)
 
     p = sub.add_parser("route", help="print and draw a saved agent's greedy route from S")
     add_scenario_args(p)
@@ -105,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--png", metavar="FILE", help="also draw the routes to a PNG")
     p.add_argument("--record", nargs="?", const="", default=None, metavar="PATH.rrd",
                    help="record the route to Rerun (default recordings/<scenario>-route-...)")
-    p.set_defaults(func=c.cmd_route)
+    p.set_defaults(func=route.cmd_route)
 
     p = sub.add_parser("compare", help="methods x seeds (x worlds): results, summary, figures")
     add_scenario_args(p)
@@ -125,19 +72,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--record-seeds", type=int, default=1, metavar="N",
                    help="record the first N seeds of each method in full, the others as "
                         "curves only (default 1)")
-    p.set_defaults(func=c.cmd_compare)
+    p.set_defaults(func=compare.cmd_compare)
 
     p = sub.add_parser("view", help="open a .rrd recording in the Rerun viewer")
     p.add_argument("file", metavar="FILE.rrd")
     p.add_argument("--web", action="store_true",
                    help="serve the web viewer on 127.0.0.1 instead of the native viewer")
     p.add_argument("--port", type=int, default=9090, help="web viewer port (with --web)")
-    p.set_defaults(func=c.cmd_view)
+    p.set_defaults(func=view.cmd_view)
 
     p = sub.add_parser("bench", help="measure throughput")
     p.add_argument("--json", action="store_true")
     p.add_argument("--physics", action="store_true", help="include the physics benchmark")
-    p.set_defaults(func=c.cmd_bench)
+    p.set_defaults(func=bench.cmd_bench)
     return parser
 
 
@@ -151,7 +98,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except Exception as err:
         from learning.checkpoint import CheckpointError
-        from scenarios.backends import SweepError
 
         if isinstance(err, CheckpointError):
             print(f"rnhql: error: {err}", file=sys.stderr)
@@ -167,6 +113,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr = open(os.devnull, "w")
         return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -22,8 +22,8 @@ the grid world, the bumps (moves that left the state unchanged) are shown.
 Cost: the ``log_*`` calls only copy arrays into a buffer; when
 ``flush_rows`` rows are pending or ``flush_interval_s`` has passed (and on
 ``close``), the buffer becomes one ``send_columns`` call per entity, built
-vectorised over all buffered episodes (:mod:`scenarios.recording_batch`).
-Measure with ``python -m scenarios.recording_bench``.
+vectorised over all buffered episodes (:mod:`scenarios.recording.batch`).
+Measure with ``python -m scenarios.bench.recording``.
 
 Files: :class:`RecordingFile` owns an explicit ``rr.RecordingStream`` writing to
 ``<path>.part``; ``close`` flushes, writes the footer and renames it to ``path``,
@@ -54,7 +54,7 @@ maps and curves follow it), ``step`` (the recorded episodes played back to back,
 one row per state), ``sim_time`` (the same in simulated seconds, physics world).
 
 Comparisons (methods x seeds): each run is a subtree ``runs/<method>/s<seed>``
-(:func:`run_prefix`); see :mod:`scenarios.recording_compare`.
+(:func:`run_prefix`); see :mod:`scenarios.recording.comparison`.
 """
 
 from __future__ import annotations
@@ -70,9 +70,9 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
-from scenarios import recording_scene as scene
-from scenarios.recording_batch import EpisodeRecord, ValueFrame, send_episodes, send_values
-from scenarios.recording_file import RecordingFile, rerun_cli, verify_recording
+from scenarios.recording import scene
+from scenarios.recording.batch import EpisodeRecord, ValueFrame, send_episodes, send_values
+from scenarios.recording.file import RecordingFile, rerun_cli, verify_recording
 from sim.grid import TabularModel
 from sim.planning import ACTION_DELTAS
 from sim.scenario import Scenario

@@ -14,7 +14,7 @@ import numpy as np
 import pyarrow as pa
 import rerun as rr
 
-from scenarios import recording_scene as scene
+from scenarios.recording import scene
 from sim.grid import TabularModel
 
 MAX_CONTACT_EVENTS = 10  # contact events (text log rows) per episode; the rest are counted

@@ -1,6 +1,6 @@
 """A synthetic training run, for recording tests, screenshots and demos (no learner needed).
 
-``python -m scenarios.recording_demo out.rrd [--scenario paper-50] [--episodes 300]
+``python -m scenarios.recording.demo out.rrd [--scenario paper-50] [--episodes 300]
 [--world grid|physics]`` writes one.
 
 Training episodes are random walks from S that drift towards the goal more and
@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.recording import Recorder
+from scenarios.recording.recorder import Recorder
 from sim.grid import TabularModel
 from sim.planning import bfs_route, value_iteration
 from sim.scenario import Scenario

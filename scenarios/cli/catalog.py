@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import argparse
 from dataclasses import dataclass
 
+from scenarios.cli.args import scenario_from_args
 from sim.grid import build_model
 from sim.scenario import Scenario, builtin_names, resolve_scenario
 
@@ -55,3 +57,16 @@ def format_table(rows: list[list[str]], header: list[str]) -> str:
     lines.append("  ".join("-" * w for w in widths))
     lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
     return "\n".join(lines)
+
+
+def cmd_scenarios(args: argparse.Namespace) -> int:
+    if args.check:
+        args.scenario = args.check
+        f = facts(scenario_from_args(args))
+        print(f"{args.check}: OK")
+        print(format_table([f.row()], HEADER))
+        return 0
+    rows = builtin_facts()
+    print(format_table([f.row() for f in rows], HEADER))
+    print("\noptimal = BFS moves from start to goal for the inflated robot (4-connected).")
+    return 0

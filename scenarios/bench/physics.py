@@ -11,7 +11,7 @@
   alpha/gamma/epsilon) in ``rnhql/PhysicsRoute-v0``: wall time and primitives
   per episode, the number that decides what a full learning run costs.
 
-Run: ``python -m scenarios.bench_physics [--quick] [--scenario NAME]``.
+Run: ``python -m scenarios.bench.physics [--quick] [--scenario NAME]``.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The file side of a recording: an explicit stream, a ``.part`` file, a safe close.
 
-See :mod:`scenarios.recording` for the recording API.
+See :mod:`scenarios.recording.recorder` for the recording API.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""``--record``: connect training runs to :mod:`scenarios.recording`.
+"""``--record``: connect training runs to :mod:`scenarios.recording.recorder`.
 
 Which episodes are recorded in full (``--record-every N``): the first, every
 N-th, the last, and every greedy test from S. Curves are logged for every
@@ -20,7 +20,7 @@ import numpy as np
 
 from learning.readout import greedy_actions, potential, q_table
 from learning.state import AgentState
-from scenarios.recording import Recorder
+from scenarios.recording.recorder import Recorder
 
 
 @dataclass(frozen=True)

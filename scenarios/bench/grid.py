@@ -1,6 +1,6 @@
 """Benchmarks of the foundation: building a scenario, and GridRoute-v0 through gymnasium.
 
-Run: ``python -m scenarios.bench_grid`` (or ``rnhql bench``). The gymnasium
+Run: ``python -m scenarios.bench.grid`` (or ``rnhql bench``). The gymnasium
 figure uses a plain Python tabular Q-learning loop over ``gymnasium.make`` (all
 wrappers on), the way a user would write it; CliffWalking-v1 runs the same
 loop as a reference point for this machine.

@@ -1,6 +1,6 @@
 """Extra wall time of ``--record`` on a real fused-kernel run (not a stand-in loop).
 
-    python -m scenarios.bench_record_overhead
+    python -m scenarios.bench.record_overhead
 
 rnh-ql on paper-50, 3000 episodes, median of 5: ``train_tabular`` alone against
 ``train_tabular`` with the recording observer plus the recorder's close
@@ -17,9 +17,9 @@ import time
 import numpy as np
 
 from learning.train import train_tabular
-from scenarios.experiment import load, make_config
-from scenarios.recorded_runs import GridRecorder, RecordPlan
-from scenarios.recording import Recorder
+from scenarios.recording.hooks import GridRecorder, RecordPlan
+from scenarios.recording.recorder import Recorder
+from scenarios.runs.spec import load, make_config
 
 
 def run_bench(repeats: int = 5) -> dict:

@@ -1,7 +1,7 @@
 """Re-run the RNH-QL paper's experiments and say, claim by claim, what holds.
 
-    python -m scenarios.reproduce_paper --out results/paper          # full: 10 seeds x 3000
-    python -m scenarios.reproduce_paper --out /tmp/p --seeds 2 --episodes 200   # a quick look
+    python -m scenarios.experiments.reproduce_paper --out results/paper  # full: 10 seeds x 3000
+    python -m scenarios.experiments.reproduce_paper --out /tmp/p --seeds 2 --episodes 200  # a look
 
 Experiments (each a ``compare`` sweep written to its own sub-directory):
 
@@ -21,9 +21,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from scenarios.backends import Progress, run_local, run_ray
-from scenarios.compare import ALL_METHODS, make_specs, run_sweep
-from scenarios.results import atomic_write_text
+from scenarios.experiments.compare import ALL_METHODS, make_specs, run_sweep
+from scenarios.runs.backends import Progress, run_local, run_ray
+from scenarios.runs.results import atomic_write_text
 
 PAPER_FIVE = ("st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql")
 ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.5)
@@ -120,7 +120,7 @@ def claims(compare: dict[str, dict[str, Any]], alpha: dict[float, dict[str, Any]
 def report(claim_rows: list[tuple[str, bool, str]], args: argparse.Namespace) -> str:
     held = sum(h for _, h, _ in claim_rows)
     lines = ["# The RNH-QL paper, reproduced", "",
-             f"Command: `python -m scenarios.reproduce_paper --out {args.out} --seeds "
+             f"Command: `python -m scenarios.experiments.reproduce_paper --out {args.out} --seeds "
              f"{args.seeds} --episodes {args.episodes}`", "",
              f"{held} of {len(claim_rows)} claims hold. Each sub-directory holds its "
              "`results.json`, `summary.md` and figures.", "",

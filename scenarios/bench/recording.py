@@ -1,4 +1,4 @@
-"""What recording costs: ``python -m scenarios.recording_bench [--episodes 3000]``.
+"""What recording costs: ``python -m scenarios.bench.recording [--episodes 3000]``.
 
 A stand-in training loop spins for ``--episode-ms`` per episode on one core (the
 fused kernels take ~0.2 ms per episode); every ``--every``-th episode a
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.recording import Recorder
+from scenarios.recording.recorder import Recorder
 from sim.grid import build_model
 from sim.scenario import resolve_scenario
 

@@ -1,0 +1,4 @@
+"""The built-in scenarios (``*.toml``) and the Moving AI maps they use (``maps/``): data only.
+
+:func:`sim.scenario.builtin_dir` finds this folder by path; no code here is imported.
+"""

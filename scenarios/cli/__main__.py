@@ -1,0 +1,7 @@
+"""``python -m scenarios.cli``: the same as the ``rnhql`` console script."""
+
+import sys
+
+from scenarios.cli.app import main
+
+sys.exit(main())

@@ -1,0 +1,131 @@
+"""Argument helpers shared by the ``rnhql`` subcommands: cells, lists, overrides, paths.
+
+Every helper raises :class:`sim.errors.InputError` (one line naming the flag and
+the fix); :mod:`scenarios.cli.app` prints it and exits 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+from scenarios.runs.spec import WORLDS, ExperimentError
+from sim.errors import InputError
+
+
+class CliError(InputError):
+    """Bad command-line input that no lower layer can name better."""
+
+
+def parse_cell(text: str, flag: str) -> tuple[int, int]:
+    try:
+        x, y = (int(v) for v in text.split(","))
+    except ValueError:
+        raise CliError("command line", flag, f"expected X,Y integers, got {text!r}",
+                       f"write e.g. {flag} 3,5") from None
+    return x, y
+
+
+def add_scenario_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", help="built-in name (see `rnhql scenarios`), a .toml, or a .map")
+    p.add_argument("--start", help="X,Y start for a .map (Moving AI frame: y counts down)")
+    p.add_argument("--goal", help="X,Y goal for a .map (Moving AI frame: y counts down)")
+
+
+def add_record_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--record", nargs="?", const="", default=None, metavar="PATH.rrd",
+                   help="write a Rerun recording (default: recordings/<scenario>-<method>-"
+                        "<world>-s<seed>.rrd; compare: recordings/<scenario>-compare.rrd)")
+    p.add_argument("--record-every", type=int, default=None, metavar="N",
+                   help="record every N-th episode in full (always the first, the last and "
+                        "the greedy tests; default 10, in a comparison 100)")
+    p.add_argument("--record-values-every", type=int, default=300, metavar="K",
+                   help="log the V_NN / max Q heat maps and the policy every K episodes "
+                        "(default 300)")
+
+
+def scenario_from_args(args: argparse.Namespace):  # -> Scenario
+    from sim.scenario import resolve_scenario
+
+    start = parse_cell(args.start, "--start") if args.start else None
+    goal = parse_cell(args.goal, "--goal") if args.goal else None
+    return resolve_scenario(args.scenario, start, goal)
+
+
+def parse_overrides(items: list[str] | None) -> tuple[tuple[str, float], ...]:
+    out = []
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        try:
+            if not sep:
+                raise ValueError
+            out.append((key.strip(), float(value)))
+        except ValueError:
+            raise ExperimentError("command line", f"--set {item}", "expected FIELD=NUMBER",
+                                  "write e.g. --set alpha=0.2") from None
+    return tuple(out)
+
+
+def parse_list(text: str, flag: str, allowed: tuple[str, ...] | None = None) -> list[str]:
+    items = [t.strip() for t in text.split(",") if t.strip()]
+    if not items:
+        raise ExperimentError("command line", flag, "is empty", f"give e.g. {flag} a,b")
+    if allowed is not None:
+        bad = [t for t in items if t not in allowed]
+        if bad:
+            raise ExperimentError("command line", flag, f"unknown value {bad[0]!r}",
+                                  f"use one of: {', '.join(allowed)}")
+    return items
+
+
+def check_world(world: str) -> str:
+    if world not in WORLDS:
+        raise ExperimentError("command line", "--world", f"unknown world {world!r}",
+                              f"use one of: {', '.join(WORLDS)}")
+    return world
+
+
+def positive(value: int, flag: str) -> int:
+    if value < 1:
+        raise ExperimentError("command line", flag, f"must be >= 1, got {value}",
+                              f"pass e.g. {flag} 10")
+    return value
+
+
+def scenario_key(args: argparse.Namespace) -> tuple[str, tuple | None, tuple | None]:
+    start = parse_cell(args.start, "--start") if args.start else None
+    goal = parse_cell(args.goal, "--goal") if args.goal else None
+    return args.scenario, start, goal
+
+
+def print_run(rec_like: dict, optimal: int) -> None:
+    eto = rec_like["episodes_to_optimal"]
+    length = rec_like["final_route_length"]
+    print(f"  success rate          {rec_like['success_rate']:.3f}")
+    print(f"  episodes to optimal   {'never' if eto is None else eto}")
+    print(f"  final greedy route    {'G not reached' if length < 0 else length} "
+          f"(optimal {optimal})")
+    print(f"  greedy moves on a shortest route  {rec_like['optimal_action_fraction']:.3f}")
+    print(f"  env steps             {rec_like['env_steps']}")
+    print(f"  wall time             {rec_like['wall_time_s']:.3f} s")
+
+
+def record_path(args: argparse.Namespace, scenario: str, rest: str) -> str | None:
+    """``--record`` given: its path, or the default under recordings/; else None."""
+    if args.record is None:
+        return None
+    path = Path(args.record or f"recordings/{scenario}-{rest}.rrd")
+    if path.suffix != ".rrd":
+        raise ExperimentError("command line", "--record", f"{path} does not end in .rrd",
+                              "name the recording e.g. run.rrd")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    check_writable(path, "--record")
+    return str(path)
+
+
+def check_writable(path: Path, flag: str) -> None:
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir() or not os.access(parent, os.W_OK):
+        raise ExperimentError("command line", flag, f"cannot write to {parent}/",
+                              "create the directory or pick another path")

@@ -1,0 +1,63 @@
+"""``rnhql route``: a saved agent's greedy route from S against the BFS optimum.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from scenarios.cli.args import check_world, record_path, scenario_key
+from scenarios.runs.spec import load
+
+
+def cmd_route(args: argparse.Namespace) -> int:
+    from learning.checkpoint import load_checkpoint
+    from learning.train import greedy_test
+    from scenarios.figures.routes import ascii_routes, route_png
+    from sim.planning import bfs_route
+
+    name, start, goal = scenario_key(args)
+    sc, model = load(name, start, goal)
+    check_world(args.world)
+    ckpt = load_checkpoint(args.agent, None, model.n_states)
+    optimum = bfs_route(model.next_state, model.distance_to_goal, model.start)
+    length, route = greedy_test(ckpt.state, model)
+    trajectory = driven = None
+    print(f"{ckpt.config.name} agent {args.agent} ({ckpt.episodes} episodes) on {sc.name}")
+    if args.world == "physics":
+        from learning.agent import StepAgent
+        from learning.geometry import geometry_of
+        from scenarios.runs.physics import drive_greedy
+
+        agent = StepAgent(ckpt.config, geometry_of(model), np.random.default_rng(0), ckpt.state)
+        driven = drive_greedy(agent, sc)
+        route, trajectory = driven.states, driven.trajectory
+        length = len(route) - 1 if driven.reached else -1
+        print(f"  driven in physics: {'reached G' if driven.reached else 'did not reach G'}, "
+              f"{driven.metres:.1f} m, {driven.contacts} contacts, {driven.sim_time_s:.1f} s "
+              "sim time")
+    record = record_path(args, sc.name, f"route-{ckpt.method}-{args.world}")
+    if record is not None:
+        from learning.readout import greedy_actions, potential, q_table
+        from scenarios.recording.recorder import Recorder
+
+        with Recorder.create(record, sc, model, method=ckpt.method, config=ckpt.config,
+                             seed=-1, world=args.world) as rec:
+            poses = driven.poses if args.world == "physics" else None
+            rec.log_episode_trajectory(ckpt.episodes, np.asarray(route), poses=poses,
+                                       kind="greedy-test")
+            rec.log_values(ckpt.episodes, q_table(ckpt.state), greedy_actions(ckpt.state),
+                           potential(ckpt.state))
+            rec.log_route("greedy", route)
+        print(f"recording: {record}")
+    print(ascii_routes(model, route, optimum))
+    shown = "G not reached" if length < 0 else f"{length} moves"
+    verdict = "optimal" if length == len(optimum) - 1 else "not optimal"
+    print(f"greedy route: {shown} ({verdict}); BFS optimum: {len(optimum) - 1} moves")
+    if args.png:
+        route_png(sc, model, route, Path(args.png),
+                  f"{ckpt.config.name} greedy route ({args.world}) vs BFS optimum", trajectory)
+        print(f"drawn to {args.png}")
+    return 0

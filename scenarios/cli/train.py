@@ -1,0 +1,88 @@
+"""``rnhql train``: one method, one scenario, one seed; optional checkpoint and recording.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from scenarios.cli.args import (
+    check_world,
+    check_writable,
+    parse_overrides,
+    positive,
+    print_run,
+    record_path,
+    scenario_key,
+)
+from scenarios.runs.spec import ExperimentError, load, make_config
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from learning.checkpoint import Checkpoint, load_checkpoint, save_checkpoint
+    from learning.train import train_tabular
+    from scenarios.runs.spec import RunSpec, run_record
+
+    name, start, goal = scenario_key(args)
+    sc, model = load(name, start, goal)
+    check_world(args.world)
+    positive(args.episodes, "--episodes")
+    cfg = make_config(args.method, parse_overrides(args.set))
+    spec = RunSpec(name, args.method, args.seed, args.episodes, args.world, start=start,
+                   goal=goal)
+    record = record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
+    rng = np.random.default_rng(args.seed)
+    if args.save:
+        check_writable(Path(args.save), "--save")
+    resume = None
+    if args.resume and args.world == "grid":
+        resume = load_checkpoint(args.resume, args.method, model.n_states)
+    print(f"{cfg.name} on {sc.name} ({args.world}), seed {args.seed}, {args.episodes} episodes")
+    recorder = plan = observer = None
+    if record is not None:
+        from scenarios.recording.hooks import GridRecorder, RecordPlan
+        from scenarios.recording.recorder import Recorder
+
+        plan = RecordPlan(args.episodes,
+                          every=positive(10 if args.record_every is None else args.record_every,
+                                            "--record-every"),
+                          values_every=positive(args.record_values_every,
+                                                 "--record-values-every"))
+        recorder = Recorder.create(record, sc, model, method=args.method, config=cfg,
+                                   seed=args.seed, world=args.world)
+        observer = GridRecorder(recorder, plan)
+    try:
+        if args.world == "grid":
+            result = train_tabular(cfg, model, args.episodes, rng, resume=resume,
+                                   observer=observer)
+            if args.save:
+                save_checkpoint(args.save, Checkpoint.of_result(result, rng))
+        else:
+            if args.resume:
+                raise ExperimentError("command line", "--resume", "is only supported for grid "
+                                      "runs", "drop --resume or use --world grid")
+            from scenarios.runs.physics import train_physics
+
+            result = train_physics(cfg, sc, model, args.episodes, rng, recorder=recorder,
+                                   plan=plan)
+            if args.save:
+                save_checkpoint(args.save, Checkpoint.of_agent(result.agent))
+        if recorder is not None:
+            recorder.log_route("greedy final", result.final_route)
+    finally:
+        if recorder is not None:
+            recorder.close()  # also on Ctrl-C: the recording keeps what was logged
+    if record is not None:
+        print(f"  recording             {record}  (open: rnhql view {record})")
+    rec = run_record(spec, cfg, result, model)
+    print_run(rec, model.optimal_route_length)
+    if args.save:
+        print(f"  saved agent           {args.save}")
+    if args.json:
+        from scenarios.runs.results import atomic_write_text
+
+        atomic_write_text(args.json, json.dumps(rec, indent=1))
+    return 0

@@ -44,8 +44,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                          "--record-every"),
                                positive(args.record_values_every, "--record-values-every"),
                                positive(args.record_seeds, "--record-seeds"))
-    run_sweep(specs, Path(args.out), execute, resume=args.resume,
-              progress=Progress(len(specs)), **kwargs)
+    try:
+        run_sweep(specs, Path(args.out), execute, resume=args.resume,
+                  progress=Progress(len(specs)), **kwargs)
+    except KeyboardInterrupt:
+        _interrupted(specs, args, record)
+        raise
     if record is not None:
         from scenarios.experiments.compare import gather_parts
 
@@ -65,3 +69,26 @@ def _backend(args: argparse.Namespace):
         return run_ray, {"address": args.address, "num_cpus": args.jobs}
     raise InputError("command line", "--backend", f"unknown backend {args.backend!r}",
                      "use local or ray")
+
+
+def _interrupted(specs: list, args: argparse.Namespace, record: str | None) -> None:
+    """After Ctrl-C: say what was kept, and finish the recording with the runs done so far.
+
+    A second Ctrl-C while this runs exits at once (status 130).
+    """
+    import signal
+    import sys
+
+    from scenarios.experiments.compare import read_partial
+
+    signal.signal(signal.SIGINT, lambda *_: os._exit(130))
+    done = read_partial(Path(args.out))
+    finished = [s for s in specs if s.key in done]
+    print(f"\ninterrupted: {len(finished)} of {len(specs)} runs finished, kept in "
+          f"{args.out}/runs.partial.jsonl; finish with the same command and --resume",
+          file=sys.stderr)
+    if record is not None and finished:
+        from scenarios.experiments.compare import gather_parts
+
+        gather_parts(finished, record, keep_parts=True)
+        print(f"recording of the finished runs: {record}", file=sys.stderr)

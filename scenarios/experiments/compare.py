@@ -14,6 +14,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from scenarios.runs.outdir import check_out_dir, sweep_lock
 from scenarios.runs.results import summarise, write_results
 from scenarios.runs.spec import RunSpec, load
 
@@ -58,7 +59,10 @@ def with_recording(specs: Sequence[RunSpec], record: str, every: int,
 
     parts = Path(record + ".parts")
     parts.mkdir(parents=True, exist_ok=True)
-    rid = str(uuid.uuid4())
+    # the same sweep gets the same id, so the parts of an interrupted run and of its
+    # --resume are one recording in the viewer
+    rid = str(uuid.uuid5(uuid.NAMESPACE_URL,
+                         f"rnhql:{Path(record).resolve()}|{'|'.join(s.key for s in specs)}"))
     worlds = {s.world for s in specs}
     first_seeds = sorted({s.seed for s in specs})[:detail_seeds]
     out = []
@@ -71,8 +75,12 @@ def with_recording(specs: Sequence[RunSpec], record: str, every: int,
     return out
 
 
-def gather_parts(specs: Sequence[RunSpec], record: str) -> Path:
-    """Merge the runs' part files into one recording with a comparison blueprint."""
+def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False) -> Path:
+    """Merge the runs' part files into one recording with a comparison blueprint.
+
+    ``keep_parts`` (an interrupted sweep): the recording holds the runs finished
+    so far, and the parts stay for ``--resume`` to gather them all at the end.
+    """
     import shutil
 
     from scenarios.recording.comparison import gather_comparison
@@ -82,7 +90,8 @@ def gather_parts(specs: Sequence[RunSpec], record: str) -> Path:
     parts = [Path(s.record_path) for s in specs if s.record_path and Path(s.record_path).exists()]
     runs = [(run_label(s, worlds), s.seed) for s in specs]
     out = gather_comparison(record, parts, sc, runs, recording_id=specs[0].recording_id)
-    shutil.rmtree(record + ".parts", ignore_errors=True)
+    if not keep_parts:
+        shutil.rmtree(record + ".parts", ignore_errors=True)
     return out
 
 
@@ -122,10 +131,22 @@ def read_partial(out_dir: Path) -> dict[str, dict[str, Any]]:
 def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
               execute: Callable[..., list[dict[str, Any]]], resume: bool = False,
               figures: bool = True, **execute_kwargs: Any) -> dict[str, Any]:
-    """Run the specs not finished yet with ``execute`` (a backend), then write everything."""
+    """Run the specs not finished yet with ``execute`` (a backend), then write everything.
+
+    On Ctrl-C the runs finished so far are in ``runs.partial.jsonl`` and the
+    ``KeyboardInterrupt`` propagates; ``resume=True`` later runs only the rest
+    and writes the same ``results.json`` as an uninterrupted sweep.
+    """
+    check_out_dir(out_dir)
+    with sweep_lock(out_dir):
+        return _run_sweep(specs, out_dir, execute, resume, figures, **execute_kwargs)
+
+
+def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
+               execute: Callable[..., list[dict[str, Any]]], resume: bool, figures: bool,
+               **execute_kwargs: Any) -> dict[str, Any]:
     from scenarios.figures.plots import all_figures
 
-    out_dir.mkdir(parents=True, exist_ok=True)
     done = read_partial(out_dir) if resume else {}
     if not resume:
         (out_dir / PARTIAL).unlink(missing_ok=True)

@@ -9,6 +9,7 @@ parameters.
 
 from __future__ import annotations
 
+import signal
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -85,9 +86,36 @@ class _Collector:
         return done
 
 
+def _ignore_sigint() -> None:
+    """Pool worker initializer: Ctrl-C reaches the whole process group, but only the parent
+    decides what happens (it keeps the finished runs and ends the workers itself)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _end_workers(pool: ProcessPoolExecutor) -> None:
+    """Stop a pool now: drop queued runs and terminate the workers mid-run.
+
+    ``shutdown(cancel_futures=True)`` alone still waits for the running tasks
+    (minutes in a physics sweep); Python 3.11 has no public way to end the
+    workers, so this reaches for the pool's process table.
+    """
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in processes:
+        proc.terminate()
+    for proc in processes:
+        proc.join(timeout=1.0)
+        if proc.is_alive():
+            proc.kill()
+
+
 def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = None,
               progress: Progress | None = None) -> list[dict[str, Any]]:
-    """Run specs in ``jobs`` worker processes (in this process when ``jobs == 1``)."""
+    """Run specs in ``jobs`` worker processes (in this process when ``jobs == 1``).
+
+    Ctrl-C (``KeyboardInterrupt`` in this process) ends the workers at once and
+    propagates; every run finished before it has already gone to ``on_result``.
+    """
     col = _Collector(specs, on_result, progress)
     if jobs <= 1 or len(specs) <= 1:
         for i, spec in enumerate(specs):
@@ -98,7 +126,8 @@ def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = Non
             else:
                 col.ok(i, rec)
         return col.result()
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_ignore_sigint)
+    try:
         futures = {pool.submit(run_one, spec): i for i, spec in enumerate(specs)}
         for fut in as_completed(futures):
             try:
@@ -107,6 +136,10 @@ def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = Non
                 col.failed(futures[fut], exc)
             else:
                 col.ok(futures[fut], rec)
+    except BaseException:  # Ctrl-C (or a failing on_result): stop now, not after every run
+        _end_workers(pool)
+        raise
+    pool.shutdown(wait=True)
     return col.result()
 
 
@@ -132,15 +165,20 @@ def run_ray(specs: Sequence[RunSpec], address: str | None = None, num_cpus: int 
         refs = {task.remote(spec): i for i, spec in enumerate(specs)}
         col = _Collector(specs, on_result, progress)
         pending = list(refs)
-        while pending:
-            ready, pending = ray.wait(pending, num_returns=1)
-            i = refs[ready[0]]
-            try:
-                rec = ray.get(ready[0])
-            except Exception as exc:  # RayTaskError wraps the worker's exception
-                col.failed(i, getattr(exc, "cause", None) or exc)
-            else:
-                col.ok(i, rec)
+        try:
+            while pending:
+                ready, pending = ray.wait(pending, num_returns=1)
+                i = refs[ready[0]]
+                try:
+                    rec = ray.get(ready[0])
+                except Exception as exc:  # RayTaskError wraps the worker's exception
+                    col.failed(i, getattr(exc, "cause", None) or exc)
+                else:
+                    col.ok(i, rec)
+        except BaseException:  # Ctrl-C: cancel what is queued or running, keep what finished
+            for ref in pending:
+                ray.cancel(ref, force=True)
+            raise
         return col.result()
     finally:
         if started_here:

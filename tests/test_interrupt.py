@@ -1,0 +1,93 @@
+"""Ctrl-C: a sweep stops within 2 s, keeps its finished runs, and --resume completes it.
+
+Each command runs in its own process group and receives SIGINT on the whole
+group, as a terminal's Ctrl-C does (workers included).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from scenarios.recording.file import verify_recording
+
+CLI = [sys.executable, "-m", "scenarios.cli"]
+
+
+def start(args: list[str], cwd: Path) -> subprocess.Popen:
+    return subprocess.Popen([*CLI, *args], cwd=cwd, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            env={**os.environ, "PYTHONPATH": str(Path(__file__).parent.parent)})
+
+
+def wait_for(cond, timeout: float) -> bool:
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        if cond():
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def interrupt(proc: subprocess.Popen) -> tuple[int, float, str]:
+    """SIGINT to the process group; (exit status, seconds until it ended, stderr)."""
+    t0 = time.monotonic()
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        _, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    return proc.returncode, time.monotonic() - t0, err
+
+
+def strip_timings(x):
+    if isinstance(x, dict):
+        return {k: strip_timings(v) for k, v in x.items() if "wall_time" not in k}
+    if isinstance(x, list):
+        return [strip_timings(v) for v in x]
+    return x
+
+
+def test_ctrl_c_stops_a_recorded_sweep_and_resume_completes_it(tmp_path):
+    sweep = ["compare", "paper-40", "--methods", "rn-ql,st-ql", "--seeds", "6",
+             "--episodes", "1500", "--jobs", "2"]
+    out, rec = tmp_path / "out", tmp_path / "cmp.rrd"
+    proc = start([*sweep, "--out", str(out), "--record", str(rec)], tmp_path)
+    partial = out / "runs.partial.jsonl"
+    assert wait_for(lambda: partial.exists() and partial.read_text().count("\n") >= 1, 120)
+    code, took, err = interrupt(proc)
+    assert code == 130, err
+    assert took <= 2.0, f"took {took:.2f} s to stop"
+    assert "interrupted" in err
+    finished = partial.read_text().count("\n")
+    assert 1 <= finished < 12
+    assert not (out / "results.json").exists()
+    assert rec.exists() and verify_recording(rec)[0]
+
+    resumed = subprocess.run([*CLI, *sweep, "--out", str(out), "--record", str(rec),
+                              "--resume"], cwd=tmp_path, capture_output=True, text=True,
+                             timeout=300)
+    assert resumed.returncode == 0, resumed.stderr
+    whole = subprocess.run([*CLI, *sweep, "--out", str(tmp_path / "whole")], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=300)
+    assert whole.returncode == 0, whole.stderr
+    a = json.loads((out / "results.json").read_text())
+    b = json.loads((tmp_path / "whole" / "results.json").read_text())
+    assert strip_timings(a) == strip_timings(b)
+    assert verify_recording(rec)[0]
+
+
+def test_ctrl_c_stops_physics_training(tmp_path):
+    proc = start(["train", "paper-40", "--method", "st-ql", "--world", "physics",
+                  "--episodes", "300"], tmp_path)
+    assert wait_for(lambda: proc.poll() is not None, 4.0) is False  # still training
+    code, took, err = interrupt(proc)
+    assert code == 130, err
+    assert took <= 2.0, f"took {took:.2f} s to stop"
+    assert "Traceback" not in err

@@ -1,5 +1,9 @@
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
+
 import pytest
 
 from scenarios.cli import main
@@ -84,3 +88,45 @@ def test_console_script_exit_code(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "scenarios.cli", "scenarios", "--check",
                            str(tmp_path / "none.toml")], capture_output=True, text=True)
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1
+
+
+def test_set_applies_to_the_methods_that_have_the_field(tmp_path):
+    out = tmp_path / "o"
+    assert main(["compare", "paper-40", "--methods", "st-ql,rnh-ql", "--seeds", "1",
+                 "--episodes", "10", "--set", "k=20", "--out", str(out), "--jobs", "1"]) == 0
+    runs = json.loads((out / "results.json").read_text())["runs"]
+    assert {r["method"]: r["config"].get("k") for r in runs} == {"st-ql": None, "rnh-ql": 20}
+
+
+def test_set_with_a_field_no_method_has_is_an_input_error(tmp_path, capsys):
+    assert main(["compare", "paper-40", "--methods", "st-ql", "--seeds", "1", "--episodes",
+                 "10", "--set", "k=20", "--out", str(tmp_path / "o")]) == 2
+    assert "none of the methods" in capsys.readouterr().err
+
+
+def test_out_that_is_a_file_is_an_input_error(tmp_path, capsys):
+    f = tmp_path / "file"
+    f.write_text("x")
+    assert main(["compare", "paper-40", "--methods", "st-ql", "--seeds", "1", "--episodes",
+                 "10", "--out", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert str(f) in err and "not a directory" in err and err.count("\n") == 1
+
+
+def test_out_in_use_by_a_live_sweep_is_refused_and_a_stale_lock_taken_over(tmp_path, capsys):
+    from scenarios.runs.outdir import LOCK_NAME
+
+    out = tmp_path / "o"
+    out.mkdir()
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        (out / LOCK_NAME).write_text(f"{holder.pid}\n")
+        args = ["compare", "paper-40", "--methods", "st-ql", "--seeds", "1", "--episodes",
+                "10", "--out", str(out)]
+        assert main(args) == 2
+        assert f"in use by another sweep (pid {holder.pid})" in capsys.readouterr().err
+    finally:
+        holder.kill()
+        holder.wait()
+    assert main(args) == 0  # its owner is gone: the lock is stale
+    assert not (out / LOCK_NAME).exists()

@@ -15,7 +15,7 @@ from scenarios.cli.args import (
     record_path,
     scenario_key,
 )
-from scenarios.runs.spec import load, make_config
+from scenarios.runs.spec import ExperimentError, load, make_config
 from sim.errors import InputError
 
 
@@ -27,11 +27,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     methods = parse_list(args.methods, "--methods") if args.methods else list(ALL_METHODS)
     worlds = [check_world(w) for w in parse_list(args.world, "--world")]
     overrides = parse_overrides(args.set)
-    for m in methods:
-        make_config(m, overrides)  # every method and override is valid before we start
+    per_method = overrides_per_method(methods, overrides)
     seeds = list(range(args.seed_base, args.seed_base + positive(args.seeds, "--seeds")))
     specs = make_specs(name, methods, seeds, positive(args.episodes, "--episodes"), worlds,
-                       overrides, start, goal)
+                       per_method, start, goal)
     execute, kwargs = _backend(args)
     from scenarios.runs.backends import Progress
 
@@ -58,6 +57,31 @@ def cmd_compare(args: argparse.Namespace) -> int:
     print((Path(args.out) / "summary.md").read_text())
     print(f"wrote {args.out}/results.json, summary.md and figures")
     return 0
+
+
+def overrides_per_method(methods: list[str], overrides: tuple[tuple[str, float], ...]
+                         ) -> dict[str, tuple[tuple[str, float], ...]]:
+    """``--set`` applies to every method that has the field; an error only when none has it.
+
+    Every method's config is built here once, so a bad value fails before any run starts.
+    """
+    import dataclasses
+
+    from learning.methods import METHODS
+
+    make_config(methods[0], ())  # an unknown method name fails here, with the list of names
+    out: dict[str, tuple[tuple[str, float], ...]] = {}
+    for m in methods:
+        make_config(m, ())
+        fields = {f.name for f in dataclasses.fields(METHODS[m])}
+        out[m] = tuple((k, v) for k, v in overrides if k in fields)
+        make_config(m, out[m])
+    for k, _ in overrides:
+        if not any(k in dict(o) for o in out.values()):
+            raise ExperimentError("command line", f"--set {k}",
+                                  f"none of the methods ({', '.join(methods)}) has a field "
+                                  f"{k!r}", "check the field name in learning/methods.py")
+    return out
 
 
 def _backend(args: argparse.Namespace):

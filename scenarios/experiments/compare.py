@@ -30,11 +30,18 @@ def version() -> str:
         return "0+unknown"
 
 
+Overrides = tuple[tuple[str, float], ...]
+
+
 def make_specs(scenario: str, methods: Sequence[str], seeds: Sequence[int], episodes: int,
-               worlds: Sequence[str], overrides: tuple[tuple[str, float], ...] = (),
+               worlds: Sequence[str], overrides: Overrides | dict[str, Overrides] = (),
                start=None, goal=None, drive_final: bool = False) -> list[RunSpec]:
+    """One spec per world x method x seed; ``overrides`` for all methods, or per method."""
+    def of(m: str) -> Overrides:
+        return overrides.get(m, ()) if isinstance(overrides, dict) else overrides
+
     return [RunSpec(scenario=scenario, method=m, seed=s, episodes=episodes, world=w,
-                    overrides=overrides, start=start, goal=goal, drive_final=drive_final)
+                    overrides=of(m), start=start, goal=goal, drive_final=drive_final)
             for w in worlds for m in methods for s in seeds]
 
 

@@ -114,3 +114,28 @@ def test_atomic_writes_get_the_usual_file_mode(tmp_path):
     save_checkpoint(tmp_path / "a.npz", Checkpoint.of_result(result, rng))
     for name in ("r.json", "a.npz"):  # mkstemp alone would leave 0o600
         assert (tmp_path / name).stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_run_key_covers_everything_that_changes_a_run(tmp_path):
+    import dataclasses
+
+    from tests.conftest import MAPS, REPO
+
+    base = RunSpec(str(MAPS / "arena.map"), "rnh-ql", 0, 100, start=(3, 43), goal=(45, 5))
+    variants = [dataclasses.replace(base, goal=(44, 5)), dataclasses.replace(base, start=(4, 43)),
+                dataclasses.replace(base, test_every=5), dataclasses.replace(base, seed=1),
+                dataclasses.replace(base, episodes=101), dataclasses.replace(base, world="physics"),
+                dataclasses.replace(base, overrides=(("alpha", 0.2),))]
+    keys = {base.key, *(v.key for v in variants)}
+    assert len(keys) == 1 + len(variants)
+    # recording options do not change the run, so they do not change the key
+    assert dataclasses.replace(base, record_path="x.rrd", record_every=3).key == base.key
+    # the same name with other content (an edited TOML) is another run
+    toml = (REPO / "scenarios" / "builtin" / "paper-40.toml").read_text()
+    a, b = tmp_path / "a" / "s.toml", tmp_path / "b" / "s.toml"
+    edited = toml.replace("steps_per_episode = 600", "steps_per_episode = 500")
+    for path, text in ((a, toml), (b, edited)):
+        path.parent.mkdir()
+        path.write_text(text)
+    ka, kb = RunSpec(str(a), "st-ql", 0, 10).key, RunSpec(str(b), "st-ql", 0, 10).key
+    assert ka.split("#")[1] != kb.split("#")[1]

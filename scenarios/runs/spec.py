@@ -52,9 +52,19 @@ class RunSpec:
 
     @property
     def key(self) -> str:
-        """A stable id of the run, for resuming sweeps and naming recordings."""
+        """A stable id of everything that changes the run, for resuming sweeps.
+
+        The scenario enters by name *and* content digest (a ``.map`` with other
+        ``--start/--goal``, or an edited TOML, is another run), then start, goal,
+        world, method, config overrides, greedy-test cadence, seed and episodes.
+        Recording options are left out: a recorded run equals an unrecorded one.
+        """
         extra = "".join(f",{k}={v:g}" for k, v in self.overrides)
-        return f"{self.scenario}|{self.world}|{self.method}{extra}|s{self.seed}|e{self.episodes}"
+        cells = "".join(f"|{n}={c[0]},{c[1]}" for n, c in (("S", self.start), ("G", self.goal))
+                        if c is not None)
+        return (f"{self.scenario}#{scenario_digest(self.scenario, self.start, self.goal)}"
+                f"{cells}|{self.world}|{self.method}{extra}|t{self.test_every}"
+                f"|s{self.seed}|e{self.episodes}")
 
 
 @lru_cache(maxsize=8)
@@ -62,6 +72,20 @@ def load(scenario: str, start: Cell | None = None,
          goal: Cell | None = None) -> tuple[Scenario, TabularModel]:
     sc = resolve_scenario(scenario, start, goal)
     return sc, build_model(sc)
+
+
+@lru_cache(maxsize=64)
+def scenario_digest(scenario: str, start: Cell | None = None, goal: Cell | None = None) -> str:
+    """12 hex digits of a hash of what the scenario *is*: its resolved content (geometry,
+    robot, rewards, episode length, S, G), not the file it came from."""
+    import hashlib
+    import json
+
+    sc, _ = load(scenario, start, goal)
+    fields = {k: v for k, v in dataclasses.asdict(sc).items()
+              if k not in ("name", "source", "description")}
+    blob = json.dumps(fields, sort_keys=True, default=repr).encode()
+    return hashlib.sha256(blob).hexdigest()[:12]
 
 
 def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):

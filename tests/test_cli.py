@@ -130,3 +130,23 @@ def test_out_in_use_by_a_live_sweep_is_refused_and_a_stale_lock_taken_over(tmp_p
         holder.wait()
     assert main(args) == 0  # its owner is gone: the lock is stale
     assert not (out / LOCK_NAME).exists()
+
+
+def test_scen_problem_sets_map_start_and_goal(capsys):
+    scen = str(MAPS / "arena.map.scen")
+    assert main(["scenarios", "--scen", scen, "--index", "0"]) == 0
+    out = capsys.readouterr().out
+    # problem 0 of arena.map.scen: (19, 26) -> (19, 29) in the Moving AI frame (y down),
+    # i.e. cells (19, 22) -> (19, 19) in rnhql's frame (y up) on a 49-row map
+    assert "(19, 26) -> (19, 29)" in out and "(19, 22)" in out and "(19, 19)" in out
+
+
+def test_scen_errors_are_one_line(capsys, tmp_path):
+    scen = str(MAPS / "arena.map.scen")
+    for args, words in ((["--index", "999"], "out of range"), ([], "exactly one of"),
+                        (["--bucket", "99"], "no problem in bucket")):
+        assert main(["scenarios", "--scen", scen, *args]) == 2
+        err = capsys.readouterr().err
+        assert words in err and err.count("\n") == 1
+    assert main(["train", "paper-40", "--scen", scen, "--index", "0"]) == 2
+    assert "drop the scenario argument" in capsys.readouterr().err

@@ -27,8 +27,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("scenarios", help="list built-in scenarios or validate one")
     p.add_argument("--check", metavar="FILE", help="validate a .toml or .map and print its facts")
-    p.add_argument("--start", help="X,Y start for a .map (Moving AI frame: y counts down)")
-    p.add_argument("--goal", help="X,Y goal for a .map (Moving AI frame: y counts down)")
+    add_scenario_args(p, positional=False)
     p.set_defaults(func=catalog.cmd_scenarios)
 
     p = sub.add_parser("train", help="train one method on one scenario")

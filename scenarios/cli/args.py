@@ -27,10 +27,19 @@ def parse_cell(text: str, flag: str) -> tuple[int, int]:
     return x, y
 
 
-def add_scenario_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scenario", help="built-in name (see `rnhql scenarios`), a .toml, or a .map")
+def add_scenario_args(p: argparse.ArgumentParser, positional: bool = True) -> None:
+    if positional:
+        p.add_argument("scenario", nargs="?",
+                       help="built-in name (see `rnhql scenarios`), a .toml, or a .map "
+                            "(or give --scen)")
     p.add_argument("--start", help="X,Y start for a .map (Moving AI frame: y counts down)")
     p.add_argument("--goal", help="X,Y goal for a .map (Moving AI frame: y counts down)")
+    p.add_argument("--scen", metavar="FILE.scen",
+                   help="a Moving AI problem list: its map, start and goal (with --index or "
+                        "--bucket)")
+    p.add_argument("--index", type=int, metavar="N", help="with --scen: the N-th problem (from 0)")
+    p.add_argument("--bucket", type=int, metavar="B",
+                   help="with --scen: the last (longest) problem of bucket B")
 
 
 def add_record_args(p: argparse.ArgumentParser) -> None:
@@ -48,9 +57,35 @@ def add_record_args(p: argparse.ArgumentParser) -> None:
 def scenario_from_args(args: argparse.Namespace):  # -> Scenario
     from sim.scenario import resolve_scenario
 
-    start = parse_cell(args.start, "--start") if args.start else None
-    goal = parse_cell(args.goal, "--goal") if args.goal else None
-    return resolve_scenario(args.scenario, start, goal)
+    return resolve_scenario(*scenario_key(args))
+
+
+def scen_problem(args: argparse.Namespace):  # -> (map path, ScenProblem)
+    """The ``.scen`` problem chosen by ``--index`` or ``--bucket``; errors name the fix."""
+    from sim.maps import load_scen
+
+    path = Path(args.scen)
+    if not path.is_file():
+        raise CliError(str(path), "--scen", "is not a file", "pass a Moving AI .scen file")
+    problems = load_scen(path)
+    if not problems:
+        raise CliError(str(path), "--scen", "holds no problems", "pass a non-empty .scen file")
+    if (args.index is None) == (args.bucket is None):
+        raise CliError("command line", "--scen", "needs exactly one of --index N or --bucket B",
+                       f"add e.g. --index 0 (0..{len(problems) - 1})")
+    if args.index is not None:
+        if not 0 <= args.index < len(problems):
+            raise CliError(str(path), "--index", f"{args.index} is out of range",
+                           f"use 0..{len(problems) - 1}")
+        problem = problems[args.index]
+    else:
+        in_bucket = [q for q in problems if q.bucket == args.bucket]
+        if not in_bucket:
+            buckets = sorted({q.bucket for q in problems})
+            raise CliError(str(path), "--bucket", f"no problem in bucket {args.bucket}",
+                           f"use one of {buckets[0]}..{buckets[-1]}")
+        problem = max(in_bucket, key=lambda q: q.optimal_length)
+    return path.parent / problem.map_name, problem
 
 
 def parse_overrides(items: list[str] | None) -> tuple[tuple[str, float], ...]:
@@ -94,6 +129,18 @@ def positive(value: int, flag: str) -> int:
 
 
 def scenario_key(args: argparse.Namespace) -> tuple[str, tuple | None, tuple | None]:
+    """(scenario spec, start, goal) from the positional scenario, --start/--goal or --scen."""
+    if getattr(args, "scen", None):
+        if args.scenario or args.start or args.goal:
+            raise CliError("command line", "--scen", "sets the map, start and goal itself",
+                           "drop the scenario argument and --start/--goal, or drop --scen")
+        map_path, problem = scen_problem(args)
+        print(f"{args.scen}: problem {map_path.name} {problem.start_xy} -> {problem.goal_xy} "
+              f"(Moving AI frame; reference length {problem.optimal_length:g}, octile)")
+        return str(map_path), problem.start_xy, problem.goal_xy
+    if not args.scenario:
+        raise CliError("command line", "scenario", "is missing",
+                       "name a built-in (rnhql scenarios), a .toml, a .map, or give --scen")
     start = parse_cell(args.start, "--start") if args.start else None
     goal = parse_cell(args.goal, "--goal") if args.goal else None
     return args.scenario, start, goal

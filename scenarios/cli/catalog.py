@@ -60,10 +60,10 @@ def format_table(rows: list[list[str]], header: list[str]) -> str:
 
 
 def cmd_scenarios(args: argparse.Namespace) -> int:
-    if args.check:
+    if args.check or args.scen:
         args.scenario = args.check
         f = facts(scenario_from_args(args))
-        print(f"{args.check}: OK")
+        print(f"{args.check or args.scen}: OK")
         print(format_table([f.row()], HEADER))
         return 0
     rows = builtin_facts()

@@ -31,8 +31,8 @@ N_PARAMS = 8
 # RNHQLP packs a longer vector (N_PARAMS_PLUS); slots from P_X0 on:
 PP_BETA, PP_WARMUP, PP_FREEZE, PP_NPLAN = 4, 5, 6, 7
 PP_VTARGET, PP_SCALE, PP_LAMQ, PP_TRACE_MIN = 8, 9, 10, 11
-PP_NORMALISE, PP_LEAKFREE = 12, 13
-N_PARAMS_PLUS = 14
+PP_NORMALISE, PP_LEAKFREE, PP_REBASE = 12, 13, 14
+N_PARAMS_PLUS = 15
 
 # ---- ivar: int64[N_IVAR], scalar integer state
 I_KIND = 0  # rule family

@@ -23,7 +23,7 @@ K centres, M feature slots per state:
 ==========  ==================================================================
 q           Q-table [nS, nA]
 w           V_NN weights [K]
-e           V_NN traces [K] (v_target = 0)
+e           [K + nS]: V_NN traces [:K] (v_target = 0), Phi each row is based on [K:]
 feat        [nS, 2M]: effective feature values [:, :M], Gaussian values [:, M:]
 imap        [nS, 3nA + M]: model s' [:, :nA] (-1 unseen), terminated [:, nA:2nA],
             feature centre ids [:, 2nA:2nA+M], seen predecessors [:, 2nA+M:] (-1)
@@ -45,6 +45,7 @@ from learning.geometry import Geometry
 from learning.rules import clear_traces, is_greedy, q_lambda, q_learning, record_shaping, row_max
 
 INLINE = dict(cache=True, inline="always")
+LOG_FLOOR = 1e-3  # v_target = 2: values below this [reward units] are learned as this
 
 
 # ---------------------------------------------------------------- features (numpy, once)
@@ -134,7 +135,7 @@ def init_plus(cfg, geom: Geometry) -> dict[str, np.ndarray]:
     ilist = np.zeros(2 * n_s * n_a + n_c + n_s, dtype=np.int32)
     ilist[2 * n_s * n_a:2 * n_s * n_a + n_c] = -1
     step_v = cfg.beta / float(np.mean(np.sum(base * base, axis=1)))
-    return dict(q=np.zeros((n_s, n_a)), w=np.zeros(n_c), e=np.zeros(n_c), feat=feat,
+    return dict(q=np.zeros((n_s, n_a)), w=np.zeros(n_c), e=np.zeros(n_c + n_s), feat=feat,
                 imap=imap, fmap=np.zeros((2 * n_s, n_a)), ilist=ilist, step_v=step_v)
 
 
@@ -273,6 +274,62 @@ def leak_free_edge(feat, imap, ilist, n_s, n_a, s, s2, normalise):
             _flood(feat, imap, ilist, stack0, off, roff, n_a, i, s, normalise)
 
 
+@njit(**INLINE)
+def potential(w, feat, imap, s, par):
+    """Phi(s) = scale * V_NN(s), or scale * exp(V_NN(s)) when V_NN learns log values
+    (v_target = 2)."""
+    v = v_of(w, feat, imap, s)
+    if par[K.PP_VTARGET] == 2.0:
+        v = math.exp(min(v, 50.0))
+    return par[K.PP_SCALE] * v
+
+
+# ---------------------------------------------------------------- re-based rows
+
+
+@njit(**INLINE)
+def rebase(q, w, e, feat, imap, s, par):
+    """Phi(s) now; row s's tried actions re-based onto it (Q + Phi unchanged), untried ones
+    left at 0, i.e. valued at Phi(s). Returns Phi(s)."""
+    n_c = w.shape[0]
+    phi = potential(w, feat, imap, s, par)
+    d = e[n_c + s] - phi
+    if d != 0.0:
+        for a in range(q.shape[1]):
+            if imap[s, a] >= 0:
+                q[s, a] += d
+        e[n_c + s] = phi
+    return phi
+
+
+@njit(**INLINE)
+def tried_max(q, imap, s):
+    """max over the tried actions of Q(s, .) (-inf if none)."""
+    m = -np.inf
+    for a in range(q.shape[1]):
+        if imap[s, a] >= 0 and q[s, a] > m:
+            m = q[s, a]
+    return m
+
+
+@njit(**INLINE)
+def exploit_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
+    """Greedy test policy: argmax over tried actions (re-based rows), ties to the lowest."""
+    a = 0
+    if par[K.PP_REBASE] != 0.0:
+        m = -np.inf
+        for b in range(q.shape[1]):
+            if imap[s, b] >= 0 and q[s, b] > m:
+                m = q[s, b]
+                a = b
+        if m > -np.inf:
+            return a
+    for b in range(1, q.shape[1]):
+        if q[s, b] > q[s, a]:
+            a = b
+    return a
+
+
 # ---------------------------------------------------------------- agent events
 
 
@@ -284,10 +341,13 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     n_s, n_a = q.shape[0], q.shape[1]
     gamma = par[K.P_GAMMA]
     alpha = par[K.P_ALPHA]
-    scale = par[K.PP_SCALE]
     shaping = ivar[K.I_SHAPING] != 0
     leak_free = par[K.PP_LEAKFREE] != 0.0
     normalise = par[K.PP_NORMALISE] != 0.0
+    based = shaping and par[K.PP_REBASE] != 0.0
+    n_c = w.shape[0]
+    if based:
+        rebase(q, w, e, feat, imap, s, par)
     # model first: a new move may join s' to supports before Phi(s') is read
     if imap[s, a] < 0:
         ilist[ivar[K.I_NSEEN]] = s * n_a + a
@@ -300,7 +360,9 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     if leak_free and not terminated:
         leak_free_enter(feat, imap, ilist, n_s, n_a, s2, normalise)
     v2 = 0.0 if terminated else v_of(w, feat, imap, s2)
-    phi_s2 = scale * v2
+    phi_s2 = 0.0 if terminated else potential(w, feat, imap, s2, par)
+    if based and not terminated:
+        phi_s2 = rebase(q, w, e, feat, imap, s2, par)
     train_v = ivar[K.I_TRAIN_V] != 0
     td = par[K.PP_VTARGET] == 0.0
     if train_v and td:
@@ -308,7 +370,8 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
                     fvar[K.F_STEP_V])
     f = 0.0
     if shaping:
-        f = gamma * phi_s2 - fvar[K.F_PHI]
+        phi_s = e[n_c + s] if based else fvar[K.F_PHI]
+        f = gamma * phi_s2 - phi_s
         record_shaping(ivar, fvar, f)
     if par[K.PP_LAMQ] > 0.0:
         q_lambda(q, fmap[n_s:], ilist[n_s * n_a:], ivar, s, a, r, s2, terminated, alpha, gamma,
@@ -316,9 +379,14 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     else:
         q_learning(q, s, a, r, s2, terminated, alpha, gamma, f)
     if train_v and not td:
-        target = row_max(q, s)
-        if shaping:
-            target += fvar[K.F_PHI]
+        if based:
+            target = tried_max(q, imap, s) + e[n_c + s]
+        else:
+            target = row_max(q, s)
+            if shaping:
+                target += fvar[K.F_PHI]
+        if par[K.PP_VTARGET] == 2.0:  # V_NN learns log values: Phi = scale * exp(V_NN)
+            target = math.log(max(target, LOG_FLOOR))
         v_regress(w, feat, imap, s, target, fvar[K.F_STEP_V])
     n_seen = ivar[K.I_NSEEN]
     for _ in range(int(par[K.PP_NPLAN])):
@@ -328,9 +396,13 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
         ps2 = imap[ps, pa]
         pterm = imap[ps, n_a + pa] != 0
         pf = 0.0
-        if shaping:
-            p2 = 0.0 if pterm else v_of(w, feat, imap, ps2)
-            pf = scale * (gamma * p2 - v_of(w, feat, imap, ps))
+        if based:
+            p1 = rebase(q, w, e, feat, imap, ps, par)
+            p2 = 0.0 if pterm else rebase(q, w, e, feat, imap, ps2, par)
+            pf = gamma * p2 - p1
+        elif shaping:
+            p2 = 0.0 if pterm else potential(w, feat, imap, ps2, par)
+            pf = gamma * p2 - potential(w, feat, imap, ps, par)
         q_learning(q, ps, pa, fmap[ps, pa], ps2, pterm, alpha, gamma, pf)
     fvar[K.F_PHI] = phi_s2
 
@@ -345,7 +417,7 @@ def begin_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
     fvar[K.F_FSQ] = 0.0
     n_s, n_a = q.shape[0], q.shape[1]
     if par[K.PP_VTARGET] == 0.0:
-        e[:] = 0.0
+        e[:w.shape[0]] = 0.0
     if par[K.PP_LAMQ] > 0.0:
         clear_traces(fmap[n_s:], ilist[n_s * n_a:], ivar)
     ep = ivar[K.I_EPISODE]
@@ -353,4 +425,4 @@ def begin_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
     ivar[K.I_TRAIN_V] = 1 if ep < par[K.PP_FREEZE] else 0
     if par[K.PP_LEAKFREE] != 0.0:
         leak_free_enter(feat, imap, ilist, n_s, n_a, s0, par[K.PP_NORMALISE] != 0.0)
-    fvar[K.F_PHI] = par[K.PP_SCALE] * v_of(w, feat, imap, s0)
+    fvar[K.F_PHI] = potential(w, feat, imap, s0, par)

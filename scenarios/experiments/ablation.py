@@ -25,15 +25,15 @@ import numpy as np
 from scenarios.experiments.suite import build_suite
 
 # label, method, overrides: each row adds one ingredient to the row above it
-PAPER_PLUS = (("spacing", 0), ("cutoff", 0), ("v_target", 0), ("warmup_episodes", 300),
-              ("n_planning", 0), ("leak_free", 0))
+_OFF = (("v_target", 0), ("warmup_episodes", 300), ("shaping_scale", 1.0), ("rebase", 0),
+        ("n_planning", 0))
 VARIANTS: list[tuple[str, str, tuple[tuple[str, float], ...]]] = [
     ("rnh-ql", "rnh-ql", ()),
-    ("+A lattice every 4 cells, sparse", "rnh-ql+",
-     (("v_target", 0), ("warmup_episodes", 300), ("n_planning", 0), ("leak_free", 0))),
-    ("+B V_NN toward max Q + Phi, no warm-up", "rnh-ql+", (("n_planning", 0), ("leak_free", 0))),
-    ("+C leak-free supports", "rnh-ql+", (("n_planning", 0),)),
-    ("+D 5 shaped planning updates (rnh-ql+)", "rnh-ql+", ()),
+    ("+A lattice every 4 cells, sparse (cut-off 2 widths)", "rnh-ql+", _OFF),
+    ("+B V_NN toward max Q + Phi, no warm-up", "rnh-ql+", _OFF[2:]),
+    ("+C re-based rows, Phi = 0.25 V_NN", "rnh-ql+", _OFF[4:]),
+    ("+D 10 shaped planning updates (= rnh-ql+)", "rnh-ql+", ()),
+    ("rnh-ql+ leak_free=1", "rnh-ql+", (("leak_free", 1),)),
     ("dyna-q", "dyna-q", ()),
     ("q-lambda", "q-lambda", ()),
 ]

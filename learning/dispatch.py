@@ -32,13 +32,17 @@ from numba.extending import overload
 
 from learning import kinds as K
 from learning import steps as S
+from learning.rules_plus import begin_plus, exploit_plus, update_plus
 
 _ACT = {K.SARSARS: S.act_sarsars, K.HAQL: S.act_haql, K.RNQL: S.act_rnql}
 _EXPLOIT = {K.HAQL: S.exploit_haql, K.RNQL: S.exploit_rnql}
+_EXPLOIT[K.RNHQLP] = exploit_plus
 _UPDATE = {K.QL: S.update_ql, K.HAQL: S.update_ql, K.PFH: S.update_pfh,
            K.RNHQL: S.update_rnhql, K.SARSARS: S.update_sarsars, K.QLAMBDA: S.update_qlambda,
            K.DYNA: S.update_dyna, K.RNQL: S.update_rnql}
+_UPDATE[K.RNHQLP] = update_plus
 _BEGIN = {K.QLAMBDA: S.begin_qlambda, K.RNQL: S.begin_rnql, K.RNHQL: S.begin_rnhql}
+_BEGIN[K.RNHQLP] = begin_plus
 
 
 @njit(cache=True, inline="always")
@@ -69,6 +73,8 @@ def exploit_action(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
         return S.exploit_haql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
     if kind == K.RNQL:
         return S.exploit_rnql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
+    if kind == K.RNHQLP:
+        return exploit_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
     return S.exploit_q(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
 
 
@@ -96,6 +102,9 @@ def update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2,
     elif kind == K.RNQL:
         S.update_rnql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
                       rng)
+    elif kind == K.RNHQLP:
+        update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+                    rng)
 
 
 @njit(cache=True)
@@ -107,6 +116,8 @@ def begin_episode(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
         S.begin_rnql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0)
     elif kind == K.RNHQL:
         S.begin_rnhql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0)
+    elif kind == K.RNHQLP:
+        begin_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0)
     else:
         S.begin_plain(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0)
 

@@ -19,7 +19,7 @@ from numba import njit
 
 from learning import kinds as K
 from learning.dispatch import act_k, begin_k, draw_start, end_episode, exploit_action, update_k
-from learning.kinds import DYNA, HAQL, PFH, QL, QLAMBDA, RNHQL, RNQL, SARSARS
+from learning.kinds import DYNA, HAQL, PFH, QL, QLAMBDA, RNHQL, RNHQLP, RNQL, SARSARS
 from learning.state import AgentState
 
 
@@ -106,9 +106,15 @@ def _episodes_dyna(st, mdp, max_steps, n_episodes, rng, out, trace):
     return _episodes(DYNA, st, mdp, max_steps, n_episodes, rng, out, trace)
 
 
+@njit(cache=True, nogil=True)
+def _episodes_rnhqlp(st, mdp, max_steps, n_episodes, rng, out, trace):
+    return _episodes(RNHQLP, st, mdp, max_steps, n_episodes, rng, out, trace)
+
+
 EPISODE_LOOPS = {K.QL: _episodes_ql, K.RNQL: _episodes_rnql, K.PFH: _episodes_pfh,
                  K.SARSARS: _episodes_sarsars, K.HAQL: _episodes_haql, K.RNHQL: _episodes_rnhql,
                  K.QLAMBDA: _episodes_qlambda, K.DYNA: _episodes_dyna}
+EPISODE_LOOPS[K.RNHQLP] = _episodes_rnhqlp
 
 
 NO_TRACE = np.zeros((0, 0), dtype=np.int32)

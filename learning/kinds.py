@@ -15,6 +15,7 @@ HAQL = 4  # heuristically accelerated Q-learning
 RNHQL = 5  # Q-table + RBF V_NN dynamic shaping
 QLAMBDA = 6  # tabular Watkins Q(lambda)
 DYNA = 7  # Dyna-Q
+RNHQLP = 8  # RNH-QL+: map-sized sparse RBF V_NN, shaped planning (learning.rules_plus)
 
 # ---- params: float64[N_PARAMS]
 P_EPS, P_ALPHA, P_GAMMA, P_LAMBDA = 0, 1, 2, 3
@@ -27,6 +28,11 @@ P_XI, P_BETA_H, P_ETA = 4, 5, 6  # HAQL
 P_NPLAN = 4  # DYNA
 P_BETA, P_WARMUP, P_FREEZE = 4, 5, 6  # RNHQL (P_FREEZE = inf: never)
 N_PARAMS = 8
+# RNHQLP packs a longer vector (N_PARAMS_PLUS); slots from P_X0 on:
+PP_BETA, PP_WARMUP, PP_FREEZE, PP_NPLAN = 4, 5, 6, 7
+PP_VTARGET, PP_SCALE, PP_LAMQ, PP_TRACE_MIN = 8, 9, 10, 11
+PP_NORMALISE, PP_LEAKFREE, PP_REBASE = 12, 13, 14
+N_PARAMS_PLUS = 15
 
 # ---- ivar: int64[N_IVAR], scalar integer state
 I_KIND = 0  # rule family

@@ -35,6 +35,15 @@ _VALID = {
     "q_scale": (lambda v: v > 0.0, "> 0"),
     "trace_min": (lambda v: v > 0.0, "> 0"),
     "init_range": (lambda v: v > 0.0, "> 0"),
+    "spacing": (lambda v: v >= 0, ">= 0"),
+    "sigma": (lambda v: v > 0.0, "> 0"),
+    "cutoff": (lambda v: v >= 0.0, ">= 0 (0: no cut-off)"),
+    "normalise": (lambda v: v in (0, 1), "0 or 1"),
+    "v_target": (lambda v: v in (0, 1, 2), "0 (TD on rewards), 1 (max_a Q + Phi), 2 (its log)"),
+    "shaping_scale": (lambda v: v >= 0.0, ">= 0"),
+    "lam_q": (lambda v: 0.0 <= v <= 1.0, "in [0, 1]"),
+    "leak_free": (lambda v: v in (0, 1), "0 or 1"),
+    "rebase": (lambda v: v in (0, 1), "0 or 1"),
 }
 
 
@@ -230,9 +239,77 @@ class RNHQL(MethodConfig):
         return (self.beta, float(self.warmup_episodes), float(freeze))
 
 
+@dataclass(frozen=True)
+class RNHQLPlus(MethodConfig):
+    """RNH-QL+: RNH-QL's two layers (Q-table below, RBF V_NN shaping it above), fixed where
+    the measurements of issue 10 show it breaking. Rules in :mod:`learning.rules_plus`.
+
+    Every ingredient is a field, so an ablation is ``--set field=value``; with
+    ``spacing=0, cutoff=0, v_target=0, warmup_episodes=300, shaping_scale=1, rebase=0,
+    n_planning=0`` it is the paper's RNH-QL (dense 10 x 10 lattice, TD(lambda) on
+    rewards, no planning); with ``shaping_scale=0`` it is Dyna-Q (bit for bit).
+
+    * ``spacing``: centres every ``spacing`` cells (a lattice tied to the map
+      size, centred on it), width ``sigma * spacing`` cells; ``cutoff`` makes
+      the features sparse (the hot loop touches ~13-20 weights, not K).
+    * ``v_target=1``: V_NN is regressed (normalised LMS) toward the table's own
+      value of the state it leaves, max_a Q(s, .) + Phi(s) (the Q-table learns
+      Q* - Phi), instead of TD(lambda) on the env rewards.
+    * ``leak_free=1``: a centre's feature is 0 at a cell not connected to the
+      centre's anchor cell (the first visited cell nearest the centre) by moves
+      the agent has seen succeed, staying within the support window: the
+      potential cannot leak through walls the agent has not walked round.
+    * ``n_planning``: Dyna-style Q updates per real step on seen (s, a) pairs
+      of a learned deterministic model, each with the shaping term of the
+      current potential.
+    * ``lam_q``: Watkins Q(lambda) in the Q-table (0: one-step Q-learning).
+    * ``rebase=1``: when Phi(s) changes, the tried actions of row s are re-based
+      (Q(s, a) += Phi_old(s) - Phi_new(s)) so what was learned is never moved by
+      the potential drifting; the potential then values only the actions not
+      tried yet (Wiewiora 2003: shaping = initialising Q with Phi), and greedy
+      tests pick among tried actions.
+    """
+
+    name: ClassVar[str] = "RNH-QL+"
+    cli: ClassVar[str] = "rnh-ql+"
+    kind: ClassVar[int] = K.RNHQLP
+    spacing: int = 4  # RBF centre spacing [cells]; 0: the paper's k x k lattice over the arena
+    k: int = 10  # centres per axis when spacing = 0
+    sigma: float = 1.0  # Gaussian width [lattice spacings]
+    cutoff: float = 2.0  # feature support radius [widths]; 0: no cut-off (dense)
+    normalise: int = 0  # 1: normalised RBF (a cell's features sum to 1)
+    leak_free: int = 0  # 1: features limited to cells connected to the centre by seen moves
+    v_target: int = 1  # V_NN target: 0 TD(lambda) on rewards, 1 max_a Q(s,.) + Phi(s), 2 its log
+    lam: float = 0.85  # V_NN trace decay lambda (v_target = 0)
+    beta: float = 0.1  # V_NN step per unit of mean squared feature norm
+    warmup_episodes: int = 0  # shaping starts at this 0-based episode index
+    freeze_after_episodes: int | None = None  # stop training V_NN from this episode (None: never)
+    shaping_scale: float = 0.25  # Phi = shaping_scale * V_NN [dimensionless]; 0: no shaping
+    n_planning: int = 10  # shaped model-based Q updates per real step [updates]
+    lam_q: float = 0.0  # Q-table trace decay (Watkins Q(lambda), replacing); 0: Q-learning
+    trace_min: float = 1e-8  # Q traces below this are dropped
+    rebase: int = 1  # 1: re-base a row's tried actions when Phi(s) changes (see above)
+
+    def extra(self) -> tuple[float, ...]:
+        freeze = math.inf if self.freeze_after_episodes is None else self.freeze_after_episodes
+        return (self.beta, float(self.warmup_episodes), float(freeze), float(self.n_planning),
+                float(self.v_target), self.shaping_scale, self.lam_q, self.trace_min,
+                float(self.normalise), float(self.leak_free), float(self.rebase))
+
+    def params(self) -> np.ndarray:
+        """float64[N_PARAMS_PLUS]: a longer vector than the other families (slots PP_*)."""
+        p = np.zeros(K.N_PARAMS_PLUS)
+        p[K.P_EPS], p[K.P_ALPHA], p[K.P_GAMMA] = self.eps, self.alpha, self.gamma
+        p[K.P_LAMBDA] = self.lam
+        ex = self.extra()
+        p[K.P_X0:K.P_X0 + len(ex)] = ex
+        return p
+
+
 METHODS: dict[str, type[MethodConfig]] = {
     c.cli: c for c in (STQL, RNQL, PFHRL, SarsaRS, HAQL, RNHQL, QOpt, QLambda, DynaQ)
 }
+METHODS[RNHQLPlus.cli] = RNHQLPlus
 
 
 def config_from_fields(cli: str, fields: dict[str, object]) -> MethodConfig:

@@ -96,6 +96,13 @@ def init_state(cfg: MethodConfig, geom: Geometry, rng: np.random.Generator) -> A
         feat = rbf.rbf_features(geom.coords, geom.bounds_m, cfg.k)
         w, e = _f(feat.shape[1]), _f(feat.shape[1])
         fvar[K.F_STEP_V] = cfg.beta / float(np.mean(np.sum(feat * feat, axis=1)))
+    elif kind == K.RNHQLP:  # RNH-QL+: layout in learning.rules_plus
+        from learning.rules_plus import init_plus
+
+        sl = init_plus(cfg, geom)
+        q, w, e, feat = sl["q"], sl["w"], sl["e"], sl["feat"]
+        imap, fmap, ilist = sl["imap"], sl["fmap"], sl["ilist"]
+        fvar[K.F_STEP_V] = sl["step_v"]
     else:
         raise ValueError(f"{type(cfg).__name__} has unknown rule family {kind}")
     return AgentState(ivar=ivar, fvar=fvar, par=cfg.params(), q=q, w=w, e=e,

@@ -15,6 +15,7 @@ import pytest
 import sim.envs  # noqa: F401  (registers rnhql/GridRoute-v0)
 from learning import METHODS, RNHQL, geometry_of, init_state, make_agent, run_env_episodes
 from learning.kernels import run_episodes
+from learning.methods import RNHQLPlus
 
 EPISODES = 50
 
@@ -28,6 +29,10 @@ def env():
 
 CONFIGS = [cls() for cls in METHODS.values()] + [
     RNHQL(warmup_episodes=20, freeze_after_episodes=40),  # shaping and freezing inside 50 eps
+    # rnh-ql+ ingredients one by one (the default is in METHODS above)
+    RNHQLPlus(leak_free=1, normalise=1), RNHQLPlus(lam_q=0.8, n_planning=2),
+    RNHQLPlus(v_target=0, rebase=0, warmup_episodes=20, freeze_after_episodes=40),
+    RNHQLPlus(v_target=2, spacing=0, cutoff=0),
 ]
 
 

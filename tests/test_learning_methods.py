@@ -13,7 +13,7 @@ from learning import kinds as K
 
 def test_registry_names():
     assert list(METHODS) == ["st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "rnh-ql", "q-opt",
-                             "q-lambda", "dyna-q"]
+                             "q-lambda", "dyna-q", "rnh-ql+"]
     assert METHODS["rnh-ql"].name == "RNH-QL" and METHODS["st-ql"].name == "ST-QL"
     for cli, cls in METHODS.items():
         assert cls.cli == cli and cls.kind >= 0
@@ -27,7 +27,8 @@ def test_paper_defaults_and_round_trip(cls):
         assert cfg.lam == 0.85
     assert config_from_fields(cls.cli, cfg.fields()) == cfg
     p = cfg.params()
-    assert p.shape == (K.N_PARAMS,) and p[K.P_EPS] == 0.1 and p[K.P_GAMMA] == 0.95
+    assert p.shape[0] in (K.N_PARAMS, K.N_PARAMS_PLUS)
+    assert p[K.P_EPS] == 0.1 and p[K.P_GAMMA] == 0.95
     with pytest.raises(dataclasses.FrozenInstanceError):
         cfg.eps = 0.2
 
@@ -56,3 +57,18 @@ def test_invalid_rnh_ql_fields(bad):
 def test_unknown_method():
     with pytest.raises(ValueError, match="unknown method 'nope'"):
         config_from_fields("nope", {})
+
+
+def test_rnh_ql_plus_defaults_packing_and_validation():
+    from learning.methods import RNHQLPlus
+
+    cfg = RNHQLPlus()
+    assert cfg.cli == "rnh-ql+" and cfg.kind == K.RNHQLP
+    p = cfg.params()
+    assert p.shape == (K.N_PARAMS_PLUS,)
+    assert p[K.PP_NPLAN] == cfg.n_planning and p[K.PP_SCALE] == cfg.shaping_scale
+    assert math.isinf(p[K.PP_FREEZE]) and p[K.PP_REBASE] == 1
+    assert config_from_fields("rnh-ql+", cfg.fields()) == cfg
+    for bad in (dict(v_target=3), dict(leak_free=2), dict(sigma=0.0), dict(lam_q=1.5)):
+        with pytest.raises(ValueError, match=f"RNHQLPlus.{next(iter(bad))}"):
+            RNHQLPlus(**bad)

@@ -1,0 +1,428 @@
+"""RNH-QL+ (``rnh-ql+``, :class:`learning.methods.RNHQLPlus`): features, rules and agent events.
+
+The architecture is RNH-QL's: a Q-table below, a Gaussian RBF value network
+V_NN above, shaping the Q update with F = gamma * Phi(s') - Phi(s), Phi =
+shaping_scale * V_NN cached when a state is entered, Phi(goal) = 0. What
+changes (each a config field, see the class docs):
+
+* the lattice is tied to the map (a centre every ``spacing`` cells) and the
+  features are **sparse**: each state lists its M nearest centres within
+  ``cutoff`` widths, so a step costs O(M), not O(K), on any map size;
+* V_NN is trained toward the table's own value of the state just left,
+  max_a Q(s, .) + Phi(s) (``v_target=1``), or by TD(lambda) on rewards (0);
+* ``leak_free``: a centre's feature is switched on at a cell only once the
+  cell is connected to the centre's anchor by moves the agent has seen
+  succeed, inside the centre's support window; supports only grow, by a flood
+  fill each time a new move is seen, so each (cell, centre) pair is added once;
+* a learned deterministic model drives ``n_planning`` shaped Q updates per
+  step (Dyna), and ``lam_q`` adds Watkins Q(lambda) traces to the real step.
+
+State layout (:class:`learning.state.AgentState` slots), nS states, nA actions,
+K centres, M feature slots per state:
+
+==========  ==================================================================
+q           Q-table [nS, nA]
+w           V_NN weights [K]
+e           [K + nS]: V_NN traces [:K] (v_target = 0), Phi each row is based on [K:]
+feat        [nS, 2M]: effective feature values [:, :M], Gaussian values [:, M:]
+imap        [nS, 3nA + M]: model s' [:, :nA] (-1 unseen), terminated [:, nA:2nA],
+            feature centre ids [:, 2nA:2nA+M], seen predecessors [:, 2nA+M:] (-1)
+fmap        [2nS, nA]: model reward [:nS], Q(lambda) traces [nS:]
+ilist       [2nS*nA + K + nS]: seen pairs, Q-trace list, centre anchors (-1 none),
+            flood-fill stack
+==========  ==================================================================
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from learning import kinds as K
+from learning.geometry import Geometry
+from learning.rules import clear_traces, is_greedy, q_lambda, q_learning, record_shaping, row_max
+
+INLINE = dict(cache=True, inline="always")
+LOG_FLOOR = 1e-3  # v_target = 2: values below this [reward units] are learned as this
+
+
+# ---------------------------------------------------------------- features (numpy, once)
+
+
+def lattice(geom: Geometry, spacing: int, k: int, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """(centres float64[K, 2], width float64[2]) in cell units (cell ix spans [ix, ix+1)).
+
+    ``spacing`` > 0: a centre every ``spacing`` cells, the lattice centred on
+    the map; 0: the paper's k x k lattice over the arena. Width = sigma * pitch.
+    """
+    cs = geom.cell_size_m
+    nx = round((geom.bounds_m[2] - geom.bounds_m[0]) / cs)
+    ny = round((geom.bounds_m[3] - geom.bounds_m[1]) / cs)
+    if spacing > 0:
+        def axis(n: int) -> np.ndarray:
+            m = max(1, -(-n // spacing))
+            off = (n - (m - 1) * spacing) / 2.0
+            return off + spacing * np.arange(m)
+        cx, cy, h = axis(nx), axis(ny), np.array([spacing, spacing], dtype=float)
+    else:
+        hx, hy = nx / k, ny / k
+        cx, cy, h = (np.arange(k) + 0.5) * hx, (np.arange(k) + 0.5) * hy, np.array([hx, hy])
+    gx, gy = np.meshgrid(cx, cy)
+    return np.column_stack([gx.ravel(), gy.ravel()]), sigma * h
+
+
+def sparse_features(geom: Geometry, spacing: int, k: int, sigma: float, cutoff: float,
+                    normalise: bool) -> tuple[np.ndarray, np.ndarray, int]:
+    """(values float64[nS, M], centre ids int32[nS, M], K): each state's Gaussian features
+    exp(-d^2/2) (d in widths) of the centres with d <= cutoff (all if cutoff = 0), nearest
+    first; unused slots have value 0 and id 0. ``normalise``: each row sums to 1."""
+    centres, width = lattice(geom, spacing, k, sigma)
+    pos = geom.cells.astype(np.float64) + 0.5
+    n_s, n_c = pos.shape[0], centres.shape[0]
+    ids = np.arange(n_c)
+    if cutoff > 0:  # candidate centres: a window of lattice indices around each state
+        ncx = len(np.unique(centres[:, 0]))
+        pitch = width / sigma
+        c0 = centres[0]
+        jx0 = np.floor((pos[:, 0] - c0[0]) / pitch[0]).astype(int)
+        jy0 = np.floor((pos[:, 1] - c0[1]) / pitch[1]).astype(int)
+        r = math.ceil(cutoff * sigma) + 1
+        ncy = n_c // ncx
+        cand = []
+        for oy in range(-r, r + 2):
+            for ox in range(-r, r + 2):
+                jx, jy = jx0 + ox, jy0 + oy
+                ok = (jx >= 0) & (jx < ncx) & (jy >= 0) & (jy < ncy)
+                cand.append(np.where(ok, jy * ncx + jx, -1))
+        cid = np.stack(cand, axis=1)
+    else:
+        cid = np.broadcast_to(ids, (n_s, n_c)).copy()
+    safe = np.maximum(cid, 0)
+    d = (pos[:, None, :] - centres[safe]) / width
+    d2 = np.sum(d * d, axis=2)
+    val = np.exp(-0.5 * d2)
+    keep = cid >= 0
+    if cutoff > 0:
+        keep &= d2 <= cutoff * cutoff
+    d2 = np.where(keep, d2, np.inf)
+    order = np.argsort(d2, axis=1, kind="stable")
+    m = max(1, int(keep.sum(axis=1).max()))
+    order = order[:, :m]
+    rows = np.arange(n_s)[:, None]
+    vals = np.where(keep[rows, order], val[rows, order], 0.0)
+    cids = np.where(keep[rows, order], safe[rows, order], 0).astype(np.int32)
+    if normalise:
+        tot = vals.sum(axis=1, keepdims=True)
+        vals = np.where(tot > 0, vals / np.where(tot > 0, tot, 1.0), 0.0)
+    return np.ascontiguousarray(vals), np.ascontiguousarray(cids), n_c
+
+
+def init_plus(cfg, geom: Geometry) -> dict[str, np.ndarray]:
+    """The RNH-QL+ slots (see the module docs) and the V_NN step size fvar[F_STEP_V]."""
+    n_s, n_a = geom.n_states, geom.n_actions
+    base, cids, n_c = sparse_features(geom, cfg.spacing, cfg.k, cfg.sigma, cfg.cutoff,
+                                      bool(cfg.normalise))
+    m = base.shape[1]
+    feat = np.zeros((n_s, 2 * m))
+    feat[:, m:] = base
+    if not cfg.leak_free:
+        feat[:, :m] = base
+    imap = np.full((n_s, 3 * n_a + m), -1, dtype=np.int32)
+    imap[:, n_a:2 * n_a] = 0
+    imap[:, 2 * n_a:2 * n_a + m] = cids
+    ilist = np.zeros(2 * n_s * n_a + n_c + n_s, dtype=np.int32)
+    ilist[2 * n_s * n_a:2 * n_s * n_a + n_c] = -1
+    step_v = cfg.beta / float(np.mean(np.sum(base * base, axis=1)))
+    return dict(q=np.zeros((n_s, n_a)), w=np.zeros(n_c), e=np.zeros(n_c + n_s), feat=feat,
+                imap=imap, fmap=np.zeros((2 * n_s, n_a)), ilist=ilist, step_v=step_v)
+
+
+# ---------------------------------------------------------------- V_NN over sparse features
+
+
+@njit(**INLINE)
+def v_of(w, feat, imap, s):
+    """V_NN(s) = sum_m feat[s, m] * w[id[s, m]] over the effective features."""
+    m_n = feat.shape[1] // 2
+    off = imap.shape[1] - m_n - (imap.shape[1] - m_n) // 3
+    v = 0.0
+    for m in range(m_n):
+        v += feat[s, m] * w[imap[s, off + m]]
+    return v
+
+
+@njit(**INLINE)
+def v_regress(w, feat, imap, s, target, step):
+    """Normalised LMS: w += step * (target - V(s)) * phi(s)."""
+    m_n = feat.shape[1] // 2
+    off = imap.shape[1] - m_n - (imap.shape[1] - m_n) // 3
+    c = step * (target - v_of(w, feat, imap, s))
+    for m in range(m_n):
+        w[imap[s, off + m]] += c * feat[s, m]
+
+
+@njit(**INLINE)
+def v_td_lambda(w, e, feat, imap, s, r, v_s2, greedy, gamma, lam, step):
+    """TD(lambda) on env rewards with Watkins cutting (learning.rbf.td_lambda, sparse phi)."""
+    if not greedy:
+        e[:] = 0.0
+        return
+    m_n = feat.shape[1] // 2
+    off = imap.shape[1] - m_n - (imap.shape[1] - m_n) // 3
+    delta = r + gamma * v_s2 - v_of(w, feat, imap, s)
+    gl = gamma * lam
+    for i in range(e.shape[0]):
+        e[i] *= gl
+    for m in range(m_n):
+        e[imap[s, off + m]] += feat[s, m]
+    c = step * delta
+    for i in range(w.shape[0]):
+        w[i] += c * e[i]
+
+
+# ---------------------------------------------------------------- leak-free supports
+
+
+@njit(cache=True)
+def _slot(feat, imap, off, c, i):
+    """Feature slot of centre i at state c, -1 if c is outside i's support window."""
+    m_n = feat.shape[1] // 2
+    for m in range(m_n):
+        if imap[c, off + m] == i and feat[c, m_n + m] > 0.0:
+            return m
+    return -1
+
+
+@njit(cache=True)
+def _switch_on(feat, c, m, normalise):
+    m_n = feat.shape[1] // 2
+    feat[c, m] = feat[c, m_n + m]
+    if normalise:  # renormalise the row over the switched-on features (bases sum to 1)
+        tot = 0.0
+        for j in range(m_n):
+            if feat[c, j] > 0.0:
+                tot += feat[c, m_n + j]
+        for j in range(m_n):
+            if feat[c, j] > 0.0:
+                feat[c, j] = feat[c, m_n + j] / tot
+
+
+@njit(cache=True)
+def _flood(feat, imap, ilist, stack0, off, roff, n_a, i, c, normalise):
+    """Switch centre i on at c and at every cell of i's window connected to c by seen moves."""
+    m = _slot(feat, imap, off, c, i)
+    if m < 0 or feat[c, m] > 0.0:
+        return
+    _switch_on(feat, c, m, normalise)
+    ilist[stack0] = c
+    top = 1
+    while top > 0:
+        top -= 1
+        x = ilist[stack0 + top]
+        for j in range(2 * n_a):
+            y = imap[x, j] if j < n_a else imap[x, roff + j - n_a]
+            if y < 0 or y == x:
+                continue
+            my = _slot(feat, imap, off, y, i)
+            if my >= 0 and feat[y, my] == 0.0:
+                _switch_on(feat, y, my, normalise)
+                ilist[stack0 + top] = y
+                top += 1
+
+
+@njit(cache=True)
+def leak_free_enter(feat, imap, ilist, n_s, n_a, s, normalise):
+    """On entering s: if s's nearest centre has no anchor yet, s becomes it and the
+    centre's support is flooded from s."""
+    m_n = feat.shape[1] // 2
+    off = 2 * n_a
+    a0 = 2 * n_s * n_a
+    i = imap[s, off]
+    if ilist[a0 + i] < 0 and feat[s, m_n] > 0.0:
+        ilist[a0 + i] = s
+        _flood(feat, imap, ilist, ilist.shape[0] - n_s, off, off + m_n, n_a, i, s, normalise)
+
+
+@njit(cache=True)
+def leak_free_edge(feat, imap, ilist, n_s, n_a, s, s2, normalise):
+    """A move s -> s2 was seen for the first time: remember s as a predecessor of s2, and
+    join s2 (or s) to every support that holds s (or s2) and whose window holds both."""
+    m_n = feat.shape[1] // 2
+    off = 2 * n_a
+    roff = off + m_n
+    for k in range(n_a):
+        if imap[s2, roff + k] == s:
+            break
+        if imap[s2, roff + k] < 0:
+            imap[s2, roff + k] = s
+            break
+    stack0 = ilist.shape[0] - n_s
+    for m in range(m_n):
+        if feat[s, m_n + m] <= 0.0:
+            continue
+        i = imap[s, off + m]
+        m2 = _slot(feat, imap, off, s2, i)
+        if m2 < 0:
+            continue
+        on1 = feat[s, m] > 0.0
+        on2 = feat[s2, m2] > 0.0
+        if on1 and not on2:
+            _flood(feat, imap, ilist, stack0, off, roff, n_a, i, s2, normalise)
+        elif on2 and not on1:
+            _flood(feat, imap, ilist, stack0, off, roff, n_a, i, s, normalise)
+
+
+@njit(**INLINE)
+def potential(w, feat, imap, s, par):
+    """Phi(s) = scale * V_NN(s), or scale * exp(V_NN(s)) when V_NN learns log values
+    (v_target = 2)."""
+    v = v_of(w, feat, imap, s)
+    if par[K.PP_VTARGET] == 2.0:
+        v = math.exp(min(v, 50.0))
+    return par[K.PP_SCALE] * v
+
+
+# ---------------------------------------------------------------- re-based rows
+
+
+@njit(**INLINE)
+def rebase(q, w, e, feat, imap, s, par):
+    """Phi(s) now; row s's tried actions re-based onto it (Q + Phi unchanged), untried ones
+    left at 0, i.e. valued at Phi(s). Returns Phi(s)."""
+    n_c = w.shape[0]
+    phi = potential(w, feat, imap, s, par)
+    d = e[n_c + s] - phi
+    if d != 0.0:
+        for a in range(q.shape[1]):
+            if imap[s, a] >= 0:
+                q[s, a] += d
+        e[n_c + s] = phi
+    return phi
+
+
+@njit(**INLINE)
+def tried_max(q, imap, s):
+    """max over the tried actions of Q(s, .) (-inf if none)."""
+    m = -np.inf
+    for a in range(q.shape[1]):
+        if imap[s, a] >= 0 and q[s, a] > m:
+            m = q[s, a]
+    return m
+
+
+@njit(**INLINE)
+def exploit_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
+    """Greedy test policy: argmax over tried actions (re-based rows), ties to the lowest."""
+    a = 0
+    if par[K.PP_REBASE] != 0.0:
+        m = -np.inf
+        for b in range(q.shape[1]):
+            if imap[s, b] >= 0 and q[s, b] > m:
+                m = q[s, b]
+                a = b
+        if m > -np.inf:
+            return a
+    for b in range(1, q.shape[1]):
+        if q[s, b] > q[s, a]:
+            a = b
+    return a
+
+
+# ---------------------------------------------------------------- agent events
+
+
+@njit(**INLINE)
+def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+                rng):
+    """Real step: F from the cached Phi(s) and Phi(s') = scale * V_NN(s'); Q(-lambda) update;
+    V_NN update; model (and leak-free supports) update; ``n_planning`` shaped model updates."""
+    n_s, n_a = q.shape[0], q.shape[1]
+    gamma = par[K.P_GAMMA]
+    alpha = par[K.P_ALPHA]
+    shaping = ivar[K.I_SHAPING] != 0
+    leak_free = par[K.PP_LEAKFREE] != 0.0
+    normalise = par[K.PP_NORMALISE] != 0.0
+    based = shaping and par[K.PP_REBASE] != 0.0
+    n_c = w.shape[0]
+    if based:
+        rebase(q, w, e, feat, imap, s, par)
+    # model first: a new move may join s' to supports before Phi(s') is read
+    if imap[s, a] < 0:
+        ilist[ivar[K.I_NSEEN]] = s * n_a + a
+        ivar[K.I_NSEEN] += 1
+        if leak_free and s2 != s:
+            leak_free_edge(feat, imap, ilist, n_s, n_a, s, s2, normalise)
+    imap[s, a] = s2
+    imap[s, n_a + a] = 1 if terminated else 0
+    fmap[s, a] = r
+    if leak_free and not terminated:
+        leak_free_enter(feat, imap, ilist, n_s, n_a, s2, normalise)
+    v2 = 0.0 if terminated else v_of(w, feat, imap, s2)
+    phi_s2 = 0.0 if terminated else potential(w, feat, imap, s2, par)
+    if based and not terminated:
+        phi_s2 = rebase(q, w, e, feat, imap, s2, par)
+    train_v = ivar[K.I_TRAIN_V] != 0
+    td = par[K.PP_VTARGET] == 0.0
+    if train_v and td:
+        v_td_lambda(w, e, feat, imap, s, r, v2, is_greedy(q, s, a), gamma, par[K.P_LAMBDA],
+                    fvar[K.F_STEP_V])
+    f = 0.0
+    if shaping:
+        phi_s = e[n_c + s] if based else fvar[K.F_PHI]
+        f = gamma * phi_s2 - phi_s
+        record_shaping(ivar, fvar, f)
+    if par[K.PP_LAMQ] > 0.0:
+        q_lambda(q, fmap[n_s:], ilist[n_s * n_a:], ivar, s, a, r, s2, terminated, alpha, gamma,
+                 par[K.PP_LAMQ], par[K.PP_TRACE_MIN], f)
+    else:
+        q_learning(q, s, a, r, s2, terminated, alpha, gamma, f)
+    if train_v and not td:
+        if based:
+            target = tried_max(q, imap, s) + e[n_c + s]
+        else:
+            target = row_max(q, s)
+            if shaping:
+                target += fvar[K.F_PHI]
+        if par[K.PP_VTARGET] == 2.0:  # V_NN learns log values: Phi = scale * exp(V_NN)
+            target = math.log(max(target, LOG_FLOOR))
+        v_regress(w, feat, imap, s, target, fvar[K.F_STEP_V])
+    n_seen = ivar[K.I_NSEEN]
+    for _ in range(int(par[K.PP_NPLAN])):
+        j = ilist[rng.integers(0, n_seen)]
+        ps = j // n_a
+        pa = j % n_a
+        ps2 = imap[ps, pa]
+        pterm = imap[ps, n_a + pa] != 0
+        pf = 0.0
+        if based:
+            p1 = rebase(q, w, e, feat, imap, ps, par)
+            p2 = 0.0 if pterm else rebase(q, w, e, feat, imap, ps2, par)
+            pf = gamma * p2 - p1
+        elif shaping:
+            p2 = 0.0 if pterm else potential(w, feat, imap, ps2, par)
+            pf = gamma * p2 - potential(w, feat, imap, ps, par)
+        q_learning(q, ps, pa, fmap[ps, pa], ps2, pterm, alpha, gamma, pf)
+    fvar[K.F_PHI] = phi_s2
+
+
+@njit(**INLINE)
+def begin_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
+    """Reset traces and per-episode sums; shaping on from ``warmup``; V_NN frozen from
+    ``freeze``; anchor s0's centre (leak-free); cache Phi(s0)."""
+    ivar[K.I_PENDING] = -1
+    ivar[K.I_NF] = 0
+    fvar[K.F_FSUM] = 0.0
+    fvar[K.F_FSQ] = 0.0
+    n_s, n_a = q.shape[0], q.shape[1]
+    if par[K.PP_VTARGET] == 0.0:
+        e[:w.shape[0]] = 0.0
+    if par[K.PP_LAMQ] > 0.0:
+        clear_traces(fmap[n_s:], ilist[n_s * n_a:], ivar)
+    ep = ivar[K.I_EPISODE]
+    ivar[K.I_SHAPING] = 1 if ep >= par[K.PP_WARMUP] else 0
+    ivar[K.I_TRAIN_V] = 1 if ep < par[K.PP_FREEZE] else 0
+    if par[K.PP_LEAKFREE] != 0.0:
+        leak_free_enter(feat, imap, ilist, n_s, n_a, s0, par[K.PP_NORMALISE] != 0.0)
+    fvar[K.F_PHI] = potential(w, feat, imap, s0, par)

@@ -1,0 +1,172 @@
+"""The RNH-QL+ ablation (issue 10): rnh-ql, then each ingredient added in turn up to rnh-ql+,
+with dyna-q and q-lambda for reference, on every map of the suite (goal-only rewards).
+
+``python -m scenarios.experiments.ablation --out results/ablation --seeds 10 --episodes 3000
+--jobs 2`` builds the suite (:mod:`scenarios.experiments.suite`) in ``OUT/suite`` and writes
+``OUT/ablation.md`` (the table), ``OUT/ablation.json`` (per-run figures and the summary) and
+``OUT/runs.partial.jsonl`` (one line per finished run; a rerun skips the runs already there).
+
+Cells: seeds whose final greedy route from S is optimal, then the median [q25, q75] over
+seeds of *episodes to stable optimal*: episodes trained at the first greedy test (every 10
+episodes) from which every later test through the last is optimal (``never`` sorts last).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from scenarios.experiments.suite import build_suite
+
+# label, method, overrides: each row adds one ingredient to the row above it
+_OFF = (("v_target", 0), ("warmup_episodes", 300), ("shaping_scale", 1.0), ("rebase", 0),
+        ("n_planning", 0))
+VARIANTS: list[tuple[str, str, tuple[tuple[str, float], ...]]] = [
+    ("rnh-ql", "rnh-ql", ()),
+    ("+A lattice every 4 cells, sparse (cut-off 2 widths)", "rnh-ql+", _OFF),
+    ("+B V_NN toward max Q + Phi, no warm-up", "rnh-ql+", _OFF[2:]),
+    ("+C re-based rows, Phi = 0.25 V_NN", "rnh-ql+", _OFF[4:]),
+    ("+D 10 shaped planning updates (= rnh-ql+)", "rnh-ql+", ()),
+    ("rnh-ql+ leak_free=1", "rnh-ql+", (("leak_free", 1),)),
+    ("dyna-q", "dyna-q", ()),
+    ("q-lambda", "q-lambda", ()),
+]
+
+
+def stable_optimal(test_episodes: list[int], lengths: list[int], optimal: int) -> int | None:
+    """Episodes at the first test from which every later test is optimal; None if the last
+    test is not."""
+    if not lengths or lengths[-1] != optimal:
+        return None
+    i = len(lengths) - 1
+    while i > 0 and lengths[i - 1] == optimal:
+        i -= 1
+    return int(test_episodes[i])
+
+
+def _run(job: tuple[str, str, str, str, tuple, int, int]) -> dict[str, Any]:
+    from scenarios.runs.spec import RunSpec, load, run_one
+
+    map_name, path, label, method, overrides, seed, episodes = job
+    rec = run_one(RunSpec(path, method, seed, episodes, overrides=overrides))
+    opt = int(load(path)[1].optimal_route_length)
+    return dict(map=map_name, label=label, seed=seed, optimal=opt,
+                final_route_optimal=bool(rec["final_route_optimal"]),
+                final_route_length=rec["final_route_length"],
+                first_optimal=rec["episodes_to_optimal"],
+                stable_optimal=stable_optimal(rec["test_episodes"], rec["test_route_length"],
+                                              opt),
+                env_steps=rec["env_steps"], wall_time_s=rec["wall_time_s"])
+
+
+def quartiles(xs: list[int | None]) -> tuple[float, float, float]:
+    """(median, q25, q75) with None as +inf (``never`` sorts last); lower median style."""
+    v = np.array([math.inf if x is None else x for x in xs], dtype=float)
+    if len(v) == 0:
+        return math.inf, math.inf, math.inf
+    return tuple(float(np.quantile(v, q, method="lower")) for q in (0.5, 0.25, 0.75))
+
+
+def _fmt(x: float) -> str:
+    return "never" if math.isinf(x) else f"{x:.0f}"
+
+
+def summarise(runs: list[dict], maps: list[dict], labels: list[str]) -> dict:
+    out: dict[str, dict[str, Any]] = {}
+    for lab in labels:
+        out[lab] = {}
+        for m in maps:
+            rs = [r for r in runs if r["label"] == lab and r["map"] == m["name"]]
+            if not rs:
+                continue
+            med, q25, q75 = quartiles([r["stable_optimal"] for r in rs])
+            out[lab][m["name"]] = dict(optimal_seeds=sum(r["final_route_optimal"] for r in rs),
+                                       seeds=len(rs), median=med, q25=q25, q75=q75)
+    return out
+
+
+def table(summary: dict, maps: list[dict], labels: list[str]) -> str:
+    head = "| variant | " + " | ".join(
+        f"{m['name']}{' (held out)' if m['held_out'] else ''}" for m in maps) + " |"
+    lines = [head, "|" + "---|" * (len(maps) + 1)]
+    for lab in labels:
+        cells = []
+        for m in maps:
+            c = summary.get(lab, {}).get(m["name"])
+            cells.append("" if c is None else
+                         f"{c['optimal_seeds']}/{c['seeds']} · {_fmt(c['median'])} "
+                         f"[{_fmt(c['q25'])}, {_fmt(c['q75'])}]")
+        lines.append(f"| {lab} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default="results/ablation")
+    ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--episodes", type=int, default=3000)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--maps", default="", help="comma-separated suite names (default: all)")
+    ap.add_argument("--variants", default="", help="comma-separated labels or row numbers "
+                    "(0-based) of the table (default: all)")
+    ap.add_argument("--extra", action="append", default=[],
+                    help="an extra row METHOD[:FIELD=VALUE,...] (e.g. rnh-ql+:n_planning=10)")
+    ap.add_argument("--rewards", default="goal-only", help="reward scheme of the suite")
+    a = ap.parse_args(argv)
+    out = Path(a.out)
+    maps = build_suite(out / "suite", a.rewards)
+    if a.maps:
+        want = a.maps.split(",")
+        maps = [m for m in maps if m["name"] in want]
+    rows = list(VARIANTS)
+    if a.variants:
+        keys = a.variants.split(",")
+        rows = [v for i, v in enumerate(VARIANTS) if v[0] in keys or str(i) in keys]
+    for ex in a.extra:
+        method, _, sets = ex.partition(":")
+        ov = tuple((k, float(v)) for k, v in (kv.split("=") for kv in sets.split(",") if kv))
+        rows.append((f"{method}|{sets}" if sets else method, method, ov))
+    labels = [r[0] for r in rows]
+    partial = out / "runs.partial.jsonl"
+    done: dict[tuple, dict] = {}
+    if partial.exists():
+        for line in partial.read_text().splitlines():
+            r = json.loads(line)
+            done[(r["map"], r["label"], r["seed"], r.get("episodes", a.episodes))] = r
+    jobs = [(m["name"], m["file"], lab, meth, ov, s, a.episodes) for lab, meth, ov in rows
+            for m in maps
+            for s in range(a.seeds) if (m["name"], lab, s, a.episodes) not in done]
+    out.mkdir(parents=True, exist_ok=True)
+    with partial.open("a") as fh, ProcessPoolExecutor(max_workers=max(1, a.jobs)) as pool:
+        futs = [pool.submit(_run, j) for j in jobs]
+        for k, fut in enumerate(as_completed(futs)):
+            r = fut.result()
+            r["episodes"] = a.episodes
+            done[(r["map"], r["label"], r["seed"], a.episodes)] = r
+            fh.write(json.dumps(r) + "\n")
+            fh.flush()
+            if (k + 1) % 20 == 0:
+                print(f"{k + 1}/{len(jobs)} runs", flush=True)
+    runs = [r for (mp, lab, s, ep), r in done.items()
+            if ep == a.episodes and lab in labels and s < a.seeds
+            and mp in {m["name"] for m in maps}]
+    summary = summarise(runs, maps, labels)
+    md = (f"Goal-only rewards, {a.seeds} seeds x {a.episodes} episodes. Cell: seeds whose "
+          "final greedy route is optimal · median [q25, q75] episodes to stable optimal.\n\n"
+          + table(summary, maps, labels) + "\n")
+    (out / "ablation.md").write_text(md)
+    (out / "ablation.json").write_text(json.dumps(dict(maps=maps, variants=[
+        dict(label=lab, method=m, overrides=dict(ov)) for lab, m, ov in rows],
+        summary=summary, runs=runs), indent=1, default=str))
+    print(md)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

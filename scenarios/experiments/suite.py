@@ -1,0 +1,237 @@
+"""The route-learning map suite of issue 10: seeded maze and rooms maps, Moving AI maps and the
+built-ins, as scenario TOMLs with a chosen reward scheme, start and goal far apart.
+
+``python -m scenarios.experiments.suite --out DIR`` writes ``DIR/maps/*.map`` (the generated
+maps), ``DIR/*.toml`` (one scenario per suite map) and ``DIR/suite.json`` (name, kind, file,
+optimal route, steps per episode, whether the map is held out from tuning).
+
+* Start and goal: a double BFS sweep over the map's free cells (farthest cell from a
+  cell of the largest component, then the farthest from that), so the route is
+  about the map's diameter.
+* ``steps_per_episode`` = max(600, 4 x the optimal route): an episode from a random
+  start can still reach the goal after exploring.
+* Rewards default to ``goal-only`` (+100 goal, -1 bump, 0 free step).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections import deque
+from pathlib import Path
+
+import numpy as np
+
+SCHEMES = {"paper": (100.0, -1.0, 1.0), "goal-only": (100.0, -1.0, 0.0),
+           "step-cost": (100.0, -1.0, -1.0)}
+MAPS_DIR = Path("/work/shared/data/maps")
+BUILTIN = ("paper-40", "paper-50", "zigzag-50", "arena")
+MOVINGAI = ("room-32-32-8", "random-64-64-20", "lak307d", "ost003d")
+TUNE_SEEDS = (1, 2)
+HELD_OUT_SEEDS = (101, 102)
+
+
+# ---------------------------------------------------------------- generators (True = free)
+
+
+def maze(seed: int, braid: float = 0.1) -> np.ndarray:
+    """A seeded maze, 1-cell corridors and walls, 25-39 cells a side; ``braid`` of the
+    remaining inner walls between two corridors are knocked out (loops: several routes)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(12, 20))  # lattice cells per side -> 2n + 1 map cells
+    size = 2 * n + 1
+    free = np.zeros((size, size), dtype=bool)
+    seen = np.zeros((n, n), dtype=bool)
+    stack = [(int(rng.integers(n)), int(rng.integers(n)))]
+    seen[stack[0]] = True
+    free[2 * stack[0][0] + 1, 2 * stack[0][1] + 1] = True
+    while stack:
+        r, c = stack[-1]
+        nbrs = [(r + dr, c + dc) for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1))
+                if 0 <= r + dr < n and 0 <= c + dc < n and not seen[r + dr, c + dc]]
+        if not nbrs:
+            stack.pop()
+            continue
+        nr, nc = nbrs[int(rng.integers(len(nbrs)))]
+        seen[nr, nc] = True
+        free[2 * nr + 1, 2 * nc + 1] = True
+        free[r + nr + 1, c + nc + 1] = True
+        stack.append((nr, nc))
+    walls = [(r, c) for r in range(1, size - 1) for c in range(1, size - 1)
+             if not free[r, c] and (r % 2) != (c % 2)]
+    for i in rng.permutation(len(walls))[:int(braid * len(walls))]:
+        free[walls[i]] = True
+    return free
+
+
+def rooms(seed: int) -> np.ndarray:
+    """Seeded rooms: a grid of rooms 5-8 cells wide, 1-cell walls, one or two doors
+    (1-2 cells) per wall between neighbouring rooms, 25-40 cells a side."""
+    rng = np.random.default_rng(seed)
+    room = int(rng.integers(5, 9))
+    k = int(rng.integers(max(3, 25 // (room + 1)), 40 // (room + 1) + 1))
+    size = k * (room + 1) + 1
+    free = np.ones((size, size), dtype=bool)
+    free[0, :] = free[-1, :] = free[:, 0] = free[:, -1] = False
+    for j in range(1, k):
+        free[j * (room + 1), :] = False
+        free[:, j * (room + 1)] = False
+    for a in range(k):
+        for b in range(k):
+            for vertical in (True, False):
+                if (vertical and b == k - 1) or (not vertical and a == k - 1):
+                    continue
+                for _ in range(int(rng.integers(1, 3))):
+                    w = int(rng.integers(1, 3))
+                    o = int(rng.integers(0, room - w + 1))
+                    lo = (a if vertical else b) * (room + 1) + 1 + o
+                    wall = ((b + 1) if vertical else (a + 1)) * (room + 1)
+                    if vertical:
+                        free[lo:lo + w, wall] = True
+                    else:
+                        free[wall, lo:lo + w] = True
+    return free
+
+
+# ---------------------------------------------------------------- maps and start/goal
+
+
+def read_map(path: Path) -> np.ndarray:
+    lines = path.read_text().splitlines()
+    h = int(lines[1].split()[1])
+    rows = lines[4:4 + h]
+    return np.array([[ch in ".GS" for ch in row] for row in rows], dtype=bool)
+
+
+def write_map(free: np.ndarray, path: Path) -> None:
+    h, w = free.shape
+    rows = ["".join("." if f else "@" for f in row) for row in free]
+    path.write_text(f"type octile\nheight {h}\nwidth {w}\nmap\n" + "\n".join(rows) + "\n")
+
+
+def bfs(free: np.ndarray, src: tuple[int, int]) -> np.ndarray:
+    """Moves from src (row, col) to every cell, 4-connected; -1 unreachable."""
+    d = np.full(free.shape, -1, dtype=np.int64)
+    d[src] = 0
+    q = deque([src])
+    while q:
+        r, c = q.popleft()
+        for nr, nc in ((r + 1, c), (r - 1, c), (r, c + 1), (r, c - 1)):
+            if 0 <= nr < free.shape[0] and 0 <= nc < free.shape[1] and free[nr, nc] \
+                    and d[nr, nc] < 0:
+                d[nr, nc] = d[r, c] + 1
+                q.append((nr, nc))
+    return d
+
+
+def far_pair(free: np.ndarray) -> tuple[tuple[int, int], tuple[int, int], int]:
+    """(start, goal, moves) as (row, col) in the map's frame: a double BFS sweep from a cell
+    of the largest component."""
+    cells = np.argwhere(free)
+    best = None
+    for r, c in cells[np.linspace(0, len(cells) - 1, 8).astype(int)]:
+        d = bfs(free, (int(r), int(c)))
+        if best is None or (d >= 0).sum() > (best >= 0).sum():
+            best = d
+    a = tuple(int(x) for x in np.unravel_index(np.argmax(best), best.shape))
+    da = bfs(free, a)
+    b = tuple(int(x) for x in np.unravel_index(np.argmax(da), da.shape))
+    return b, a, int(da[b])
+
+
+def _toml(name: str, desc: str, map_path: Path, start, goal, steps: int,
+          rewards: tuple[float, float, float], scheme: str) -> str:
+    g, b, s = rewards
+    h = read_map(map_path).shape[0]
+    # rnhql frame: y up; a Moving AI row r is y = h - 1 - r
+    sx, sy = start[1], h - 1 - start[0]
+    gx, gy = goal[1], h - 1 - goal[0]
+    return (f'name = "{name}"\ndescription = "{desc}"\nstart = [{sx}, {sy}]\n'
+            f'goal = [{gx}, {gy}]\nsteps_per_episode = {steps}\n\n[arena]\n'
+            f'map = "{map_path.resolve()}"\ncell_size_m = 1.0\n\n'
+            f'[rewards]   # {scheme}\ngoal = {g}\nbump = {b}\nstep = {s}\n')
+
+
+def _builtin_toml(name: str, rewards: tuple[float, float, float], scheme: str) -> str:
+    from sim.scenario import builtin_dir
+
+    text = (builtin_dir() / f"{name}.toml").read_text()
+    text = text.replace('map = "maps/', f'map = "{builtin_dir()}/maps/')
+    out, skip = [], False
+    for line in text.splitlines():
+        if line.startswith("[rewards]"):
+            skip = True
+            continue
+        if skip and line.startswith("["):
+            skip = False
+        if not skip:
+            out.append(line)
+    g, b, s = rewards
+    return "\n".join(out) + f"\n\n[rewards]   # {scheme}\ngoal = {g}\nbump = {b}\nstep = {s}\n"
+
+
+def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True) -> list[dict]:
+    """Write the suite into ``out``; returns its entries (also in ``out/suite.json``)."""
+    from sim.grid import build_model
+    from sim.scenario import load_scenario
+
+    rewards = SCHEMES[scheme]
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "maps").mkdir(exist_ok=True)
+    entries: list[dict] = []
+
+    def add(name: str, kind: str, text: str, held_out: bool = False) -> None:
+        path = out / f"{name}.toml"
+        path.write_text(text)
+        model = build_model(load_scenario(path))
+        opt = int(model.optimal_route_length)
+        steps = max(600, 4 * opt)
+        if f"steps_per_episode = {steps}" not in text:
+            text = "\n".join(f"steps_per_episode = {steps}" if ln.startswith("steps_per_episode")
+                             else ln for ln in text.splitlines()) + "\n"
+            path.write_text(text)
+        entries.append(dict(name=name, kind=kind, file=str(path.resolve()), optimal=opt,
+                            steps_per_episode=steps, free_cells=int(len(model.start_states) + 1),
+                            held_out=held_out))
+
+    kinds = {"paper-40": "open", "paper-50": "open", "zigzag-50": "large obstacles",
+             "arena": "rooms"}
+    for name in BUILTIN:
+        add(name, kinds[name], _builtin_toml(name, rewards, scheme))
+    gens = [("maze", maze, "maze"), ("rooms", rooms, "rooms")]
+    for seed in (*TUNE_SEEDS, *HELD_OUT_SEEDS):
+        for prefix, gen, kind in gens:
+            free = gen(seed)
+            mp = out / "maps" / f"{prefix}-{seed}.map"
+            write_map(free, mp)
+            s, g, _ = far_pair(free)
+            add(f"{prefix}-{seed}", kind,
+                _toml(f"{prefix}-{seed}", f"generated {prefix}, seed {seed}", mp, s, g, 600,
+                      rewards, scheme), held_out=seed in HELD_OUT_SEEDS)
+    if moving_ai:
+        mkinds = {"room-32-32-8": "rooms", "random-64-64-20": "random obstacles",
+                  "lak307d": "large obstacles", "ost003d": "large"}
+        for name in MOVINGAI:
+            mp = MAPS_DIR / f"{name}.map"
+            s, g, _ = far_pair(read_map(mp))
+            add(name, mkinds[name], _toml(name, f"Moving AI {name}, far start and goal", mp, s,
+                                          g, 600, rewards, scheme))
+    (out / "suite.json").write_text(json.dumps(entries, indent=1))
+    return entries
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default="results/suite", help="directory for maps and TOMLs")
+    ap.add_argument("--rewards", default="goal-only", choices=sorted(SCHEMES))
+    ap.add_argument("--no-moving-ai", action="store_true", help="skip the Moving AI maps")
+    a = ap.parse_args(argv)
+    for e in build_suite(Path(a.out), a.rewards, not a.no_moving_ai):
+        print(f"{e['name']:18s} {e['kind']:17s} optimal {e['optimal']:4d}  "
+              f"steps/episode {e['steps_per_episode']:5d}  free {e['free_cells']:6d}"
+              f"{'  held out' if e['held_out'] else ''}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -179,3 +179,32 @@ def on_shortest_fraction(st, next_state, distance, states):
         if distance[next_state[s, a]] == distance[s] - 1:
             good += 1
     return good / max(states.shape[0], 1)
+
+
+@njit(cache=True)
+def epsilon_rollouts(st, next_state, terminal, start, max_steps, eps, n, rng):
+    """Route lengths of ``n`` rollouts from ``start`` with the epsilon-greedy learning policy.
+
+    The paper's own test ("put the agent at S and let it search with its learning
+    policy"), *without* learning: the agent is not updated, so the rollouts never
+    change the trained agent or the strict greedy test. Each step: with
+    probability ``eps`` a uniformly random action, else the exploitation action.
+    A rollout that does not reach a terminal state in ``max_steps`` gives -1.
+    Draws only from ``rng`` (the run's evaluation stream).
+    """
+    ivar, fvar, par, q, w, e, feat, imap, fmap, ilist = st
+    kind = ivar[K.I_KIND]
+    n_actions = next_state.shape[1]
+    out = np.full(n, -1, dtype=np.int64)
+    for i in range(n):
+        s = start
+        for t in range(max_steps):
+            if rng.random() < eps:
+                a = rng.integers(0, n_actions)
+            else:
+                a = exploit_action(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
+            s = next_state[s, a]
+            if terminal[s]:
+                out[i] = t + 1
+                break
+    return out

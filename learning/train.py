@@ -20,6 +20,12 @@ from learning.checkpoint import Checkpoint, CheckpointError
 from learning.geometry import TabularMDP, geometry_of
 from learning.kernels import NO_TRACE, greedy_route, on_shortest_fraction, run_episodes
 from learning.methods import MethodConfig
+from learning.metrics import (
+    episodes_to_first_optimal,
+    episodes_to_stable_optimal,
+    optimal_test_fraction,
+    reward_per_step,
+)
 from learning.state import AgentState, copy_state, init_state
 
 EPISODE_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std")
@@ -27,11 +33,7 @@ KERNEL_OUT = ("steps", "returns", "success", "shaping_mean", "shaping_std")  # r
 _DTYPES = {"steps": np.int32, "success": np.bool_}
 
 
-def first_optimal_test(test_episodes: np.ndarray, test_route_length: np.ndarray,
-                       optimal_length: int) -> int | None:
-    """Episodes trained at the first greedy test whose route has the optimal length."""
-    hit = np.flatnonzero(np.asarray(test_route_length) == optimal_length)
-    return int(test_episodes[hit[0]]) if len(hit) else None
+first_optimal_test = episodes_to_first_optimal  # the older name, kept for callers
 
 
 @dataclass(eq=False)
@@ -56,8 +58,9 @@ class TrainResult:
     optimal_action_fraction: float  # reachable free cells whose greedy move is on a shortest route
 
     @property
-    def reward_per_step(self) -> np.ndarray:
-        return self.returns / np.maximum(self.steps, 1)
+    def reward_per_step(self) -> float:
+        """Total return / total steps over the whole run (ratio of sums, see learning.metrics)."""
+        return reward_per_step(self.returns, self.steps)
 
     @property
     def final_route_excess(self) -> int | None:
@@ -68,9 +71,21 @@ class TrainResult:
 
     @property
     def episodes_to_optimal(self) -> int | None:
-        """Episodes trained at the first greedy test whose route is a shortest one."""
-        return first_optimal_test(self.test_episodes, self.test_route_length,
-                                  self.optimal_length)
+        """Episodes trained at the first greedy test whose route is a shortest one (first hit;
+        a secondary figure: rank by :attr:`episodes_to_stable_optimal`)."""
+        return episodes_to_first_optimal(self.test_episodes, self.test_route_length,
+                                         self.optimal_length)
+
+    @property
+    def episodes_to_stable_optimal(self) -> int | None:
+        """Episodes trained at the first greedy test from which every later test is optimal."""
+        return episodes_to_stable_optimal(self.test_episodes, self.test_route_length,
+                                          self.optimal_length)
+
+    @property
+    def optimal_test_fraction(self) -> float | None:
+        """Share of optimal greedy tests over the last 10 % of tests."""
+        return optimal_test_fraction(self.test_route_length, self.optimal_length)
 
     def episode_arrays(self) -> dict[str, np.ndarray]:
         return {f: getattr(self, f) for f in EPISODE_FIELDS}
@@ -82,6 +97,15 @@ def greedy_test(st: AgentState, model: TabularMDP, start: int | None = None) -> 
     s0 = int(model.start if start is None else start)
     length, n = greedy_route(st, model.next_state, model.terminal, s0, int(model.max_steps), route)
     return int(length), route[:n].tolist()
+
+
+def epsilon_route_lengths(st: AgentState, model: TabularMDP, eps: float,
+                          rng: np.random.Generator, n: int = 20) -> np.ndarray:
+    """Route lengths (-1: G missed) of ``n`` epsilon-greedy rollouts from S, no learning."""
+    from learning.kernels import epsilon_rollouts
+
+    return epsilon_rollouts(st, model.next_state, model.terminal, int(model.start),
+                            int(model.max_steps), float(eps), int(n), rng)
 
 
 def shortest_fraction(st: AgentState, model: TabularMDP) -> float:

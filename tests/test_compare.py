@@ -11,8 +11,10 @@ from scenarios.runs.backends import SweepError, run_local
 from scenarios.runs.results import summarise
 from scenarios.runs.spec import RunSpec, run_one
 
-RUN_KEYS = {"method", "seed", "world", "episodes_to_optimal", "final_route_length",
-            "success_rate", "wall_time_s", "env_steps", "steps_per_episode", "reward_per_step"}
+RUN_KEYS = {"method", "seed", "world", "episodes_to_stable_optimal", "episodes_to_optimal",
+            "optimal_test_fraction", "final_route_length", "epsilon_route_length",
+            "success_rate", "reward_per_step", "reward_per_step_last_10pct", "wall_time_s",
+            "env_steps", "steps_per_episode", "return_per_episode"}
 
 
 @pytest.fixture(scope="module")
@@ -26,14 +28,20 @@ def small(tmp_path_factory):
 def test_results_json_contract(small):
     out, specs, _ = small
     data = json.loads((out / "results.json").read_text())
-    assert {"scenario", "world", "episodes", "optimal_route_length", "runs", "summary"} <= set(data)
+    assert {"version", "scenario", "world", "episodes", "optimal_route_length", "runs",
+            "summary"} <= set(data)
+    assert data["version"] == 2
+    assert set(data["scenario"]["rewards"]) == {"scheme", "goal", "bump", "step"}
     assert data["episodes"] == 40 and data["world"] == "grid"
     assert data["optimal_route_length"] == 60
     assert len(data["runs"]) == len(specs) == 4
     for run in data["runs"]:
         assert RUN_KEYS <= set(run)
-        assert len(run["steps_per_episode"]) == 40 == len(run["reward_per_step"])
+        assert len(run["steps_per_episode"]) == 40 == len(run["return_per_episode"])
         assert run["env_steps"] == sum(run["steps_per_episode"])
+        # reward per step is total return / total steps, not a mean of per-episode ratios
+        assert run["reward_per_step"] == pytest.approx(
+            sum(run["return_per_episode"]) / sum(run["steps_per_episode"]), rel=1e-6)
     for method in ("rnh-ql", "st-ql"):
         entry = data["summary"][method]["grid"]
         assert entry["seeds"] == 2
@@ -139,3 +147,16 @@ def test_run_key_covers_everything_that_changes_a_run(tmp_path):
         path.write_text(text)
     ka, kb = RunSpec(str(a), "st-ql", 0, 10).key, RunSpec(str(b), "st-ql", 0, 10).key
     assert ka.split("#")[1] != kb.split("#")[1]
+
+
+def test_one_quantile_definition_with_never_last():
+    from scenarios.runs.results import _stats, quantile
+
+    assert quantile([1, 2, 3, 4], 0.5) == 2.5  # type 7: interpolates
+    assert quantile([4, 1, 3, 2], 0.25) == 1.75
+    # never (None) sorts last; interpolating towards it is never, landing on a value is it
+    assert quantile([1, 2, None, None], 0.5) == float("inf")
+    assert quantile([1, 2, 3, None, None], 0.5) == 3.0
+    assert _stats([100, 200, None]) == {"median": 200.0, "q25": 150.0, "q75": None}
+    # the same definition whether or not some seed never got there (positions 1.75 of 0..7)
+    assert quantile([1, 2, 3, 4, None, None, None, None], 0.25) == 2.75

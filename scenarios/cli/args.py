@@ -147,10 +147,12 @@ def scenario_key(args: argparse.Namespace) -> tuple[str, tuple | None, tuple | N
 
 
 def print_run(rec_like: dict, optimal: int) -> None:
-    eto = rec_like["episodes_to_optimal"]
+    stable = rec_like.get("episodes_to_stable_optimal")
+    first = rec_like["episodes_to_optimal"]
     length = rec_like["final_route_length"]
     print(f"  success rate          {rec_like['success_rate']:.3f}")
-    print(f"  episodes to optimal   {'never' if eto is None else eto}")
+    print(f"  stable optimal after  {'never' if stable is None else stable} episodes "
+          f"(first optimal test: {'never' if first is None else first})")
     print(f"  final greedy route    {'G not reached' if length < 0 else length} "
           f"(optimal {optimal})")
     print(f"  greedy moves on a shortest route  {rec_like['optimal_action_fraction']:.3f}")

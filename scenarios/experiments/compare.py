@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from scenarios.runs.outdir import check_out_dir, sweep_lock
-from scenarios.runs.results import summarise, write_results
+from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
 from scenarios.runs.spec import RunSpec, load
 
 ALL_METHODS = ("rnh-ql", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt", "q-lambda",
@@ -109,10 +109,14 @@ def assemble(specs: Sequence[RunSpec], runs: list[dict[str, Any]]) -> dict[str, 
     order = {s.key: i for i, s in enumerate(specs)}
     runs = sorted(runs, key=lambda r: order.get(r["key"], len(order)))
     worlds = sorted({s.world for s in specs}, key=["grid", "physics"].index)
+    rw = sc.rewards
     return {
+        "version": RESULTS_VERSION,
         "rnhql_version": version(),
         "scenario": {"name": sc.name, "source": sc.source, "size_cells": [sc.nx, sc.ny],
-                     "start": list(sc.start), "goal": list(sc.goal)},
+                     "start": list(sc.start), "goal": list(sc.goal),
+                     "rewards": {"scheme": getattr(rw, "scheme", "custom"), "goal": rw.goal,
+                                 "bump": rw.bump, "step": rw.step}},
         "world": ",".join(worlds),
         "episodes": spec0.episodes,
         "optimal_route_length": model.optimal_route_length,

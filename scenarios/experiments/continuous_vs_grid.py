@@ -27,13 +27,19 @@ from scenarios.runs.results import atomic_write_text
 from scenarios.runs.spec import load
 
 
-def _median(values: list[float], digits: int = 1) -> str:
-    vals = [v for v in values if v is not None]
-    return "—" if not vals else f"{np.median(vals):.{digits}f}"
+def _median(values: list[float | None], digits: int = 1, missing: str = "never") -> str:
+    """Median by the one definition of :func:`scenarios.runs.results.quantile` (None sorts
+    last, as never / not reached)."""
+    from scenarios.runs.results import quantile
+
+    if not values:
+        return "—"
+    v = quantile(values, 0.5)
+    return missing if not np.isfinite(v) else f"{v:.{digits}f}"
 
 
 def table(results: dict[str, Any]) -> str:
-    rows = ["| method | world | seeds | success rate | episodes to optimal | final route "
+    rows = ["| method | world | seeds | success rate | stable optimal after | final route "
             "(cells) | driven (m) | contacts on final drive | sim time to G (s) | contacts per "
             "training episode | wall time (s) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
@@ -46,8 +52,8 @@ def table(results: dict[str, Any]) -> str:
         rows.append(
             f"| {method} | {world} | {len(runs)} | "
             f"{_median([r['success_rate'] for r in runs], 3)} | "
-            f"{_median([r['episodes_to_optimal'] for r in runs], 0)} | "
-            f"{_median([r['final_route_length'] if r['final_route_length'] >= 0 else None for r in runs])} | "  # noqa: E501
+            f"{_median([r['episodes_to_stable_optimal'] for r in runs], 0)} | "
+            f"{_median([r['final_route_length'] if r['final_route_length'] >= 0 else None for r in runs], missing='no G')} | "  # noqa: E501
             f"{_median([r['physics_route_metres'] for r in reached])} | "
             f"{_median([r['physics_route_contacts'] for r in runs])} | "
             f"{_median([r['physics_route_sim_time_s'] for r in reached])} | {contacts} | "

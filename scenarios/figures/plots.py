@@ -37,12 +37,29 @@ def _groups(results: dict[str, Any]) -> dict[tuple[str, str], list[dict[str, Any
     return out
 
 
+def _series(run: dict[str, Any], key: str, window: int) -> np.ndarray:
+    """A run's curve, smoothed over ``window`` episodes.
+
+    Reward per step is the ratio of sums over the window (total return / total
+    steps), never a mean of per-episode ratios that one-step episodes would spike.
+    """
+    if key == "reward_per_step":
+        from learning.metrics import windowed_reward_per_step
+
+        return windowed_reward_per_step(np.asarray(run["return_per_episode"]),
+                                        np.asarray(run["steps_per_episode"]),
+                                        window)[window - 1:]
+    return _smooth(np.asarray(run[key], dtype=float), window)
+
+
 def curve_figure(results: dict[str, Any], key: str, ylabel: str, path: Path,
                  window: int = 25, logy: bool = False) -> None:
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
+    n_episodes = len(results["runs"][0]["steps_per_episode"])
+    window = min(window, n_episodes)
     for i, ((method, world), runs) in enumerate(_groups(results).items()):
-        y = _smooth(np.array([r[key] for r in runs], dtype=float), window)
-        x = np.arange(y.shape[1]) + (window // 2 if y.shape[1] < len(runs[0][key]) else 0)
+        y = np.array([_series(r, key, window) for r in runs])
+        x = np.arange(y.shape[1]) + (window // 2 if y.shape[1] < n_episodes else 0)
         q25, med, q75 = np.percentile(y, [25, 50, 75], axis=0)
         label = method if len({w for _, w in _groups(results)}) == 1 else f"{method} ({world})"
         colour = COLOURS[i % len(COLOURS)]
@@ -53,8 +70,10 @@ def curve_figure(results: dict[str, Any], key: str, ylabel: str, path: Path,
     ax.set_ylabel(ylabel)
     if logy:
         ax.set_yscale("log")
-    ax.set_title(f"{results['scenario']['name']}: {ylabel} (median, IQR over seeds; "
-                 f"moving average {window})", fontsize=9)
+    rw = results["scenario"].get("rewards")
+    scheme = f", rewards {rw['scheme']}" if rw else ""
+    ax.set_title(f"{results['scenario']['name']}{scheme}: {ylabel} (median, IQR over seeds; "
+                 f"window {window})", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
     fig.tight_layout()
@@ -121,7 +140,8 @@ def all_figures(results: dict[str, Any], sc: Scenario, model: TabularModel,
     paths = [out_dir / "steps_per_episode.png", out_dir / "reward_per_step.png",
              out_dir / "time_per_episode.png", out_dir / "routes.png"]
     curve_figure(results, "steps_per_episode", "steps per episode", paths[0], logy=True)
-    curve_figure(results, "reward_per_step", "average cumulative reward per step", paths[1])
+    curve_figure(results, "reward_per_step", "reward per step (total return / total steps)",
+                 paths[1])
     time_figure(results, paths[2])
     routes_figure(results, sc, model, paths[3])
     return paths

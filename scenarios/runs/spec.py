@@ -110,11 +110,27 @@ def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
 
 
 def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dict[str, Any]:
-    """One ``runs[]`` entry of results.json from a finished training result."""
+    """One ``runs[]`` entry of results.json from a finished training result.
+
+    The figures come from :mod:`learning.metrics` (one definition each); the
+    per-episode arrays (steps, return) let a script compute any window's reward
+    per step as a ratio of sums.
+    """
+    from learning.metrics import (
+        episodes_to_first_optimal,
+        episodes_to_stable_optimal,
+        optimal_test_fraction,
+        reward_per_step,
+    )
+
     steps = np.asarray(result.steps)
     returns = np.asarray(result.returns)
-    optimal = model.optimal_route_length
+    optimal = int(getattr(result, "optimal_length", model.optimal_route_length))
     final_len = int(result.final_route_length)
+    test_e = np.asarray(result.test_episodes).astype(int)
+    test_l = np.asarray(result.test_route_length).astype(int)
+    tail = max(1, steps.size // 10)
+    eps_routes = getattr(result, "epsilon_route_lengths", None)
     return {
         "key": spec.key,
         "method": spec.method,
@@ -122,23 +138,37 @@ def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dic
         "seed": spec.seed,
         "world": spec.world,
         "config": cfg.fields(),
-        "episodes_to_optimal": (None if result.episodes_to_optimal is None
-                                else int(result.episodes_to_optimal)),
+        "optimal_route_length": optimal,
+        "episodes_to_stable_optimal": episodes_to_stable_optimal(test_e, test_l, optimal),
+        "episodes_to_optimal": episodes_to_first_optimal(test_e, test_l, optimal),
+        "optimal_test_fraction": optimal_test_fraction(test_l, optimal),
         "final_route_length": final_len,
         "final_route_optimal": final_len == optimal,
         "final_route_excess": None if final_len < 0 else final_len - optimal,
         "final_route": [int(s) for s in result.final_route],
+        "epsilon_route_length": (None if eps_routes is None
+                                 else _median_route(np.asarray(eps_routes))),
         "success_rate": float(np.mean(result.success)),
+        "reward_per_step": reward_per_step(returns, steps),
+        "reward_per_step_last_10pct": reward_per_step(returns[-tail:], steps[-tail:]),
         "wall_time_s": float(np.sum(result.wall_time_s)),
         "env_steps": int(steps.sum()),
         "optimal_action_fraction": float(result.optimal_action_fraction),
         "steps_per_episode": steps.astype(int).tolist(),
-        "reward_per_step": np.round(returns / np.maximum(steps, 1), 6).tolist(),
+        "return_per_episode": np.round(returns, 6).tolist(),
         "wall_time_per_episode_s": np.round(np.asarray(result.wall_time_s), 9).tolist(),
-        "test_episodes": np.asarray(result.test_episodes).astype(int).tolist(),
-        "test_route_length": np.asarray(result.test_route_length).astype(int).tolist(),
+        "test_episodes": test_e.tolist(),
+        "test_route_length": test_l.tolist(),
         **getattr(result, "world_extras", {}),
     }
+
+
+def _median_route(lengths: np.ndarray) -> float | None:
+    """Median route length of rollouts, a rollout that missed G counting as infinite."""
+    from scenarios.runs.results import quantile
+
+    v = quantile([None if x < 0 else float(x) for x in lengths], 0.5)
+    return None if not np.isfinite(v) else v
 
 
 def run_one(spec: RunSpec) -> dict[str, Any]:
@@ -184,6 +214,12 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
         observer = GridRecorder(recorder, plan)
     result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every,
                            observer=observer)
+    from learning.train import epsilon_route_lengths
+
+    # the paper's test, on its own stream (spawned child 2 of the seed) so it never
+    # changes the training run
+    eval_rng = np.random.default_rng(np.random.SeedSequence(spec.seed).spawn(3)[2])
+    result.epsilon_route_lengths = epsilon_route_lengths(result.state, model, cfg.eps, eval_rng)
     if spec.drive_final:
         from learning.agent import StepAgent
         from learning.geometry import geometry_of

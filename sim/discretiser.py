@@ -5,7 +5,7 @@ Cell ``(ix, iy)`` covers ``[ix*c, (ix+1)*c) x [iy*c, (iy+1)*c)``: a pose exactly
 on a border belongs to the cell above/right of it (``floor``), and poses on the
 far walls (x == width or y == height) are clamped into the last cell, so every
 pose inside the closed arena maps to exactly one cell. The state index of a
-cell is ``s = iy * nx + ix``, so ``occupancy(...).ravel()[s]`` is that state.
+cell is ``s = iy * nx + ix``, so ``sim.raster.occupancy(...).ravel()[s]`` is that state.
 """
 
 from __future__ import annotations
@@ -71,38 +71,3 @@ class Discretiser:
         """float64[n_states, 2]: every cell centre in state order [m]."""
         iy, ix = np.divmod(np.arange(self.n_states), self.nx)
         return np.stack([(ix + 0.5) * self.cell_size_m, (iy + 0.5) * self.cell_size_m], axis=1)
-
-    # ---- occupancy
-    def occupancy(self, sc: Scenario) -> np.ndarray:
-        """bool[ny, nx]: True where a robot disc at the cell centre would touch something.
-
-        The disc has radius ``robot.radius_m + robot.clearance_m``. It touches a
-        circle when the centre distance is below the sum of radii, a blocked map
-        cell when it reaches into that cell's square, an arena wall when it
-        crosses it. ``inflation < cell/2`` (validated) means neighbouring squares
-        and walls can never be reached from a centre, but they are checked anyway
-        so the rule holds for any scenario.
-        """
-        infl = sc.robot.inflation_m
-        c = self.cell_size_m
-        xy = self.centres()
-        blocked = np.zeros(self.n_states, dtype=bool)
-        if sc.obstacles:
-            circ = np.array([(o.x_m, o.y_m, o.radius_m) for o in sc.obstacles])
-            d = np.hypot(xy[:, :1] - circ[None, :, 0], xy[:, 1:] - circ[None, :, 1])
-            blocked |= (d < circ[None, :, 2] + infl).any(axis=1)
-        if sc.blocked_cells:
-            cells = np.array(sc.blocked_cells, dtype=np.int64)
-            blocked[cells[:, 1] * self.nx + cells[:, 0]] = True
-            if infl >= c / 2:  # a disc this large could reach a neighbouring square
-                sq = blocked.reshape(self.ny, self.nx).copy()
-                grown = sq.copy()
-                grown[1:] |= sq[:-1]
-                grown[:-1] |= sq[1:]
-                grown[:, 1:] |= sq[:, :-1]
-                grown[:, :-1] |= sq[:, 1:]
-                blocked = grown.ravel()
-        wall = np.minimum.reduce([xy[:, 0], xy[:, 1], sc.width_m - xy[:, 0],
-                                  sc.height_m - xy[:, 1]])
-        blocked |= wall < infl
-        return blocked.reshape(self.ny, self.nx)

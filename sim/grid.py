@@ -14,66 +14,15 @@ Entering the goal gives ``goal`` and terminates; any other move gives ``step``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from sim.discretiser import Discretiser
-from sim.planning import ACTION_DELTAS, bfs_distances
+from sim.planning import ACTION_DELTAS
+from sim.raster import rasterise
 from sim.scenario import Scenario
 
 ACTION_NAMES = ("up", "down", "left", "right")
-
-
-def _segment_distance(px: np.ndarray, py: np.ndarray, ax: np.ndarray, ay: np.ndarray,
-                      bx: np.ndarray, by: np.ndarray) -> np.ndarray:
-    """Distance from points p to segments a-b (broadcasting)."""
-    abx, aby = bx - ax, by - ay
-    t = np.clip(((px - ax) * abx + (py - ay) * aby) / (abx * abx + aby * aby), 0.0, 1.0)
-    return np.hypot(px - (ax + t * abx), py - (ay + t * aby))
-
-
-def passable_moves(sc: Scenario, blocked: np.ndarray) -> np.ndarray:
-    """bool[nS, 4]: which moves succeed, given the inflated occupancy ``blocked[ny, nx]``."""
-    nx, ny = sc.nx, sc.ny
-    xy = Discretiser.from_scenario(sc).centres()
-    iy, ix = np.divmod(np.arange(nx * ny), nx)
-    free = ~blocked.ravel()
-    ok = np.zeros((nx * ny, 4), dtype=bool)
-    for a, (dx, dy) in enumerate(ACTION_DELTAS):
-        tx, ty = ix + dx, iy + dy
-        inside = (tx >= 0) & (tx < nx) & (ty >= 0) & (ty < ny)
-        t = np.where(inside, ty * nx + tx, 0)
-        ok[:, a] = inside & free & free[t]
-    if sc.obstacles:
-        circ = np.array([(o.x_m, o.y_m, o.radius_m) for o in sc.obstacles])
-        reach = circ[:, 2] + sc.robot.inflation_m
-        # a segment of length c starting at a centre can only come within `reach`
-        # of a circle if that centre is within reach + c: test those pairs only
-        d_centre = np.hypot(xy[:, :1] - circ[None, :, 0], xy[:, 1:] - circ[None, :, 1])
-        s_idx, k_idx = np.nonzero(d_centre < reach[None, :] + sc.cell_size_m)
-        p = xy[s_idx]
-        for a, (dx, dy) in enumerate(ACTION_DELTAS):
-            end = p + np.array([dx, dy]) * sc.cell_size_m
-            d = _segment_distance(circ[k_idx, 0], circ[k_idx, 1], p[:, 0], p[:, 1],
-                                  end[:, 0], end[:, 1])
-            ok[s_idx[d < reach[k_idx]], a] = False
-    return ok
-
-
-@lru_cache(maxsize=16)
-def rasterise(sc: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(blocked[ny,nx], passable[nS,4], distance_to_goal[nS]) of a scenario, read-only.
-
-    Cached because validation and model building both need it; a Scenario is
-    frozen and hashable, so the cache key is the whole problem.
-    """
-    blocked = Discretiser.from_scenario(sc).occupancy(sc)
-    ok = passable_moves(sc, blocked)
-    dist = bfs_distances(ok, sc.nx, sc.goal)
-    for arr in (blocked, ok, dist):
-        arr.setflags(write=False)
-    return blocked, ok, dist
 
 
 @dataclass(frozen=True, eq=False)

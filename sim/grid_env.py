@@ -10,7 +10,8 @@ from gymnasium import spaces
 
 from sim.grid import build_model
 from sim.render import AGENT, PATH, MapCanvas
-from sim.scenario import Scenario, resolve_scenario
+from sim.scenario import Scenario
+from sim.scenario_io import resolve_scenario
 
 
 def start_state_from_options(options: dict[str, Any] | None, model: Any,

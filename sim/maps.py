@@ -120,6 +120,9 @@ def load_map(path: str | Path) -> GridMap:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise MapError(str(path), "file", "does not exist", "check the path") from None
+    except IsADirectoryError:
+        raise MapError(str(path), "file", "is a directory, not a map",
+                       "pass a Moving AI .map file") from None
     except UnicodeDecodeError:
         raise MapError(str(path), "file", "is not a text file",
                        "pass a Moving AI .map text file") from None
@@ -129,7 +132,11 @@ def load_map(path: str | Path) -> GridMap:
 def load_scen(path: str | Path) -> list[ScenProblem]:
     """Read a ``.scen`` file (``version 1`` then tab-separated problems)."""
     path = Path(path)
-    lines = path.read_text(encoding="utf-8").splitlines()
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except (FileNotFoundError, IsADirectoryError, UnicodeDecodeError) as exc:
+        raise MapError(str(path), "file", f"cannot be read as a .scen file ({type(exc).__name__})",
+                       "pass a Moving AI .scen text file") from None
     if not lines or not lines[0].startswith("version"):
         raise MapError(str(path), "line 1", "expected 'version 1'",
                        "start the file with the Moving AI line 'version 1'")

@@ -17,12 +17,14 @@ import numpy as np
 from gymnasium import spaces
 
 from sim.discretiser import Discretiser
+from sim.feasibility import validate
 from sim.grid import build_model
 from sim.grid_env import start_state_from_options
 from sim.motion import DriveLimits, PrimitiveController, rate_limit, wheels_to_twist, wrap_angle
 from sim.physics import PhysicsConfig, PhysicsWorld
 from sim.render import AGENT, PATH, MapCanvas
-from sim.scenario import Scenario, resolve_scenario, validate
+from sim.scenario import Scenario
+from sim.scenario_io import resolve_scenario
 
 # DiffDrive: 4 physics steps of 25 ms per 0.1 s control period, and Chipmunk's default
 # positional correction (nothing is ever placed there; contacts persist while the agent

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections import deque
 
 import numpy as np
 
@@ -26,26 +25,28 @@ def bfs_distances(passable: np.ndarray, nx: int, goal: tuple[int, int]) -> np.nd
 
     ``passable[s, a]`` says move ``a`` from ``s`` succeeds. Moves between free
     cells are symmetric, so a BFS outward from the goal along reversed moves
-    gives every state's distance to it.
+    gives every state's distance to it. Layer by layer with numpy: O(states)
+    work plus a small constant per layer, so a 1024 x 1024 map takes
+    milliseconds, not the seconds of a per-state Python loop.
     """
     n = passable.shape[0]
     dist = np.full(n, -1, dtype=np.int32)
     g = goal[1] * nx + goal[0]
     dist[g] = 0
-    rows = passable.tolist()
-    steps = [dy * nx + dx for dx, dy in ACTION_DELTAS]
-    queue = deque([g])
-    dist_l = dist.tolist()
-    while queue:
-        u = queue.popleft()
-        du = dist_l[u] + 1
+    steps = np.array([dy * nx + dx for dx, dy in ACTION_DELTAS], dtype=np.int64)
+    frontier = np.array([g], dtype=np.int64)
+    d = 0
+    while frontier.size:
+        d += 1
+        reached = []
         for a in range(4):
-            v = u + steps[a]
             # v reaches u by the opposite move, which is passable iff u -> v is
-            if rows[u][a] and dist_l[v] < 0:
-                dist_l[v] = du
-                queue.append(v)
-    return np.asarray(dist_l, dtype=np.int32)
+            u = frontier[passable[frontier, a]]
+            v = u + steps[a]
+            reached.append(v[dist[v] < 0])
+        frontier = np.unique(np.concatenate(reached))
+        dist[frontier] = d
+    return dist
 
 
 def bfs_route(next_state: np.ndarray, distance: np.ndarray, start: int) -> list[int]:

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from sim.grid import build_model
-from sim.scenario import resolve_scenario
+from sim.scenario_io import resolve_scenario
 
 REPO = Path(__file__).resolve().parent.parent
 MAPS = REPO / "scenarios" / "builtin" / "maps"

@@ -7,6 +7,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from sim.discretiser import Discretiser
+from sim.raster import occupancy
 from sim.scenario import Circle, Scenario
 
 sizes = st.tuples(st.integers(2, 60), st.integers(2, 60),
@@ -49,7 +50,7 @@ def test_poses_on_borders_map_deterministically_up_and_right(size, data):
 def test_occupancy_inflates_obstacles_by_radius_plus_clearance():
     sc = Scenario(name="t", width_m=10, height_m=10, start=(0, 0), goal=(9, 9),
                   obstacles=(Circle(5.0, 5.0, 1.0),))
-    blocked = Discretiser.from_scenario(sc).occupancy(sc)
+    blocked = occupancy(sc)
     infl = sc.robot.inflation_m
     xy = Discretiser.from_scenario(sc).centres()
     expected = np.hypot(xy[:, 0] - 5.0, xy[:, 1] - 5.0) < 1.0 + infl

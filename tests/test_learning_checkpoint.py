@@ -20,7 +20,7 @@ from learning import kinds as K
 from learning.geometry import geometry_of
 from learning.train import EPISODE_FIELDS
 from sim.grid import build_model
-from sim.scenario import resolve_scenario
+from sim.scenario_io import resolve_scenario
 
 RESUME_CONFIGS = [c() for c in METHODS.values()] + [RNHQL(warmup_episodes=25)]
 

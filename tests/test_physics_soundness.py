@@ -14,7 +14,8 @@ from sim.grid import build_model
 from sim.physics import PhysicsConfig, PhysicsWorld
 from sim.physics_env import DIFFDRIVE_CONFIG, DiffDriveEnv, PhysicsRouteEnv
 from sim.planning import bfs_route
-from sim.scenario import Scenario, builtin_names, resolve_scenario
+from sim.scenario import Scenario
+from sim.scenario_io import builtin_names, resolve_scenario
 
 MAX_OVERLAP_M = 0.01
 

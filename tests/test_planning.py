@@ -6,7 +6,7 @@ import pytest
 from sim.grid import build_model
 from sim.maps import load_map, load_scen, movingai_to_cell
 from sim.planning import astar, bfs_route, value_iteration
-from sim.scenario import scenario_from_map
+from sim.scenario_io import scenario_from_map
 from tests.conftest import MAPS
 
 

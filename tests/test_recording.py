@@ -186,7 +186,7 @@ CHILD = textwrap.dedent("""
     signal.signal(signal.SIGINT, signal.default_int_handler)  # even if the parent ignores it
     from scenarios.recording.recorder import Recorder
     from sim.grid import build_model
-    from sim.scenario import resolve_scenario
+    from sim.scenario_io import resolve_scenario
     sc = resolve_scenario("paper-50")
     m = build_model(sc)
     rng = np.random.default_rng(0)

@@ -7,16 +7,10 @@ import numpy as np
 import pytest
 
 from sim.errors import ScenarioError
-from sim.scenario import (
-    Circle,
-    Robot,
-    Scenario,
-    builtin_names,
-    load_scenario,
-    random_circles,
-    resolve_scenario,
-    validate,
-)
+from sim.feasibility import validate
+from sim.layouts import random_circles
+from sim.scenario import Circle, Robot, Scenario
+from sim.scenario_io import builtin_names, load_scenario, resolve_scenario
 from tests.conftest import MAPS
 
 BASE = """\

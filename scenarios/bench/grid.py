@@ -15,8 +15,9 @@ import gymnasium as gym
 import numpy as np
 
 import sim.envs  # noqa: F401  (registers the ids)
-from sim.grid import build_model, rasterise
-from sim.scenario import resolve_scenario
+from sim.grid import build_model
+from sim.raster import rasterise
+from sim.scenario_io import resolve_scenario
 
 
 def time_build(name: str = "paper-50", repeats: int = 30) -> float:

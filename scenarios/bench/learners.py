@@ -45,7 +45,7 @@ from learning import (
 from learning.kernels import run_episodes
 from scenarios.bench.grid import python_q_learning_steps_per_s
 from sim.grid import build_model
-from sim.scenario import resolve_scenario
+from sim.scenario_io import resolve_scenario
 
 EPISODES = 3000
 
@@ -151,7 +151,7 @@ t0 = time.perf_counter()
 import numpy as np
 from learning import RNHQL, train_tabular
 from sim.grid import build_model
-from sim.scenario import resolve_scenario
+from sim.scenario_io import resolve_scenario
 m = build_model(resolve_scenario("paper-50"))
 t1 = time.perf_counter()
 train_tabular(RNHQL(), m, 1, np.random.default_rng(0))

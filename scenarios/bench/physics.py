@@ -30,7 +30,8 @@ import sim.envs  # noqa: F401  (registers the ids)
 from sim.motion import PrimitiveController
 from sim.physics import PhysicsConfig, PhysicsWorld
 from sim.physics_env import PhysicsRouteEnv
-from sim.scenario import Scenario, resolve_scenario
+from sim.scenario import Scenario
+from sim.scenario_io import resolve_scenario
 
 
 def step_cost_us(sc: Scenario, cfg: PhysicsConfig, n: int = 200_000) -> float:

@@ -21,7 +21,7 @@ import numpy as np
 
 from scenarios.recording.recorder import Recorder
 from sim.grid import build_model
-from sim.scenario import resolve_scenario
+from sim.scenario_io import resolve_scenario
 
 
 def spin(seconds: float) -> None:

@@ -55,7 +55,7 @@ def add_record_args(p: argparse.ArgumentParser) -> None:
 
 
 def scenario_from_args(args: argparse.Namespace):  # -> Scenario
-    from sim.scenario import resolve_scenario
+    from sim.scenario_io import resolve_scenario
 
     return resolve_scenario(*scenario_key(args))
 

@@ -7,7 +7,8 @@ from dataclasses import dataclass
 
 from scenarios.cli.args import scenario_from_args
 from sim.grid import build_model
-from sim.scenario import Scenario, builtin_names, resolve_scenario
+from sim.scenario import Scenario
+from sim.scenario_io import builtin_names, resolve_scenario
 
 
 @dataclass(frozen=True)

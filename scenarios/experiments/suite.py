@@ -153,7 +153,7 @@ def _toml(name: str, desc: str, map_path: Path, start, goal, steps: int,
 
 
 def _builtin_toml(name: str, rewards: tuple[float, float, float], scheme: str) -> str:
-    from sim.scenario import builtin_dir
+    from sim.scenario_io import builtin_dir
 
     text = (builtin_dir() / f"{name}.toml").read_text()
     text = text.replace('map = "maps/', f'map = "{builtin_dir()}/maps/')
@@ -173,7 +173,7 @@ def _builtin_toml(name: str, rewards: tuple[float, float, float], scheme: str) -
 def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True) -> list[dict]:
     """Write the suite into ``out``; returns its entries (also in ``out/suite.json``)."""
     from sim.grid import build_model
-    from sim.scenario import load_scenario
+    from sim.scenario_io import load_scenario
 
     rewards = SCHEMES[scheme]
     out.mkdir(parents=True, exist_ok=True)

@@ -98,7 +98,7 @@ def main() -> None:
     ap.add_argument("--world", choices=("grid", "physics"), default="grid")
     a = ap.parse_args()
     from sim.grid import build_model
-    from sim.scenario import resolve_scenario
+    from sim.scenario_io import resolve_scenario
 
     sc = resolve_scenario(a.scenario)
     record_synthetic(a.out, sc, build_model(sc), episodes=a.episodes, world=a.world)

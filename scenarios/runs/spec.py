@@ -19,7 +19,8 @@ import numpy as np
 
 from sim.errors import InputError
 from sim.grid import TabularModel, build_model
-from sim.scenario import Cell, Scenario, resolve_scenario
+from sim.scenario import Cell, Scenario
+from sim.scenario_io import resolve_scenario
 
 WORLDS = ("grid", "physics")
 

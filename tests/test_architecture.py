@@ -1,0 +1,117 @@
+"""The layout is the architecture: imports run only downward and never in a cycle.
+
+Parses every module with ``ast`` (no imports executed) and checks, over *all*
+imports, lazy ones inside functions included:
+
+- ``sim`` never imports ``learning`` or ``scenarios``; ``learning`` never
+  imports ``sim`` or ``scenarios``; neither imports rerun or matplotlib;
+- inside ``scenarios`` the subpackages are ranked ``cli`` > ``bench`` >
+  ``experiments`` > ``runs`` > ``recording`` > ``figures``: a module imports its
+  own subpackage or lower ones only;
+- the module import graph has no cycle.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+PACKAGES = ("sim", "learning", "scenarios")
+SCENARIO_RANK = {"figures": 1, "recording": 2, "runs": 3, "experiments": 4, "bench": 5, "cli": 6}
+FORBIDDEN = {
+    "sim": ("learning", "scenarios", "rerun", "matplotlib"),
+    "learning": ("sim", "scenarios", "rerun", "matplotlib", "pymunk"),
+}
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(REPO).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def imports_of(path: Path, known: set[str]) -> set[str]:
+    """Modules (of this repository, or top-level names of others) that ``path`` imports."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            found.add(node.module)
+            # `from pkg import mod` imports a module when mod is one of ours
+            found.update(f"{node.module}.{a.name}" for a in node.names
+                         if f"{node.module}.{a.name}" in known)
+    return found
+
+
+def graph() -> dict[str, set[str]]:
+    files = [p for pkg in PACKAGES for p in (REPO / pkg).rglob("*.py")]
+    known = {module_name(p) for p in files}
+    return {module_name(p): imports_of(p, known) for p in files}
+
+
+def subpackage(mod: str) -> str | None:
+    parts = mod.split(".")
+    return parts[1] if parts[0] == "scenarios" and len(parts) > 2 else None
+
+
+def test_layers_never_import_upward():
+    bad = []
+    for mod, deps in graph().items():
+        top = mod.split(".")[0]
+        for dep in deps:
+            if any(dep == f or dep.startswith(f + ".") for f in FORBIDDEN.get(top, ())):
+                bad.append(f"{mod} imports {dep}")
+            sub, dep_sub = subpackage(mod), subpackage(dep)
+            if sub in SCENARIO_RANK and dep_sub in SCENARIO_RANK and \
+                    SCENARIO_RANK[dep_sub] > SCENARIO_RANK[sub]:
+                bad.append(f"{mod} ({sub}) imports {dep} ({dep_sub}), a higher layer")
+    assert bad == [], "\n".join(sorted(bad))
+
+
+def test_every_scenarios_subpackage_is_ranked():
+    subs = {p.name for p in (REPO / "scenarios").iterdir()
+            if p.is_dir() and (p / "__init__.py").is_file()}
+    assert subs - {"builtin"} == set(SCENARIO_RANK)
+
+
+def find_cycle(g: dict[str, set[str]]) -> list[str] | None:
+    """One import cycle among our own modules (as a path), or None."""
+    state: dict[str, int] = {}  # 1 on the stack, 2 done
+    stack: list[str] = []
+
+    def visit(m: str) -> list[str] | None:
+        state[m] = 1
+        stack.append(m)
+        for d in sorted(g.get(m, ())):
+            if d not in g or d == m:
+                continue
+            if state.get(d) == 1:
+                return [*stack[stack.index(d):], d]
+            if d not in state and (c := visit(d)):
+                return c
+        stack.pop()
+        state[m] = 2
+        return None
+
+    for m in sorted(g):
+        if m not in state and (c := visit(m)):
+            return c
+    return None
+
+
+def test_no_import_cycles():
+    g = graph()
+    # a package importing its own submodules (re-exports in __init__) is not a cycle
+    for mod, deps in g.items():
+        g[mod] = {d for d in deps if not (d.startswith(mod + ".") and
+                                          (REPO / Path(*mod.split("."))).is_dir())}
+    assert find_cycle(g) is None, " -> ".join(find_cycle(g) or [])
+
+
+def test_the_checker_sees_a_cycle():
+    assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert find_cycle({"a": {"b"}, "b": set()}) is None

@@ -43,6 +43,7 @@ from typing import Any, NamedTuple
 
 import pymunk
 
+from sim import sigint
 from sim.scenario import Scenario
 
 try:  # pymunk's own cffi binding of Chipmunk; see the module docstring
@@ -188,6 +189,7 @@ class PhysicsWorld:
         self._pending: list[tuple[Any, ...]] = []
         for kind in STATIC_KINDS:
             space.on_collision(CollisionType.ROBOT, kind, begin=self._on_begin, data=kind)
+        sigint.install(PhysicsWorld._on_begin)  # Ctrl-C inside a callback is not lost
         self._bind_fast()
 
     # ------------------------------------------------------------- internals
@@ -224,6 +226,7 @@ class PhysicsWorld:
             self.contacts.append(Contact(self.steps, CollisionType(kind), x, y, nx, ny, depth))
             self.contact_counts[CollisionType(kind)] += 1
         self._pending.clear()
+        sigint.raise_if_deferred()
 
     # ------------------------------------------------------------ state
     @property

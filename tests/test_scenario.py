@@ -11,7 +11,9 @@ from sim.feasibility import validate
 from sim.layouts import random_circles
 from sim.scenario import Circle, Robot, Scenario
 from sim.scenario_io import builtin_names, load_scenario, resolve_scenario
-from tests.conftest import MAPS
+from tests.conftest import MAPS, REPO
+
+REPO_BUILTIN = REPO / "scenarios" / "builtin"
 
 BASE = """\
 name = "t"
@@ -115,3 +117,37 @@ def test_robot_too_large_for_a_cell_is_a_clear_error():
                   robot=Robot(radius_m=0.5))
     with pytest.raises(ScenarioError, match="does not fit"):
         validate(sc)
+
+
+def test_reward_schemes_from_toml_and_text(tmp_path):
+    from sim.scenario import Rewards, rewards_from_text
+
+    base = (REPO_BUILTIN / "paper-40.toml").read_text()
+    for extra, expected in (("", ("paper", 100, -1, 1)),
+                            ('[rewards]\nscheme = "goal-only"\n', ("goal-only", 100, -1, 0)),
+                            ('[rewards]\nscheme = "goal-only"\nbump = -2.0\n',
+                             ("custom", 100, -2, 0)),
+                            ("[rewards]\nstep = -1.0\n", ("step-cost", 100, -1, -1))):
+        path = tmp_path / "s.toml"
+        path.write_text(base + "\n" + extra)
+        rw = load_scenario(path).rewards
+        assert (rw.scheme, rw.goal, rw.bump, rw.step) == expected
+    path.write_text(base + '\n[rewards]\nscheme = "nope"\n')
+    with pytest.raises(ScenarioError, match=r"rewards.scheme.*unknown reward scheme.*goal-only"):
+        load_scenario(path)
+    assert rewards_from_text("step-cost") == Rewards(100, -1, -1, "step-cost")
+    assert rewards_from_text("step=0") == Rewards(100, -1, 0, "goal-only")
+    assert rewards_from_text("scheme=step-cost,goal=50").scheme == "custom"
+    for bad in ("nope", "step=x", "gaol=1", "step=inf"):
+        with pytest.raises(ScenarioError, match="--rewards"):
+            rewards_from_text(bad)
+
+
+def test_rewards_reach_the_model():
+    from scenarios.runs.spec import load
+
+    _, paper = load("paper-40")
+    _, goal_only = load("paper-40", None, None, "goal-only")
+    free = (paper.reward == 1.0)
+    assert free.any() and (goal_only.reward[free] == 0.0).all()
+    assert (goal_only.reward[paper.reward == 100.0] == 100.0).all()

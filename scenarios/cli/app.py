@@ -95,6 +95,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except InputError as err:
         print(f"rnhql: error: {err}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into e.g. `head`: not an error
+        sys.stdout = open(os.devnull, "w")
+        return 0
     except Exception as err:
         from learning.checkpoint import CheckpointError
 
@@ -108,7 +111,4 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("rnhql: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:  # output piped into e.g. `head`: not an error
-        sys.stderr = open(os.devnull, "w")
-        return 0
 

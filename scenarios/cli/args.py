@@ -40,6 +40,10 @@ def add_scenario_args(p: argparse.ArgumentParser, positional: bool = True) -> No
     p.add_argument("--index", type=int, metavar="N", help="with --scen: the N-th problem (from 0)")
     p.add_argument("--bucket", type=int, metavar="B",
                    help="with --scen: the last (longest) problem of bucket B")
+    p.add_argument("--rewards", metavar="SCHEME",
+                   help="reward scheme: paper (+100 goal, -1 bump, +1 free step), goal-only "
+                        "(free step 0), step-cost (free step -1), or goal=..,bump=..,step=.. "
+                        "(default: the scenario's own)")
 
 
 def add_record_args(p: argparse.ArgumentParser) -> None:
@@ -55,9 +59,9 @@ def add_record_args(p: argparse.ArgumentParser) -> None:
 
 
 def scenario_from_args(args: argparse.Namespace):  # -> Scenario
-    from sim.scenario_io import resolve_scenario
+    from scenarios.runs.spec import load
 
-    return resolve_scenario(*scenario_key(args))
+    return load(*scenario_key(args), getattr(args, "rewards", None))[0]
 
 
 def scen_problem(args: argparse.Namespace):  # -> (map path, ScenProblem)

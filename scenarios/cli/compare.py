@@ -23,14 +23,14 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from scenarios.experiments.compare import ALL_METHODS, make_specs, run_sweep
 
     name, start, goal = scenario_key(args)
-    load(name, start, goal)  # validate the scenario before any work
+    load(name, start, goal, args.rewards)  # validate the scenario before any work
     methods = parse_list(args.methods, "--methods") if args.methods else list(ALL_METHODS)
     worlds = [check_world(w) for w in parse_list(args.world, "--world")]
     overrides = parse_overrides(args.set)
     per_method = overrides_per_method(methods, overrides)
     seeds = list(range(args.seed_base, args.seed_base + positive(args.seeds, "--seeds")))
     specs = make_specs(name, methods, seeds, positive(args.episodes, "--episodes"), worlds,
-                       per_method, start, goal)
+                       per_method, start, goal, rewards=args.rewards)
     execute, kwargs = _backend(args)
     from scenarios.runs.backends import Progress
 

@@ -19,7 +19,7 @@ def cmd_route(args: argparse.Namespace) -> int:
     from sim.planning import bfs_route
 
     name, start, goal = scenario_key(args)
-    sc, model = load(name, start, goal)
+    sc, model = load(name, start, goal, args.rewards)
     check_world(args.world)
     ckpt = load_checkpoint(args.agent, None, model.n_states)
     optimum = bfs_route(model.next_state, model.distance_to_goal, model.start)

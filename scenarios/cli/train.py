@@ -27,12 +27,12 @@ def cmd_train(args: argparse.Namespace) -> int:
     from scenarios.runs.spec import RunSpec, run_record
 
     name, start, goal = scenario_key(args)
-    sc, model = load(name, start, goal)
+    sc, model = load(name, start, goal, args.rewards)
     check_world(args.world)
     positive(args.episodes, "--episodes")
     cfg = make_config(args.method, parse_overrides(args.set))
     spec = RunSpec(name, args.method, args.seed, args.episodes, args.world, start=start,
-                   goal=goal)
+                   goal=goal, rewards=args.rewards)
     record = record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
     rng = np.random.default_rng(args.seed)
     if args.save:
@@ -40,7 +40,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     resume = None
     if args.resume and args.world == "grid":
         resume = load_checkpoint(args.resume, args.method, model.n_states)
-    print(f"{cfg.name} on {sc.name} ({args.world}), seed {args.seed}, {args.episodes} episodes")
+    print(f"{cfg.name} on {sc.name} ({args.world}), seed {args.seed}, {args.episodes} episodes, "
+          f"rewards {sc.rewards.label()}")
     recorder = plan = observer = None
     if record is not None:
         from scenarios.recording.hooks import GridRecorder, RecordPlan

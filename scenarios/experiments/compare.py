@@ -35,13 +35,15 @@ Overrides = tuple[tuple[str, float], ...]
 
 def make_specs(scenario: str, methods: Sequence[str], seeds: Sequence[int], episodes: int,
                worlds: Sequence[str], overrides: Overrides | dict[str, Overrides] = (),
-               start=None, goal=None, drive_final: bool = False) -> list[RunSpec]:
+               start=None, goal=None, drive_final: bool = False,
+               rewards: str | None = None) -> list[RunSpec]:
     """One spec per world x method x seed; ``overrides`` for all methods, or per method."""
     def of(m: str) -> Overrides:
         return overrides.get(m, ()) if isinstance(overrides, dict) else overrides
 
     return [RunSpec(scenario=scenario, method=m, seed=s, episodes=episodes, world=w,
-                    overrides=of(m), start=start, goal=goal, drive_final=drive_final)
+                    overrides=of(m), start=start, goal=goal, drive_final=drive_final,
+                    rewards=rewards)
             for w in worlds for m in methods for s in seeds]
 
 
@@ -93,7 +95,7 @@ def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False
     from scenarios.recording.comparison import gather_comparison
 
     worlds = {s.world for s in specs}
-    sc, _ = load(specs[0].scenario, specs[0].start, specs[0].goal)
+    sc, _ = load(*specs[0].problem)
     parts = [Path(s.record_path) for s in specs if s.record_path and Path(s.record_path).exists()]
     runs = [(run_label(s, worlds), s.seed) for s in specs]
     out = gather_comparison(record, parts, sc, runs, recording_id=specs[0].recording_id)
@@ -105,7 +107,7 @@ def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False
 def assemble(specs: Sequence[RunSpec], runs: list[dict[str, Any]]) -> dict[str, Any]:
     """The results.json payload for finished runs, in spec order."""
     spec0 = specs[0]
-    sc, model = load(spec0.scenario, spec0.start, spec0.goal)
+    sc, model = load(*spec0.problem)
     order = {s.key: i for i, s in enumerate(specs)}
     runs = sorted(runs, key=lambda r: order.get(r["key"], len(order)))
     worlds = sorted({s.world for s in specs}, key=["grid", "physics"].index)
@@ -171,7 +173,7 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     results = assemble(specs, [*done.values(), *new])
     write_results(out_dir, results, list(dict.fromkeys(s.method for s in specs)))
     if figures:
-        sc, model = load(specs[0].scenario, specs[0].start, specs[0].goal)
+        sc, model = load(*specs[0].problem)
         all_figures(results, sc, model, out_dir)
     (out_dir / PARTIAL).unlink(missing_ok=True)
     return results

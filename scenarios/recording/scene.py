@@ -110,7 +110,8 @@ def versions() -> dict[str, str]:
 def run_metadata(sc: Scenario, model: TabularModel, *, method: str, config: dict[str, Any],
                  seed: int, world: str) -> dict[str, Any]:
     return {**versions(), "git_commit": git_commit() or "unknown", "scenario": sc.name,
-            "scenario_source": sc.source, "method": method, "seed": seed, "world": world,
+            "scenario_source": sc.source, "rewards": sc.rewards.label(), "method": method,
+            "seed": seed, "world": world,
             "optimal_route_moves": model.optimal_route_length,
             "started_utc": datetime.now(UTC).isoformat(timespec="seconds"),
             "config": config}
@@ -120,7 +121,8 @@ def meta_markdown(meta: dict[str, Any], sc: Scenario, prefix: str) -> str:
     rows = "\n".join(f"| {k} | `{v}` |" for k, v in meta.items() if k != "config")
     cfg = json.dumps(meta["config"], indent=2, sort_keys=True, default=str)
     p = path(prefix, "")
-    title = f"{meta['method']} on {sc.name} (seed {meta['seed']}, {meta['world']} world)"
+    title = (f"{meta['method']} on {sc.name} (seed {meta['seed']}, {meta['world']} world, "
+             f"rewards {sc.rewards.scheme})")
     return f"""# rnhql run: {title}
 
 {sc.description}

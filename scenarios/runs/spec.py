@@ -19,7 +19,7 @@ import numpy as np
 
 from sim.errors import InputError
 from sim.grid import TabularModel, build_model
-from sim.scenario import Cell, Scenario
+from sim.scenario import Cell, Scenario, rewards_from_text
 from sim.scenario_io import resolve_scenario
 
 WORLDS = ("grid", "physics")
@@ -42,6 +42,8 @@ class RunSpec:
     start: Cell | None = None  # for a .map (Moving AI frame)
     goal: Cell | None = None
     test_every: int = 10  # greedy test from S every N episodes
+    rewards: str | None = None  # --rewards: a scheme name or goal=..,bump=..,step=.. (None: the
+    #                             scenario's own)
     drive_final: bool = False  # grid runs: also drive the final greedy policy in physics
     # recording (not part of the key: a recorded run equals an unrecorded one)
     record_path: str | None = None  # .rrd to write; None = no recording
@@ -50,6 +52,11 @@ class RunSpec:
     record_detail: bool = True  # False: curves only (comparisons, beyond the first seeds)
     record_prefix: str = ""  # entity subtree (comparisons: runs/<label>/s<seed>)
     recording_id: str | None = None  # shared by the parts of one comparison
+
+    @property
+    def problem(self) -> tuple[str, Cell | None, Cell | None, str | None]:
+        """What :func:`load` needs: (scenario, start, goal, rewards)."""
+        return self.scenario, self.start, self.goal, self.rewards
 
     @property
     def key(self) -> str:
@@ -63,26 +70,30 @@ class RunSpec:
         extra = "".join(f",{k}={v:g}" for k, v in self.overrides)
         cells = "".join(f"|{n}={c[0]},{c[1]}" for n, c in (("S", self.start), ("G", self.goal))
                         if c is not None)
-        return (f"{self.scenario}#{scenario_digest(self.scenario, self.start, self.goal)}"
+        return (f"{self.scenario}#{scenario_digest(*self.problem)}"
                 f"{cells}|{self.world}|{self.method}{extra}|t{self.test_every}"
                 f"|s{self.seed}|e{self.episodes}")
 
 
 @lru_cache(maxsize=8)
-def load(scenario: str, start: Cell | None = None,
-         goal: Cell | None = None) -> tuple[Scenario, TabularModel]:
+def load(scenario: str, start: Cell | None = None, goal: Cell | None = None,
+         rewards: str | None = None) -> tuple[Scenario, TabularModel]:
+    """The scenario (with ``rewards`` replacing its own scheme, if given) and its grid model."""
     sc = resolve_scenario(scenario, start, goal)
+    if rewards is not None:
+        sc = dataclasses.replace(sc, rewards=rewards_from_text(rewards))
     return sc, build_model(sc)
 
 
 @lru_cache(maxsize=64)
-def scenario_digest(scenario: str, start: Cell | None = None, goal: Cell | None = None) -> str:
+def scenario_digest(scenario: str, start: Cell | None = None, goal: Cell | None = None,
+                    rewards: str | None = None) -> str:
     """12 hex digits of a hash of what the scenario *is*: its resolved content (geometry,
     robot, rewards, episode length, S, G), not the file it came from."""
     import hashlib
     import json
 
-    sc, _ = load(scenario, start, goal)
+    sc, _ = load(scenario, start, goal, rewards)
     fields = {k: v for k, v in dataclasses.asdict(sc).items()
               if k not in ("name", "source", "description")}
     blob = json.dumps(fields, sort_keys=True, default=repr).encode()
@@ -174,7 +185,7 @@ def _median_route(lengths: np.ndarray) -> float | None:
 
 def run_one(spec: RunSpec) -> dict[str, Any]:
     """Train one run in this process and return its results.json record."""
-    sc, model = load(spec.scenario, spec.start, spec.goal)
+    sc, model = load(*spec.problem)
     cfg = make_config(spec.method, spec.overrides)
     if spec.world not in WORLDS:
         raise ExperimentError("command line", "--world", f"unknown world {spec.world!r}",

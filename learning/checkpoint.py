@@ -46,10 +46,11 @@ class Checkpoint:
 
     config: MethodConfig
     state: AgentState
-    rng_state: dict  # numpy bit_generator.state after the last episode
+    rng_state: dict  # numpy bit_generator.state after the last episode (the learner's stream)
     env_steps: int = 0
     metrics: dict[str, np.ndarray] = field(default_factory=dict)  # METRIC_FIELDS so far
     path: str = "<memory>"  # where it was loaded from, for messages
+    start_rng_state: dict | None = None  # the start cells' stream, when it has its own
 
     @property
     def method(self) -> str:
@@ -60,13 +61,15 @@ class Checkpoint:
         return int(self.state.ivar[K.I_EPISODE])
 
     @classmethod
-    def of_result(cls, result, rng: np.random.Generator) -> Checkpoint:
-        """From a :class:`learning.train.TrainResult` and the generator that trained it."""
+    def of_result(cls, result, rng: np.random.Generator,
+                  start_rng: np.random.Generator | None = None) -> Checkpoint:
+        """From a :class:`learning.train.TrainResult` and the generators that trained it."""
         metrics = dict(result.episode_arrays())
         metrics["test_episodes"] = result.test_episodes
         metrics["test_route_length"] = result.test_route_length
         return cls(result.config, result.state, rng.bit_generator.state, result.env_steps,
-                   metrics)
+                   metrics, start_rng_state=(None if start_rng is None
+                                             else start_rng.bit_generator.state))
 
     @classmethod
     def of_agent(cls, agent) -> Checkpoint:
@@ -100,6 +103,8 @@ def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
     payload["method"] = np.array(ckpt.method)
     payload["config"] = np.array(json.dumps(ckpt.config.fields()))
     payload["rng_state"] = np.array(json.dumps(ckpt.rng_state))
+    if ckpt.start_rng_state is not None:
+        payload["start_rng_state"] = np.array(json.dumps(ckpt.start_rng_state))
     payload["env_steps"] = np.array(ckpt.env_steps, dtype=np.int64)
     payload["n_states"] = np.array(ckpt.state.feat.shape[0], dtype=np.int64)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
@@ -122,9 +127,11 @@ def _field(data, name: str, path: Path) -> np.ndarray:
                               "rnhql checkpoint, delete it and train again")
     try:
         return data[name]
-    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
-        raise CheckpointError(f"{path}: field {name!r} is unreadable ({exc}); the file is "
-                              "corrupt, delete it and train again") from None
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile):  # numpy's text would suggest
+        # loading pickled data unsafely: advice a user must never take for a checkpoint
+        raise CheckpointError(f"{path}: field {name!r} is unreadable: not an rnhql checkpoint "
+                              "(corrupt, or an .npz from elsewhere); train again with "
+                              "--save") from None
 
 
 def _slot(data, name: str, path: Path) -> np.ndarray:
@@ -154,6 +161,8 @@ def _read(data, path: Path, method: str | None):
     try:
         cfg = config_from_fields(name, json.loads(str(_field(data, "config", path))))
         rng_state = json.loads(str(_field(data, "rng_state", path)))
+        start_rng_state = (json.loads(str(_field(data, "start_rng_state", path)))
+                           if "start_rng_state" in data.files else None)
     except (ValueError, TypeError) as exc:
         raise CheckpointError(f"{path}: field 'config' or 'rng_state' is invalid ({exc}); "
                               "the file is corrupt, delete it and train again") from None
@@ -161,7 +170,7 @@ def _read(data, path: Path, method: str | None):
     metrics = {k: _field(data, f"metric_{k}", path).copy() for k in METRIC_FIELDS
                if f"metric_{k}" in data.files}
     env_steps = int(_field(data, "env_steps", path))
-    return cfg, state, rng_state, env_steps, metrics
+    return cfg, state, rng_state, env_steps, metrics, start_rng_state
 
 
 def load_checkpoint(path: str | os.PathLike, method: str | None = None,
@@ -178,15 +187,16 @@ def load_checkpoint(path: str | os.PathLike, method: str | None = None,
     with fh:
         try:
             data = np.load(fh, allow_pickle=False)
-        except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
-            raise CheckpointError(f"{path}: not a readable .npz ({exc}); the file is corrupt, "
-                                  "delete it and train again") from None
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile):
+            raise CheckpointError(f"{path}: is not an rnhql checkpoint (not a readable .npz "
+                                  "of plain arrays); the file is corrupt or from elsewhere: "
+                                  "check the path, or train again with --save") from None
         if not hasattr(data, "files"):
             raise CheckpointError(f"{path}: holds a single array, not an rnhql checkpoint "
                                   "(.npz); check the path")
         with data:
-            cfg, state, rng_state, env_steps, metrics = _read(data, path, method)
-    ckpt = Checkpoint(cfg, state, rng_state, env_steps, metrics, str(path))
+            cfg, state, rng_state, env_steps, metrics, start_state = _read(data, path, method)
+    ckpt = Checkpoint(cfg, state, rng_state, env_steps, metrics, str(path), start_state)
     if int(state.ivar[K.I_KIND]) != cfg.kind:
         raise CheckpointError(f"{path}: field 'state_ivar' says rule family "
                               f"{int(state.ivar[K.I_KIND])}, not {cfg.cli}'s; the file is corrupt, "

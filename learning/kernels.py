@@ -24,14 +24,14 @@ from learning.state import AgentState
 
 
 @njit(cache=True, inline="always")
-def _episodes(kind, st, mdp, max_steps, n_episodes, rng, out, trace):
+def _episodes(kind, st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
     ivar, fvar, par, q, w, e, feat, imap, fmap, ilist = st
     tracing = trace.shape[0] > 0
     next_state, reward, terminal, start_states = mdp
     out_steps, out_return, out_success, out_fmean, out_fstd = out
     total = 0
     for i in range(n_episodes):
-        s = draw_start(rng, start_states)
+        s = draw_start(start_rng, start_states)
         if tracing:
             trace[i, 0] = s
         begin_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
@@ -67,48 +67,48 @@ def _episodes(kind, st, mdp, max_steps, n_episodes, rng, out, trace):
 # Family ids are imported names, not ``K.QL``: numba types a global int as a literal
 # (which learning.dispatch needs to pick the family), a module attribute as int64.
 @njit(cache=True, nogil=True)
-def _episodes_ql(st, mdp, max_steps, n_episodes, rng, out, trace):
-    return _episodes(QL, st, mdp, max_steps, n_episodes, rng, out, trace)
+def _episodes_ql(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
+    return _episodes(QL, st, mdp, max_steps, n_episodes, rng, start_rng, out, trace)
 
 
 @njit(cache=True, nogil=True)
-def _episodes_rnql(st, mdp, max_steps, n_episodes, rng, out, trace):
-    return _episodes(RNQL, st, mdp, max_steps, n_episodes, rng, out, trace)
+def _episodes_rnql(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
+    return _episodes(RNQL, st, mdp, max_steps, n_episodes, rng, start_rng, out, trace)
 
 
 @njit(cache=True, nogil=True)
-def _episodes_pfh(st, mdp, max_steps, n_episodes, rng, out, trace):
-    return _episodes(PFH, st, mdp, max_steps, n_episodes, rng, out, trace)
+def _episodes_pfh(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
+    return _episodes(PFH, st, mdp, max_steps, n_episodes, rng, start_rng, out, trace)
 
 
 @njit(cache=True, nogil=True)
-def _episodes_sarsars(st, mdp, max_steps, n_episodes, rng, out, trace):
-    return _episodes(SARSARS, st, mdp, max_steps, n_episodes, rng, out, trace)
+def _episodes_sarsars(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
+    return _episodes(SARSARS, st, mdp, max_steps, n_episodes, rng, start_rng, out, trace)
 
 
 @njit(cache=True, nogil=True)
-def _episodes_haql(st, mdp, max_steps, n_episodes, rng, out, trace):
-    return _episodes(HAQL, st, mdp, max_steps, n_episodes, rng, out, trace)
+def _episodes_haql(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
+    return _episodes(HAQL, st, mdp, max_steps, n_episodes, rng, start_rng, out, trace)
 
 
 @njit(cache=True, nogil=True)
-def _episodes_rnhql(st, mdp, max_steps, n_episodes, rng, out, trace):
-    return _episodes(RNHQL, st, mdp, max_steps, n_episodes, rng, out, trace)
+def _episodes_rnhql(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
+    return _episodes(RNHQL, st, mdp, max_steps, n_episodes, rng, start_rng, out, trace)
 
 
 @njit(cache=True, nogil=True)
-def _episodes_qlambda(st, mdp, max_steps, n_episodes, rng, out, trace):
-    return _episodes(QLAMBDA, st, mdp, max_steps, n_episodes, rng, out, trace)
+def _episodes_qlambda(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
+    return _episodes(QLAMBDA, st, mdp, max_steps, n_episodes, rng, start_rng, out, trace)
 
 
 @njit(cache=True, nogil=True)
-def _episodes_dyna(st, mdp, max_steps, n_episodes, rng, out, trace):
-    return _episodes(DYNA, st, mdp, max_steps, n_episodes, rng, out, trace)
+def _episodes_dyna(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
+    return _episodes(DYNA, st, mdp, max_steps, n_episodes, rng, start_rng, out, trace)
 
 
 @njit(cache=True, nogil=True)
-def _episodes_rnhqlp(st, mdp, max_steps, n_episodes, rng, out, trace):
-    return _episodes(RNHQLP, st, mdp, max_steps, n_episodes, rng, out, trace)
+def _episodes_rnhqlp(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
+    return _episodes(RNHQLP, st, mdp, max_steps, n_episodes, rng, start_rng, out, trace)
 
 
 EPISODE_LOOPS = {K.QL: _episodes_ql, K.RNQL: _episodes_rnql, K.PFH: _episodes_pfh,
@@ -121,14 +121,20 @@ NO_TRACE = np.zeros((0, 0), dtype=np.int32)
 
 
 def run_episodes(st: AgentState, model, n_episodes: int, rng: np.random.Generator,
-                 out: tuple[np.ndarray, ...], trace: np.ndarray = NO_TRACE) -> int:
+                 out: tuple[np.ndarray, ...], trace: np.ndarray = NO_TRACE,
+                 start_rng: np.random.Generator | None = None) -> int:
     """Train ``n_episodes`` episodes in place on the tabular ``model``; returns env steps.
 
     ``out`` = (steps int32, return float64, success bool, shaping mean, shaping
     std), each with >= n_episodes entries; episode i writes index i. An episode
-    starts at ``draw_start(rng, model.start_states)`` and ends on entering a
-    terminal state or after ``model.max_steps`` steps (a truncation: the last
+    starts at ``draw_start(start_rng, model.start_states)`` and ends on entering
+    a terminal state or after ``model.max_steps`` steps (a truncation: the last
     update still bootstraps). Returns count env rewards only, never shaping.
+
+    ``rng`` is the learner's stream (exploration, ties, planning); ``start_rng``
+    the start cells' stream (default: ``rng`` itself). With a start stream of
+    its own, every method trained with one seed sees the same start sequence
+    (common random numbers), whatever it draws for exploration.
 
     ``trace`` (int32[n_episodes, max_steps + 1], optional) receives each
     episode's states: ``trace[i, k]`` is the state after k moves. It costs one
@@ -136,7 +142,8 @@ def run_episodes(st: AgentState, model, n_episodes: int, rng: np.random.Generato
     """
     loop = EPISODE_LOOPS[int(st.ivar[K.I_KIND])]
     mdp = (model.next_state, model.reward, model.terminal, model.start_states)
-    return int(loop(st, mdp, int(model.max_steps), int(n_episodes), rng, out, trace))
+    return int(loop(st, mdp, int(model.max_steps), int(n_episodes), rng,
+                    rng if start_rng is None else start_rng, out, trace))
 
 
 @njit(cache=True)

@@ -114,7 +114,8 @@ def shortest_fraction(st: AgentState, model: TabularMDP) -> float:
 
 
 def _resume(ck: Checkpoint, cfg: MethodConfig, model: TabularMDP, n_episodes: int,
-            rng: np.random.Generator, arrays: dict[str, np.ndarray]) -> tuple[AgentState, int, int]:
+            rng: np.random.Generator, arrays: dict[str, np.ndarray],
+            start_rng: np.random.Generator | None = None) -> tuple[AgentState, int, int]:
     """Check ``ck`` fits this run, restore ``rng`` and the metrics so far; a copy of its state."""
     ck.check_compatible(cfg, model.next_state.shape[0])
     done = ck.episodes
@@ -127,6 +128,13 @@ def _resume(ck: Checkpoint, cfg: MethodConfig, model: TabularMDP, n_episodes: in
         raise CheckpointError(f"{ck.path}: field 'rng_state' does not fit this run's "
                               f"{type(rng.bit_generator).__name__} generator ({exc}); "
                               "resume with numpy.random.default_rng") from None
+    if (start_rng is None) != (ck.start_rng_state is None):
+        raise CheckpointError(f"{ck.path}: field 'start_rng_state' is "
+                              f"{'missing' if ck.start_rng_state is None else 'present'} but "
+                              f"this run {'has' if start_rng is not None else 'has no'} start "
+                              "stream of its own; resume with the command that saved it")
+    if start_rng is not None:
+        start_rng.bit_generator.state = ck.start_rng_state
     for f in EPISODE_FIELDS:  # an agent's checkpoint has no metrics: those stay 0
         if f in ck.metrics:
             if ck.metrics[f].shape[0] < done:
@@ -151,11 +159,13 @@ class TrainObserver(Protocol):
 
 def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np.random.Generator,
                   test_every: int = 10, resume: Checkpoint | None = None,
-                  observer: TrainObserver | None = None) -> TrainResult:
+                  observer: TrainObserver | None = None,
+                  start_rng: np.random.Generator | None = None) -> TrainResult:
     """Train ``cfg`` on ``model`` for ``n_episodes`` episodes in all.
 
-    ``rng`` is the only source of randomness (RN-QL's initial weights, episode
-    starts, exploration, ties, planning). ``resume`` (a
+    ``rng`` is the learner's source of randomness (RN-QL's initial weights,
+    exploration, ties, planning); episode starts come from ``start_rng`` when
+    given (common random numbers: see :mod:`learning.streams`), else from ``rng``. ``resume`` (a
     :class:`learning.checkpoint.Checkpoint`) continues a run: its agent state,
     metrics and generator state are restored (``rng`` is set to the saved
     state), and training goes on from ``resume.episodes`` to ``n_episodes``,
@@ -171,7 +181,7 @@ def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np
     if resume is None:
         st, done, env_steps = init_state(cfg, geometry_of(model), rng), 0, 0
     else:
-        st, done, env_steps = _resume(resume, cfg, model, n_episodes, rng, arrays)
+        st, done, env_steps = _resume(resume, cfg, model, n_episodes, rng, arrays, start_rng)
         tests_e = [int(x) for x in resume.metrics.get("test_episodes", ())]
         tests_l = [int(x) for x in resume.metrics.get("test_route_length", ())]
     # compile (or load from the JIT cache) before the clock starts: 0 episodes draw nothing
@@ -183,7 +193,7 @@ def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np
         if observer is not None and observer.trace_chunk(done, n):
             trace = np.full((n, int(model.max_steps) + 1), -1, dtype=np.int32)
         t0 = time.perf_counter()
-        env_steps += run_episodes(st, model, n, rng, out, trace)
+        env_steps += run_episodes(st, model, n, rng, out, trace, start_rng)
         arrays["wall_time_s"][done:done + n] = (time.perf_counter() - t0) / n
         done += n
         test = greedy_test(st, model)

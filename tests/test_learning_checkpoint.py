@@ -73,8 +73,18 @@ def saved(tmp_path, paper50_model):
 def test_corrupt_file(tmp_path):
     bad = tmp_path / "bad.npz"
     bad.write_bytes(b"not a zip at all")
-    with pytest.raises(CheckpointError, match=r"bad\.npz.*corrupt.*delete it"):
+    with pytest.raises(CheckpointError, match=r"bad\.npz.*not an rnhql checkpoint"):
         load_checkpoint(bad)
+
+
+def test_a_foreign_npz_with_pickled_data_never_suggests_loading_it_unsafely(tmp_path):
+    foreign = tmp_path / "foreign.npz"
+    np.savez(foreign, format=np.array({"a": 1}, dtype=object), method=np.array("rnh-ql"))
+    with pytest.raises(CheckpointError) as info:
+        load_checkpoint(foreign)
+    msg = str(info.value).replace(str(foreign), "FILE")
+    assert msg.startswith("FILE:") and "not an rnhql checkpoint" in msg
+    assert "unsafe" not in msg and "pickle" not in msg
 
 
 def test_truncated_file(tmp_path, saved):

@@ -7,8 +7,7 @@ import argparse
 import json
 from pathlib import Path
 
-import numpy as np
-
+from learning.streams import streams
 from scenarios.cli.args import (
     check_world,
     check_writable,
@@ -34,7 +33,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     spec = RunSpec(name, args.method, args.seed, args.episodes, args.world, start=start,
                    goal=goal, rewards=args.rewards)
     record = record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
-    rng = np.random.default_rng(args.seed)
+    rs = streams(args.seed)  # the same streams as a run of `rnhql compare`
+    rng = rs.learner
     if args.save:
         check_writable(Path(args.save), "--save")
     resume = None
@@ -58,9 +58,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     try:
         if args.world == "grid":
             result = train_tabular(cfg, model, args.episodes, rng, resume=resume,
-                                   observer=observer)
+                                   observer=observer, start_rng=rs.starts)
             if args.save:
-                save_checkpoint(args.save, Checkpoint.of_result(result, rng))
+                save_checkpoint(args.save, Checkpoint.of_result(result, rng, rs.starts))
         else:
             if args.resume:
                 raise ExperimentError("command line", "--resume", "is only supported for grid "
@@ -68,7 +68,7 @@ def cmd_train(args: argparse.Namespace) -> int:
             from scenarios.runs.physics import train_physics
 
             result = train_physics(cfg, sc, model, args.episodes, rng, recorder=recorder,
-                                   plan=plan)
+                                   plan=plan, start_rng=rs.starts)
             if args.save:
                 save_checkpoint(args.save, Checkpoint.of_agent(result.agent))
         if recorder is not None:

@@ -127,8 +127,14 @@ class PhysicsTrainResult:
 
 def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
                   rng: np.random.Generator, test_every: int = 10,
-                  recorder: Any = None, plan: Any = None) -> PhysicsTrainResult:
-    """Train the step agent in PhysicsRoute-v0; optionally record (see recorded_runs)."""
+                  recorder: Any = None, plan: Any = None,
+                  start_rng: np.random.Generator | None = None) -> PhysicsTrainResult:
+    """Train the step agent in PhysicsRoute-v0; optionally record (see recorded_runs).
+
+    ``rng`` is the learner's stream, ``start_rng`` the start cells' (default ``rng``):
+    with :func:`learning.streams.streams` a grid run and a physics run of one seed
+    start their episodes in the same cells.
+    """
     from scenarios.recording.hooks import ChunkLogger, EpisodeTap
 
     counter = ContactCounter(gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
@@ -147,7 +153,7 @@ def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
             j = i + 1 if marks[i] else next((k for k in range(i, n) if marks[k]), n)
             env.armed = marks[i]
             t0 = time.perf_counter()
-            logs.append(run_env_episodes(agent, env, j - i))
+            logs.append(run_env_episodes(agent, env, j - i, start_rng))
             walls.append(np.full(j - i, (time.perf_counter() - t0) / (j - i)))
             if marks[i] and recorder is not None:
                 env.log_to(recorder, done + i)

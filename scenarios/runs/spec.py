@@ -211,12 +211,19 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
 
 def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder: Any = None,
            plan: Any = None) -> Any:
-    rng = np.random.default_rng(spec.seed)
+    from learning.streams import streams
+    from learning.train import epsilon_route_lengths
+
+    rs = streams(spec.seed)  # starts, learner, evaluation: independent (common random numbers)
+    rng = rs.learner
     if spec.world == "physics":
         from scenarios.runs.physics import train_physics
 
-        return train_physics(cfg, sc, model, spec.episodes, rng, test_every=spec.test_every,
-                             recorder=recorder, plan=plan)
+        result = train_physics(cfg, sc, model, spec.episodes, rng, test_every=spec.test_every,
+                               recorder=recorder, plan=plan, start_rng=rs.starts)
+        result.epsilon_route_lengths = epsilon_route_lengths(result.agent.state, model,
+                                                             cfg.eps, rs.evaluation)
+        return result
     from learning.train import train_tabular
 
     observer = None
@@ -225,13 +232,10 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
 
         observer = GridRecorder(recorder, plan)
     result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every,
-                           observer=observer)
-    from learning.train import epsilon_route_lengths
-
-    # the paper's test, on its own stream (spawned child 2 of the seed) so it never
-    # changes the training run
-    eval_rng = np.random.default_rng(np.random.SeedSequence(spec.seed).spawn(3)[2])
-    result.epsilon_route_lengths = epsilon_route_lengths(result.state, model, cfg.eps, eval_rng)
+                           observer=observer, start_rng=rs.starts)
+    # the paper's test, on its own stream so it never changes the training run
+    result.epsilon_route_lengths = epsilon_route_lengths(result.state, model, cfg.eps,
+                                                         rs.evaluation)
     if spec.drive_final:
         from learning.agent import StepAgent
         from learning.geometry import geometry_of

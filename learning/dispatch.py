@@ -37,7 +37,7 @@ from learning.rules_plus import begin_plus, exploit_plus, update_plus
 _ACT = {K.SARSARS: S.act_sarsars, K.HAQL: S.act_haql, K.RNQL: S.act_rnql}
 _EXPLOIT = {K.HAQL: S.exploit_haql, K.RNQL: S.exploit_rnql}
 _EXPLOIT[K.RNHQLP] = exploit_plus
-_UPDATE = {K.QL: S.update_ql, K.HAQL: S.update_ql, K.PFH: S.update_pfh,
+_UPDATE = {K.QL: S.update_ql, K.HAQL: S.update_haql, K.PFH: S.update_pfh,
            K.RNHQL: S.update_rnhql, K.SARSARS: S.update_sarsars, K.QLAMBDA: S.update_qlambda,
            K.DYNA: S.update_dyna, K.RNQL: S.update_rnql}
 _UPDATE[K.RNHQLP] = update_plus
@@ -82,8 +82,11 @@ def exploit_action(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
 def update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
            truncated, rng):
     """Learn from (s, a, r, s'). ``truncated`` steps bootstrap like any non-terminal step."""
-    if kind == K.QL or kind == K.HAQL:
+    if kind == K.QL:
         S.update_ql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated, rng)
+    elif kind == K.HAQL:
+        S.update_haql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+                      rng)
     elif kind == K.RNHQL:
         S.update_rnhql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
                        rng)

@@ -24,7 +24,7 @@ P_Q0 = 4  # QL: initial Q
 P_TRACE_MIN = 4  # QLAMBDA: drop traces below this
 P_QSCALE = 4  # RNQL: Q = q_scale * net
 P_OMEGA, P_ALPHA_V = 4, 5  # SARSARS
-P_XI, P_BETA_H, P_ETA = 4, 5, 6  # HAQL
+P_XI, P_BETA_H, P_ETA, P_EXPLORED = 4, 5, 6, 7  # HAQL
 P_NPLAN = 4  # DYNA
 P_BETA, P_WARMUP, P_FREEZE = 4, 5, 6  # RNHQL (P_FREEZE = inf: never)
 N_PARAMS = 8

@@ -179,9 +179,17 @@ class SarsaRS(MethodConfig):
 class HAQL(MethodConfig):
     """Heuristically accelerated Q-learning (Bianchi 2008): act on argmax[Q + xi * H^beta].
 
-    H(s,a) = max_b Q(s,b) - Q(s,a) + eta for the heuristic move a = pi_H(s) (the
-    move that most reduces the Manhattan distance to G), else 0. With xi = beta
-    = 1 the heuristic move always wins the argmax; Q is learned off-policy.
+    H(s,a) = max_b Q(s,b) - Q(s,a) + eta for the heuristic move a = pi_H(s), else
+    0; Q is learned off-policy. With xi = beta = 1 the heuristic move always wins
+    the argmax, so what pi_H is decides everything:
+
+    - ``explored = 1`` (default): pi_H is a heuristic from exploration
+      (:mod:`learning.explored`): the first move of a shortest route to G over the
+      moves not yet seen to fail, re-derived at every new bump. The route follows
+      what the agent has learned about the walls.
+    - ``explored = 0``: Bianchi's static heuristic, the move that most reduces
+      the Manhattan distance to G. It never changes, so the route is fixed before
+      learning starts (kept to show exactly that).
     """
 
     name: ClassVar[str] = "HAQL"
@@ -190,9 +198,10 @@ class HAQL(MethodConfig):
     xi: float = 1.0  # heuristic weight xi
     beta_h: float = 1.0  # heuristic exponent beta
     eta: float = 0.1  # margin of the heuristic move over the current max [reward units]
+    explored: int = 1  # 1: heuristic from exploration; 0: the static Manhattan move
 
     def extra(self) -> tuple[float, ...]:
-        return (self.xi, self.beta_h, self.eta)
+        return (self.xi, self.beta_h, self.eta, float(self.explored))
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ q           Q-table [nS, nA]    [0, nA] (unused)       Q-table [nS, nA]
 w           RBF weights [K]     net weights [4(4H+1)]  SARSA-RS: abstract V [n_z]
 e           RBF traces [K]      net traces             --
 feat        phi [nS, K]         inputs in [0,1]^2      PFH-RL: Phi [nS, 1]
-imap        --                  --                     HAQL pi_H, SARSA-RS z [nS, 1];
+imap        --                  --                     HAQL pi_H, bumps [nS, 9]; SARSA-RS z [nS, 1];
                                                        Dyna-Q model s', done [nS, 2nA]
 fmap        --                  scratch row [1, nA]    Dyna-Q model reward [nS, nA];
                                                        Q(lambda): Q traces [nS, nA]
@@ -87,7 +87,11 @@ def init_state(cfg: MethodConfig, geom: Geometry, rng: np.random.Generator) -> A
         imap, n_z = shaping.abstract_states(geom, cfg.block)
         w = _f(n_z)
     elif kind == K.HAQL:
-        imap = shaping.heuristic_actions(geom)
+        from learning.explored import init_explored
+
+        imap, ilist = init_explored(geom, bool(cfg.explored))
+        if not cfg.explored:
+            imap[:, 0] = shaping.heuristic_actions(geom)[:, 0]
     elif kind == K.DYNA:
         imap = np.full((n_s, 2 * n_a), -1, dtype=np.int32)
         imap[:, n_a:] = 0

@@ -11,6 +11,7 @@ from __future__ import annotations
 from numba import njit
 
 from learning import kinds as K
+from learning.explored import observe
 from learning.mlp import net_row, q_lambda_net
 from learning.rbf import td_lambda, value
 from learning.rules import (
@@ -88,6 +89,14 @@ def exploit_rnql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
 @njit(**INLINE)
 def update_ql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated, rng):
     q_learning(q, s, a, r, s2, terminated, par[K.P_ALPHA], par[K.P_GAMMA], 0.0)
+
+
+@njit(**INLINE)
+def update_haql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+                rng):
+    """Q-learning, and the heuristic from exploration learns from a bump (learning.explored)."""
+    q_learning(q, s, a, r, s2, terminated, par[K.P_ALPHA], par[K.P_GAMMA], 0.0)
+    observe(imap, ilist, s, a, s2, terminated, par[K.P_EXPLORED] != 0.0)
 
 
 @njit(**INLINE)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 
 from learning import METHODS, RNHQL, STQL, config_from_fields
@@ -72,3 +73,28 @@ def test_rnh_ql_plus_defaults_packing_and_validation():
     for bad in (dict(v_target=3), dict(leak_free=2), dict(sigma=0.0), dict(lam_q=1.5)):
         with pytest.raises(ValueError, match=f"RNHQLPlus.{next(iter(bad))}"):
             RNHQLPlus(**bad)
+
+
+def test_haql_route_follows_what_it_learned_about_the_walls():
+    """HAQL's heuristic from exploration: before training its greedy route runs into the
+    first wall of zigzag-50 (G not reached); after training it is the optimal 212-move
+    route. The static Manhattan heuristic never changes, so its route never reaches G."""
+    from learning.geometry import geometry_of
+    from learning.methods import HAQL
+    from learning.state import init_state
+    from learning.streams import streams
+    from learning.train import greedy_test, train_tabular
+    from scenarios.runs.spec import load
+
+    _, model = load("zigzag-50", None, None, "goal-only")
+    fresh = init_state(HAQL(), geometry_of(model), np.random.default_rng(0))
+    assert greedy_test(fresh, model)[0] == -1
+    rs = streams(0)
+    learned = train_tabular(HAQL(), model, 300, rs.learner, start_rng=rs.starts)
+    assert learned.final_route_length == model.optimal_route_length == 212
+    assert int(learned.state.imap[:, 1:5].sum()) > 0  # it has seen walls
+    rs = streams(0)
+    static = train_tabular(HAQL(explored=0), model, 300, rs.learner, start_rng=rs.starts)
+    assert static.final_route_length == -1
+    untrained_static = init_state(HAQL(explored=0), geometry_of(model), np.random.default_rng(0))
+    np.testing.assert_array_equal(static.state.imap[:, 0], untrained_static.imap[:, 0])

@@ -221,7 +221,7 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
 
         result = train_physics(cfg, sc, model, spec.episodes, rng, test_every=spec.test_every,
                                recorder=recorder, plan=plan, start_rng=rs.starts)
-        result.epsilon_route_lengths = epsilon_route_lengths(result.agent.state, model,
+        result.epsilon_route_lengths = epsilon_route_lengths(result.agent.state, result.graded,
                                                              cfg.eps, rs.evaluation)
         return result
     from learning.train import train_tabular

@@ -1,0 +1,169 @@
+"""The physics world's own tabular model: which cell each primitive really reaches.
+
+The grid model blocks a cell when the robot's disc plus a 5 cm clearance would
+touch an obstacle; the real disc in Pymunk has no clearance, so it can enter
+some cells the grid blocks, and its optimum can be shorter than the grid's BFS
+route. Grading a physics-learned policy on the grid model would call a route
+through such a cell "G not reached". So a physics run is graded on this model:
+from S outward (breadth first over the cells the robot actually reaches), every
+action is driven as a primitive from rest at the cell centre in a fresh world
+(the env's reset), and the cell the discretiser reports is the next state; a
+contact is a bump (the robot stays). The arrays have the grid model's shapes and
+meaning (:class:`sim.grid.TabularModel`), so greedy tests and BFS distances work
+on it unchanged. Cells never reached from S keep "stay" for every action.
+
+Building it drives 4 primitives per reachable cell (paper-50: ~10k primitives,
+a few seconds), so it is cached in-process and on disk
+(``$XDG_CACHE_HOME/rnhql/physics-graph/<digest>.npz``, written atomically; a
+file that does not load is rebuilt, never trusted). ``RNHQL_NO_DISK_CACHE=1``
+turns the disk cache off.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import tempfile
+from collections import deque
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import pymunk
+
+from sim.grid import TabularModel, build_model
+from sim.physics import PhysicsConfig
+from sim.planning import ACTION_DELTAS
+from sim.scenario import Scenario
+
+FORMAT = "rnhql-physics-graph-1"
+
+
+def cache_dir() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "rnhql" / "physics-graph"
+
+
+def digest(sc: Scenario, config: PhysicsConfig) -> str:
+    """What the graph depends on: the scenario's content, the physics config, pymunk."""
+    fields = {k: v for k, v in dataclasses.asdict(sc).items()
+              if k not in ("name", "source", "description", "rewards")}
+    blob = json.dumps([FORMAT, pymunk.version, fields, dataclasses.asdict(config)],
+                      sort_keys=True, default=repr)
+    return hashlib.sha256(blob.encode()).hexdigest()[:20]
+
+
+def drive_transitions(sc: Scenario, config: PhysicsConfig) -> np.ndarray:
+    """int32[nS, 4]: the state each primitive reaches from each cell reachable from S."""
+    from sim.discretiser import Discretiser
+    from sim.motion import PrimitiveController
+    from sim.physics import PhysicsWorld
+
+    model = build_model(sc)
+    disc = Discretiser.from_scenario(sc)
+    controller = PrimitiveController(sc, config)
+    cast_cache: dict = {}
+    n = model.n_states
+    nxt = np.repeat(np.arange(n, dtype=np.int32)[:, None], 4, axis=1)
+    seen = np.zeros(n, dtype=bool)
+    seen[model.start] = True
+    queue = deque([model.start])
+    while queue:
+        s = queue.popleft()
+        if s == model.goal:
+            continue
+        x, y = disc.state_centre(int(s))
+        for a in range(len(ACTION_DELTAS)):
+            # a fresh world at rest on the cell centre, as the env's reset makes it
+            world = PhysicsWorld(sc, config, (x, y, 0.0), cast_cache=cast_cache)
+            res = controller.run(world, a)
+            t = int(s) if res.bumped else int(res.state)
+            nxt[s, a] = t
+            if not seen[t]:
+                seen[t] = True
+                queue.append(t)
+    return nxt
+
+
+def _reverse_bfs(nxt: np.ndarray, goal: int) -> np.ndarray:
+    """int32[nS]: moves to ``goal`` along the (directed) transitions, -1 where none."""
+    n = nxt.shape[0]
+    preds: list[list[int]] = [[] for _ in range(n)]
+    for s, row in enumerate(nxt.tolist()):
+        for t in row:
+            if t != s:
+                preds[t].append(s)
+    dist = np.full(n, -1, dtype=np.int32)
+    dist[goal] = 0
+    queue = deque([goal])
+    while queue:
+        v = queue.popleft()
+        for u in preds[v]:
+            if dist[u] < 0:
+                dist[u] = dist[v] + 1
+                queue.append(u)
+    return dist
+
+
+def model_from_transitions(sc: Scenario, nxt: np.ndarray) -> TabularModel:
+    """The tabular model of driven transitions, with the scenario's rewards."""
+    grid = build_model(sc)
+    goal = grid.goal
+    nxt = nxt.astype(np.int32).copy()
+    nxt[goal] = goal
+    states = np.arange(nxt.shape[0])[:, None]
+    rw = sc.rewards
+    reward = np.where(nxt == states, rw.bump, rw.step).astype(np.float64)
+    reward[nxt == goal] = rw.goal
+    reward[goal] = 0.0
+    dist = _reverse_bfs(nxt, goal)
+    start_states = np.flatnonzero(dist > 0).astype(np.int32)
+    for arr in (nxt, reward, dist, start_states):
+        arr.setflags(write=False)
+    return dataclasses.replace(grid, next_state=nxt, reward=reward, distance_to_goal=dist,
+                               start_states=start_states)
+
+
+def _load(path: Path, n: int) -> np.ndarray | None:
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            if str(data["format"]) != FORMAT:
+                return None
+            nxt = data["next_state"]
+    except (OSError, ValueError, KeyError, EOFError):
+        return None
+    if nxt.shape != (n, 4) or nxt.dtype != np.int32 or nxt.min() < 0 or nxt.max() >= n:
+        return None
+    return nxt
+
+
+def _save(path: Path, nxt: np.ndarray) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, format=np.array(FORMAT), next_state=nxt)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+@lru_cache(maxsize=8)
+def physics_model(sc: Scenario, config: PhysicsConfig | None = None) -> TabularModel:
+    """The physics world's tabular model of ``sc`` (cached in-process and on disk)."""
+    config = config or PhysicsConfig()
+    n = sc.nx * sc.ny
+    use_disk = os.environ.get("RNHQL_NO_DISK_CACHE", "") in ("", "0")
+    path = cache_dir() / f"{digest(sc, config)}.npz"
+    nxt = _load(path, n) if use_disk and path.exists() else None
+    if nxt is None:
+        nxt = drive_transitions(sc, config)
+        if use_disk:
+            try:
+                _save(path, nxt)
+            except OSError:  # a read-only home: the in-process cache still works
+                pass
+    return model_from_transitions(sc, nxt)

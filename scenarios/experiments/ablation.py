@@ -35,19 +35,17 @@ VARIANTS: list[tuple[str, str, tuple[tuple[str, float], ...]]] = [
     ("+D 10 shaped planning updates (= rnh-ql+)", "rnh-ql+", ()),
     ("rnh-ql+ leak_free=1", "rnh-ql+", (("leak_free", 1),)),
     ("dyna-q", "dyna-q", ()),
+    ("dyna-q, 10 planning updates (rnh-ql+'s budget)", "dyna-q", (("n_planning", 10),)),
     ("q-lambda", "q-lambda", ()),
+    ("haql (heuristic from exploration)", "haql", ()),
 ]
 
 
 def stable_optimal(test_episodes: list[int], lengths: list[int], optimal: int) -> int | None:
-    """Episodes at the first test from which every later test is optimal; None if the last
-    test is not."""
-    if not lengths or lengths[-1] != optimal:
-        return None
-    i = len(lengths) - 1
-    while i > 0 and lengths[i - 1] == optimal:
-        i -= 1
-    return int(test_episodes[i])
+    """Episodes at the first test from which every later test is optimal (learning.metrics)."""
+    from learning.metrics import episodes_to_stable_optimal
+
+    return episodes_to_stable_optimal(np.asarray(test_episodes), np.asarray(lengths), optimal)
 
 
 def _run(job: tuple[str, str, str, str, tuple, int, int]) -> dict[str, Any]:
@@ -66,11 +64,13 @@ def _run(job: tuple[str, str, str, str, tuple, int, int]) -> dict[str, Any]:
 
 
 def quartiles(xs: list[int | None]) -> tuple[float, float, float]:
-    """(median, q25, q75) with None as +inf (``never`` sorts last); lower median style."""
-    v = np.array([math.inf if x is None else x for x in xs], dtype=float)
-    if len(v) == 0:
+    """(median, q25, q75) by the one quantile definition (scenarios.runs.results.quantile:
+    type 7, None = never = +inf sorts last)."""
+    from scenarios.runs.results import quantile
+
+    if not xs:
         return math.inf, math.inf, math.inf
-    return tuple(float(np.quantile(v, q, method="lower")) for q in (0.5, 0.25, 0.75))
+    return tuple(quantile(list(xs), q) for q in (0.5, 0.25, 0.75))
 
 
 def _fmt(x: float) -> str:

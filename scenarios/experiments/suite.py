@@ -24,7 +24,7 @@ import numpy as np
 
 SCHEMES = {"paper": (100.0, -1.0, 1.0), "goal-only": (100.0, -1.0, 0.0),
            "step-cost": (100.0, -1.0, -1.0)}
-MAPS_DIR = Path("/work/shared/data/maps")
+MAPS_DIR = Path(__file__).resolve().parent.parent / "builtin" / "maps"  # shipped copies
 BUILTIN = ("paper-40", "paper-50", "zigzag-50", "arena")
 MOVINGAI = ("room-32-32-8", "random-64-64-20", "lak307d", "ost003d")
 TUNE_SEEDS = (1, 2)

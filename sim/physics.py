@@ -37,13 +37,20 @@ about 3x the cost of the physics itself. If those internals are missing
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from enum import IntEnum
-from typing import Any, NamedTuple
+from typing import Any
 
 import pymunk
 
 from sim import sigint
+from sim.physics_static import (
+    ROBOT_CATEGORY,
+    STATIC_CATEGORY,
+    STATIC_KINDS,
+    CollisionType,
+    Contact,
+    PhysicsConfig,
+    static_shapes,
+)
 from sim.scenario import Scenario
 
 try:  # pymunk's own cffi binding of Chipmunk; see the module docstring
@@ -52,85 +59,7 @@ except ImportError:  # pragma: no cover - another pymunk layout
     _cp = None
 
 
-class CollisionType(IntEnum):
-    """Pymunk collision types of the world's shapes."""
-
-    ROBOT = 1
-    OBSTACLE = 2  # circular obstacles
-    WALL = 3  # arena walls
-    CELL = 4  # blocked map cells
-
-
 _MISSING = object()
-STATIC_KINDS = (CollisionType.OBSTACLE, CollisionType.WALL, CollisionType.CELL)
-_ROBOT_CATEGORY = 0b01
-_STATIC_CATEGORY = 0b10
-
-
-@dataclass(frozen=True)
-class PhysicsConfig:
-    """Time stepping, controller tolerances and contact parameters."""
-
-    dt_s: float = 0.1  # physics step [s]
-    substeps: int = 1  # physics steps per control period (commands change once per period)
-    iterations: int = 10  # Chipmunk solver iterations per step
-    tolerance_m: float = 0.02  # a primitive ends this close to the target cell centre [m]
-    tolerance_rad: float = math.radians(2.0)  # ... and to the action's cardinal heading [rad]
-    timeout_s: float = 5.0  # a primitive gives up after this much simulated time [s]
-    #   (checked between legs; a free primitive takes 1.3-2.2 s at the paper robot's limits)
-    contact_depth_m: float = 0.005  # deepest a step may carry the robot into a surface [m]
-    collision_slop_m: float = 0.001  # overlap Chipmunk leaves uncorrected [m]
-    # Fraction of an overlap Chipmunk leaves uncorrected after 1 s [-]. 1.0 = no positional
-    # correction: a correction is a pseudo-velocity stored in the body that pymunk cannot
-    # clear, so it would move a robot placed back on its start cell after a bump. The
-    # time-of-impact clamp bounds every overlap by contact_depth_m instead.
-    collision_bias: float = 1.0
-    traction_margin: float = 2.0  # joint force limits / what the wheel limits need [-]
-    friction: float = 0.5  # robot-to-anything Coulomb friction coefficient [-]
-
-    @property
-    def control_period_s(self) -> float:
-        """Time one command is held [s]."""
-        return self.dt_s * self.substeps
-
-    def validate(self) -> None:
-        for name in ("dt_s", "tolerance_m", "tolerance_rad", "timeout_s", "contact_depth_m",
-                     "traction_margin"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"PhysicsConfig.{name} must be a finite positive number, "
-                                 f"got {v!r}")
-        if not (0.0 <= self.collision_bias <= 1.0):
-            raise ValueError(f"PhysicsConfig.collision_bias must be in [0, 1], "
-                             f"got {self.collision_bias!r}")
-        if not (isinstance(self.substeps, int) and self.substeps >= 1):
-            raise ValueError(f"PhysicsConfig.substeps must be an int >= 1, got {self.substeps!r}")
-        if not (isinstance(self.iterations, int) and self.iterations >= 1):
-            raise ValueError(f"PhysicsConfig.iterations must be an int >= 1, "
-                             f"got {self.iterations!r}")
-
-
-class Contact(NamedTuple):
-    """A contact that began (Pymunk ``begin``) between the robot and static geometry."""
-
-    step: int  # physics step (since the world was built) in which it began
-    kind: CollisionType  # what the robot touched
-    x_m: float  # contact point on the robot's surface [m]
-    y_m: float
-    normal_x: float  # unit normal from the robot towards the other shape
-    normal_y: float
-    depth_m: float  # overlap when detected [m]
-
-
-def merged_boxes(cells: tuple[tuple[int, int], ...]) -> list[tuple[int, int, int]]:
-    """Blocked cells as horizontal runs ``(iy, ix_first, ix_last)``: fewer shapes, same area."""
-    runs: list[tuple[int, int, int]] = []
-    for iy, ix in sorted((iy, ix) for ix, iy in set(cells)):
-        if runs and runs[-1][0] == iy and runs[-1][2] == ix - 1:
-            runs[-1] = (iy, runs[-1][1], ix)
-        else:
-            runs.append((iy, ix, ix))
-    return runs
 
 
 class PhysicsWorld:
@@ -158,8 +87,8 @@ class PhysicsWorld:
         space.collision_slop = cfg.collision_slop_m
         space.collision_bias = cfg.collision_bias
         self.space = space
-        self._query_filter = pymunk.ShapeFilter(mask=_STATIC_CATEGORY)
-        space.add(*_static_shapes(sc, space.static_body))
+        self._query_filter = pymunk.ShapeFilter(mask=STATIC_CATEGORY)
+        space.add(*static_shapes(sc, space.static_body))
 
         x, y, th = pose if pose is not None else (*_centre(sc, sc.start), 0.0)
         moment = pymunk.moment_for_circle(rb.mass_kg, 0.0, rb.radius_m)
@@ -169,7 +98,7 @@ class PhysicsWorld:
         shape.collision_type = CollisionType.ROBOT
         shape.friction = cfg.friction
         shape.elasticity = 0.0
-        shape.filter = pymunk.ShapeFilter(categories=_ROBOT_CATEGORY)
+        shape.filter = pymunk.ShapeFilter(categories=ROBOT_CATEGORY)
         control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         control.position, control.angle = (x, y), th
         pivot = pymunk.PivotJoint(control, robot, (0.0, 0.0), (0.0, 0.0))
@@ -250,6 +179,11 @@ class PhysicsWorld:
         """Command the control body (the robot follows through the joints)."""
         self._fn[1](self._C, (vx_m_s, vy_m_s))
         self._fn[2](self._C, omega_rad_s)
+
+    def touching(self) -> bool:
+        """Whether the robot's disc overlaps a wall, an obstacle or a blocked cell now."""
+        return any(info.shape.collision_type in STATIC_KINDS
+                   for info in self.space.shape_query(self.robot_shape))
 
     def place(self, x_m: float, y_m: float, heading_rad: float) -> None:
         """Put the robot (and the control body) at rest at a pose.
@@ -408,32 +342,6 @@ class PhysicsWorld:
             if self._pending:
                 self._flush_contacts()
         return len(self.contacts) - before
-
-
-def _static_shapes(sc: Scenario, body: pymunk.Body) -> list[pymunk.Shape]:
-    """Walls (thick segments whose inner surface is the arena boundary), circles, cell runs."""
-    shapes: list[pymunk.Shape] = []
-    w, h, t = sc.width_m, sc.height_m, sc.cell_size_m
-    for a, b in (((-t, -t), (w + t, -t)), ((w + t, -t), (w + t, h + t)),
-                 ((w + t, h + t), (-t, h + t)), ((-t, h + t), (-t, -t))):
-        shapes.append(_typed(pymunk.Segment(body, a, b, t), CollisionType.WALL))
-    for o in sc.obstacles:
-        shapes.append(_typed(pymunk.Circle(body, o.radius_m, (o.x_m, o.y_m)),
-                             CollisionType.OBSTACLE))
-    c = sc.cell_size_m
-    for iy, ix0, ix1 in merged_boxes(sc.blocked_cells):
-        x0, x1, y0, y1 = ix0 * c, (ix1 + 1) * c, iy * c, (iy + 1) * c
-        box = pymunk.Poly(body, [(x0, y0), (x1, y0), (x1, y1), (x0, y1)])
-        shapes.append(_typed(box, CollisionType.CELL))
-    return shapes
-
-
-def _typed(shape: pymunk.Shape, kind: CollisionType) -> pymunk.Shape:
-    shape.collision_type = kind
-    shape.friction = 1.0  # the robot's friction sets the pair's coefficient (product)
-    shape.elasticity = 0.0
-    shape.filter = pymunk.ShapeFilter(categories=_STATIC_CATEGORY)
-    return shape
 
 
 def _centre(sc: Scenario, cell: tuple[int, int]) -> tuple[float, float]:

@@ -212,8 +212,10 @@ class DiffDriveEnv(gym.Env):
 
     ## Reward
     Per control period, the scenario's scheme applied to what happened:
-    ``goal`` when the robot's cell is G (terminates); else ``bump`` if a
-    contact began; else ``step`` if the robot changed cell; else 0.
+    ``goal`` when the robot's cell is G (terminates); else ``bump`` for every
+    period spent in contact (a contact began during it, or the disc still
+    touches a wall, obstacle or blocked cell at its end: pushing into a wall
+    keeps costing); else ``step`` if the robot changed cell; else 0.
 
     ## Starting State
     As ``PhysicsRoute-v0`` (``options={"start": ...}``), heading +x unless
@@ -304,9 +306,10 @@ class DiffDriveEnv(gym.Env):
         contacts = tuple(world.contacts[before:])
         terminated = cell == self.model.goal
         rw = self.scenario.rewards
+        in_contact = bool(contacts) or world.touching()
         if terminated:
             reward = rw.goal
-        elif contacts:
+        elif in_contact:
             reward = rw.bump
         elif cell != self._cell:
             reward = rw.step
@@ -317,7 +320,8 @@ class DiffDriveEnv(gym.Env):
         if self._trail is not None:
             self._trail.chunks.append(arr)
         info = {"pose": (x, y, wrap_angle(th)), "time_s": world.time_s, "state": cell,
-                "contacts": contacts, "wheels": (vl, vr), "trajectory": arr}
+                "contacts": contacts, "in_contact": in_contact, "wheels": (vl, vr),
+                "trajectory": arr}
         return self._obs(), float(reward), terminated, False, info
 
     def render(self) -> np.ndarray | None:

@@ -156,3 +156,35 @@ def test_diffdrive_reaches_goal_and_terminates():
         if term:
             break
     assert term and r == env.scenario.rewards.goal
+
+
+def test_diffdrive_penalises_every_period_spent_pushing_into_a_wall():
+    env = DiffDriveEnv("paper-50")
+    env.reset(seed=0, options={"start": "S", "heading": np.pi})
+    full = np.array([1.0, 1.0], dtype=np.float32)
+    began, rewards = [], []
+    for _ in range(80):
+        _obs, r, _t, _tr, info = env.step(full)
+        began.append(len(info["contacts"]))
+        rewards.append((r, info["in_contact"]))
+    first = next(i for i, n in enumerate(began) if n)
+    # after the contact began the robot keeps pushing: every later period costs a bump
+    pushing = rewards[first + 1:]
+    assert len(pushing) > 10 and all(c for _, c in pushing)
+    assert all(r == env.scenario.rewards.bump for r, _ in pushing)
+    assert sum(began[first + 1:]) < len(pushing)  # not because new contacts kept beginning
+
+
+def test_importing_sim_registers_the_ids_in_a_fresh_process():
+    import subprocess
+    import sys
+
+    code = ("import gymnasium as gym, sim; gym.register_envs(sim); "
+            "ids = [i for i in gym.registry if i.startswith('rnhql/')]; print(sorted(ids)); "
+            "e = gym.make('sim.envs:rnhql/GridRoute-v0', scenario='paper-40'); "
+            "print(e.reset(seed=1)[0] == e.reset(seed=1)[0])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=120).stdout.splitlines()
+    assert out[0] == str(sorted(["rnhql/DiffDrive-v0", "rnhql/GridRoute-v0",
+                                 "rnhql/PhysicsRoute-v0"]))
+    assert out[1] == "True"

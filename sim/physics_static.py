@@ -1,0 +1,124 @@
+"""The static side of the physics world: collision types, its config, contacts, the shapes.
+
+Split from :mod:`sim.physics` (the world and its drive loop) so each file has one job.
+Walls are thick segments whose inner surface is the arena boundary; circles are
+the scenario's obstacles; blocked map cells become boxes, merged into runs along
+each row so a large map adds thousands of shapes, not hundreds of thousands.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import NamedTuple
+
+import pymunk
+
+from sim.scenario import Scenario
+
+
+class CollisionType(IntEnum):
+    """Pymunk collision types of the world's shapes."""
+
+    ROBOT = 1
+    OBSTACLE = 2  # circular obstacles
+    WALL = 3  # arena walls
+    CELL = 4  # blocked map cells
+
+
+STATIC_KINDS = (CollisionType.OBSTACLE, CollisionType.WALL, CollisionType.CELL)
+ROBOT_CATEGORY = 0b01
+STATIC_CATEGORY = 0b10
+
+
+@dataclass(frozen=True)
+class PhysicsConfig:
+    """Time stepping, controller tolerances and contact parameters."""
+
+    dt_s: float = 0.1  # physics step [s]
+    substeps: int = 1  # physics steps per control period (commands change once per period)
+    iterations: int = 10  # Chipmunk solver iterations per step
+    tolerance_m: float = 0.02  # a primitive ends this close to the target cell centre [m]
+    tolerance_rad: float = math.radians(2.0)  # ... and to the action's cardinal heading [rad]
+    timeout_s: float = 5.0  # a primitive gives up after this much simulated time [s]
+    #   (checked between legs; a free primitive takes 1.3-2.2 s at the paper robot's limits)
+    contact_depth_m: float = 0.005  # deepest a step may carry the robot into a surface [m]
+    collision_slop_m: float = 0.001  # overlap Chipmunk leaves uncorrected [m]
+    # Fraction of an overlap Chipmunk leaves uncorrected after 1 s [-]. 1.0 = no positional
+    # correction: a correction is a pseudo-velocity stored in the body that pymunk cannot
+    # clear, so it would move a robot placed back on its start cell after a bump. The
+    # time-of-impact clamp bounds every overlap by contact_depth_m instead.
+    collision_bias: float = 1.0
+    traction_margin: float = 2.0  # joint force limits / what the wheel limits need [-]
+    friction: float = 0.5  # robot-to-anything Coulomb friction coefficient [-]
+
+    @property
+    def control_period_s(self) -> float:
+        """Time one command is held [s]."""
+        return self.dt_s * self.substeps
+
+    def validate(self) -> None:
+        for name in ("dt_s", "tolerance_m", "tolerance_rad", "timeout_s", "contact_depth_m",
+                     "traction_margin"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"PhysicsConfig.{name} must be a finite positive number, "
+                                 f"got {v!r}")
+        if not (0.0 <= self.collision_bias <= 1.0):
+            raise ValueError(f"PhysicsConfig.collision_bias must be in [0, 1], "
+                             f"got {self.collision_bias!r}")
+        if not (isinstance(self.substeps, int) and self.substeps >= 1):
+            raise ValueError(f"PhysicsConfig.substeps must be an int >= 1, got {self.substeps!r}")
+        if not (isinstance(self.iterations, int) and self.iterations >= 1):
+            raise ValueError(f"PhysicsConfig.iterations must be an int >= 1, "
+                             f"got {self.iterations!r}")
+
+
+class Contact(NamedTuple):
+    """A contact that began (Pymunk ``begin``) between the robot and static geometry."""
+
+    step: int  # physics step (since the world was built) in which it began
+    kind: CollisionType  # what the robot touched
+    x_m: float  # contact point on the robot's surface [m]
+    y_m: float
+    normal_x: float  # unit normal from the robot towards the other shape
+    normal_y: float
+    depth_m: float  # overlap when detected [m]
+
+
+def merged_boxes(cells: tuple[tuple[int, int], ...]) -> list[tuple[int, int, int]]:
+    """Blocked cells as horizontal runs ``(iy, ix_first, ix_last)``: fewer shapes, same area."""
+    runs: list[tuple[int, int, int]] = []
+    for iy, ix in sorted((iy, ix) for ix, iy in set(cells)):
+        if runs and runs[-1][0] == iy and runs[-1][2] == ix - 1:
+            runs[-1] = (iy, runs[-1][1], ix)
+        else:
+            runs.append((iy, ix, ix))
+    return runs
+
+
+def static_shapes(sc: Scenario, body: pymunk.Body) -> list[pymunk.Shape]:
+    """Walls (thick segments whose inner surface is the arena boundary), circles, cell runs."""
+    shapes: list[pymunk.Shape] = []
+    w, h, t = sc.width_m, sc.height_m, sc.cell_size_m
+    for a, b in (((-t, -t), (w + t, -t)), ((w + t, -t), (w + t, h + t)),
+                 ((w + t, h + t), (-t, h + t)), ((-t, h + t), (-t, -t))):
+        shapes.append(typed(pymunk.Segment(body, a, b, t), CollisionType.WALL))
+    for o in sc.obstacles:
+        shapes.append(typed(pymunk.Circle(body, o.radius_m, (o.x_m, o.y_m)),
+                             CollisionType.OBSTACLE))
+    c = sc.cell_size_m
+    for iy, ix0, ix1 in merged_boxes(sc.blocked_cells):
+        x0, x1, y0, y1 = ix0 * c, (ix1 + 1) * c, iy * c, (iy + 1) * c
+        box = pymunk.Poly(body, [(x0, y0), (x1, y0), (x1, y1), (x0, y1)])
+        shapes.append(typed(box, CollisionType.CELL))
+    return shapes
+
+
+def typed(shape: pymunk.Shape, kind: CollisionType) -> pymunk.Shape:
+    shape.collision_type = kind
+    shape.friction = 1.0  # the robot's friction sets the pair's coefficient (product)
+    shape.elasticity = 0.0
+    shape.filter = pymunk.ShapeFilter(categories=STATIC_CATEGORY)
+    return shape

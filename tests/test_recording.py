@@ -230,3 +230,61 @@ def test_ctrl_c_leaves_a_verified_recording(tmp_path, mode):
     assert ok, msg
     table = read_table(path, ["/world/robot"], "step")
     assert table.num_rows >= 21 * 601
+
+
+def test_route_label_anchor_stays_inside_and_away_from_s_and_g():
+    from scenarios.recording.scene import label_anchor
+
+    s, g = (2.5, 2.5), (47.5, 47.5)
+    bounds = (0.0, 0.0, 50.0, 50.0)
+    # a route that loops three moves after S: the label must not sit on S
+    route = np.array([[2.5, 2.5], [2.5, 3.5], [3.5, 3.5], [3.5, 4.5]])
+    a = label_anchor(route, [s, g], bounds, margin=15.0)
+    assert min(np.hypot(*(a - s)), np.hypot(*(a - g))) > 10.0
+    assert 15.0 <= a[0] <= 35.0 and 0.0 <= a[1] <= 50.0
+    # a route along the left edge: pulled inside by the margin
+    edge = np.array([[0.5, y + 0.5] for y in range(50)])
+    b = label_anchor(edge, [s, g], bounds, margin=15.0)
+    assert b[0] == 15.0
+
+
+def test_comparison_summary_curves_are_medians_of_ratio_of_sums():
+    from scenarios.recording.summary import WINDOW, summary_curves
+
+    n = 2 * WINDOW
+    # seed A: a 1-step episode worth 100 among 600-step episodes worth 600
+    a = {"key": "a", "steps_per_episode": [1] + [600] * (n - 1),
+         "return_per_episode": [100.0] + [600.0] * (n - 1), "success_per_episode": [1] * n}
+    b = {"key": "b", "steps_per_episode": [600] * n, "return_per_episode": [0.0] * n,
+         "success_per_episode": [0] * n}
+    curves = summary_curves([a, b], lambda r: "m")["m"]["reward_per_step"]
+    episodes, q25, med, q75 = curves
+    i = int(np.flatnonzero(episodes == WINDOW)[0])  # the first full window
+    ratio_a = (100.0 + 600.0 * (WINDOW - 1)) / (1 + 600 * (WINDOW - 1))
+    assert med[i] == pytest.approx((ratio_a + 0.0) / 2)  # type-7 median of two seeds
+    assert q25[i] < med[i] < q75[i]
+    succ = summary_curves([a, b], lambda r: "m")["m"]["success"]
+    assert succ[2][-1] == pytest.approx(0.5)
+
+
+def test_comparison_blueprint_has_one_legend_entry_per_method():
+    from scenarios.recording import summary
+
+    names = {}
+
+    class Stream:
+        def log(self, ent, arch, static=False):
+            if isinstance(arch, __import__("rerun").SeriesLines):
+                names[ent] = arch.names.as_arrow_array().to_pylist()
+
+        def send_columns(self, *a, **k):
+            pass
+
+    ep = np.arange(1.0, 11.0)
+    curves = {m: {f: np.stack([ep, ep, ep, ep]) for f in summary.FIGURES}
+              for m in ("rnh-ql", "dyna-q")}
+    summary.log_summary(Stream(), curves)
+    for fig in summary.FIGURES:
+        per_view = {n for ent, ns in names.items() if ent.startswith(f"summary/{fig}/")
+                    for n in ns}
+        assert per_view == {"rnh-ql", "dyna-q"}  # q25/q75 share the median's name

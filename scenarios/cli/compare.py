@@ -44,15 +44,15 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                positive(args.record_values_every, "--record-values-every"),
                                positive(args.record_seeds, "--record-seeds"))
     try:
-        run_sweep(specs, Path(args.out), execute, resume=args.resume,
-                  progress=Progress(len(specs)), **kwargs)
+        results = run_sweep(specs, Path(args.out), execute, resume=args.resume,
+                            progress=Progress(len(specs)), **kwargs)
     except KeyboardInterrupt:
         _interrupted(specs, args, record)
         raise
     if record is not None:
         from scenarios.experiments.compare import gather_parts
 
-        gather_parts(specs, record)
+        gather_parts(specs, record, records=results["runs"])
         print(f"recording: {record}  (open: rnhql view {record})")
     print((Path(args.out) / "summary.md").read_text())
     print(f"wrote {args.out}/results.json, summary.md and figures")
@@ -114,5 +114,5 @@ def _interrupted(specs: list, args: argparse.Namespace, record: str | None) -> N
     if record is not None and finished:
         from scenarios.experiments.compare import gather_parts
 
-        gather_parts(finished, record, keep_parts=True)
+        gather_parts(finished, record, keep_parts=True, records=list(done.values()))
         print(f"recording of the finished runs: {record}", file=sys.stderr)

@@ -44,7 +44,7 @@ def cmd_route(args: argparse.Namespace) -> int:
         from scenarios.recording.recorder import Recorder
 
         with Recorder.create(record, sc, model, method=ckpt.method, config=ckpt.config,
-                             seed=-1, world=args.world) as rec:
+                             seed=-1, world=args.world, blueprint="route") as rec:
             poses = driven.poses if args.world == "physics" else None
             rec.log_episode_trajectory(ckpt.episodes, np.asarray(route), poses=poses,
                                        kind="greedy-test")

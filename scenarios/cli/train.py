@@ -72,7 +72,7 @@ def cmd_train(args: argparse.Namespace) -> int:
             if args.save:
                 save_checkpoint(args.save, Checkpoint.of_agent(result.agent))
         if recorder is not None:
-            recorder.log_route("greedy final", result.final_route)
+            recorder.log_route("final route", result.final_route)
     finally:
         if recorder is not None:
             recorder.close()  # also on Ctrl-C: the recording keeps what was logged

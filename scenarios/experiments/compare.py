@@ -84,7 +84,8 @@ def with_recording(specs: Sequence[RunSpec], record: str, every: int,
     return out
 
 
-def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False) -> Path:
+def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False,
+                 records: Sequence[dict[str, Any]] = ()) -> Path:
     """Merge the runs' part files into one recording with a comparison blueprint.
 
     ``keep_parts`` (an interrupted sweep): the recording holds the runs finished
@@ -98,7 +99,15 @@ def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False
     sc, _ = load(*specs[0].problem)
     parts = [Path(s.record_path) for s in specs if s.record_path and Path(s.record_path).exists()]
     runs = [(run_label(s, worlds), s.seed) for s in specs]
-    out = gather_comparison(record, parts, sc, runs, recording_id=specs[0].recording_id)
+    curves = None
+    if records:
+        from scenarios.recording.summary import summary_curves
+
+        by_key = {s.key: s for s in specs}
+        curves = summary_curves([r for r in records if r["key"] in by_key],
+                                lambda r: run_label(by_key[r["key"]], worlds))
+    out = gather_comparison(record, parts, sc, runs, recording_id=specs[0].recording_id,
+                            curves=curves)
     if not keep_parts:
         shutil.rmtree(record + ".parts", ignore_errors=True)
     return out

@@ -29,14 +29,20 @@ from sim.scenario import Scenario
 
 def write_comparison_header(path: str | Path, scenario: Scenario,
                             runs: Sequence[tuple[str, int]], *, recording_id: str,
-                            application_id: str = "rnhql", title: str | None = None) -> Path:
-    """A small part holding the comparison's name, description and blueprint."""
+                            application_id: str = "rnhql", title: str | None = None,
+                            curves: dict | None = None) -> Path:
+    """A small part holding the comparison's name, description, blueprint and the per-method
+    summary curves (:mod:`scenarios.recording.summary`)."""
     with RecordingFile(path, application_id=application_id, recording_id=recording_id,
                        recording_name=title or f"{scenario.name} · compare") as f:
         table = "\n".join(f"| {m} | {s} | `{run_prefix(m, s)}` |" for m, s in runs)
         f.stream.log("meta", rr.TextDocument(
             f"# rnhql comparison on {scenario.name}\n\n| method | seed | subtree |\n"
             f"|---|---|---|\n{table}\n", media_type="text/markdown"), static=True)
+        if curves:
+            from scenarios.recording.summary import log_summary
+
+            log_summary(f.stream, curves)
         f.stream.send_blueprint(scene.comparison_blueprint(runs, scenario, run_prefix),
                                 make_active=True, make_default=True)
     return Path(path)
@@ -58,11 +64,18 @@ def gather_recordings(parts: Sequence[str | Path], out: str | Path) -> Path:
 
 def gather_comparison(out: str | Path, parts: Sequence[str | Path], scenario: Scenario,
                       runs: Sequence[tuple[str, int]], *, recording_id: str,
-                      application_id: str = "rnhql") -> Path:
-    """Header (blueprint) + per-run parts -> one ``.rrd``; the parts are left in place."""
+                      application_id: str = "rnhql", curves: dict | None = None) -> Path:
+    """Header (blueprint, summary curves) + per-run parts -> one verified ``.rrd``.
+
+    The parts are left in place. Known limit: ``rerun rrd merge`` orders chunks by id
+    (creation time), so the summary curves, made last from the finished runs, end up at
+    the end of the file, and the web viewer draws them only once it has read everything
+    (``rrd route`` would keep the order but does not accept files with footers in 0.41).
+    """
     out = Path(out)
     header = write_comparison_header(out.with_name(out.stem + ".header.rrd"), scenario, runs,
-                                     recording_id=recording_id, application_id=application_id)
+                                     recording_id=recording_id, application_id=application_id,
+                                     curves=curves)
     try:
         return gather_recordings([header, *parts], out)
     finally:

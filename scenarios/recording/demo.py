@@ -83,7 +83,7 @@ def record_synthetic(path: str | Path | None, sc: Scenario, model: TabularModel,
                     shaping_std=np.abs(rng.normal(0.5, 0.1, values_every)))
         greedy = walk(model, rng, greedy_p=1.0)
         rec.log_episode_trajectory(episodes, greedy, kind="greedy-test")
-        rec.log_route("greedy final", greedy)
+        rec.log_route("final route", greedy)
         logged[episodes] = greedy
     route = bfs_route(model.next_state, model.distance_to_goal, model.start)
     return {"trajectories": logged, "route": route, "recorder": rec}

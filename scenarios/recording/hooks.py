@@ -47,7 +47,6 @@ def log_chunk_metrics(rec: Recorder, first: int, n: int, arrays: dict[str, np.nd
     steps = arrays["steps"][sl]
     rec.log_episode_metrics(np.arange(first, first + n), steps, arrays["success"][sl],
                             arrays["returns"][sl],
-                            reward_per_step=arrays["returns"][sl] / np.maximum(steps, 1),
                             wall_time_s=arrays["wall_time_s"][sl],
                             shaping_mean=arrays["shaping_mean"][sl],
                             shaping_std=arrays["shaping_std"][sl])

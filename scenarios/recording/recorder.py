@@ -105,6 +105,8 @@ class Recorder:
         self._values: list[ValueFrame] = []
         self._deltas = np.asarray(ACTION_DELTAS, dtype=np.float64) * model.cell_size_m
         self._success_tail = np.zeros(0)
+        self._rps_tail = np.zeros((2, 0))  # returns, steps of the last episodes (reward/step)
+        self.curve_stride = 1  # log every n-th episode's curves (curves-only runs: 10)
         self._free = np.flatnonzero(~model.blocked.ravel())
         self._reachable = np.flatnonzero(model.distance_to_goal > 0)
         self._n_routes = 0
@@ -119,7 +121,8 @@ class Recorder:
                method: str, config: dict[str, Any] | Any, seed: int, world: str = "grid",
                application_id: str = "rnhql", recording_name: str | None = None,
                prefix: str = "", file: RecordingFile | None = None,
-               recording_id: str | None = None, blueprint: bool = True, with_scene: bool = True,
+               recording_id: str | None = None, blueprint: bool | str = True,
+               with_scene: bool = True,
                flush_rows: int = 20_000, flush_interval_s: float = 5.0) -> Recorder:
         """Open (or join ``file``) and log metadata, the static scene and the blueprint.
 
@@ -150,14 +153,16 @@ class Recorder:
                          rr.AnyValues(**props))
         if with_scene:  # a curves-only run in a comparison needs no map of its own
             scene.log_scene(st, rec.prefix, scenario, model)
+        else:  # its per-seed curves stay in the file, every 10th episode (the comparison's
+            rec.curve_stride = 10  # summary curves use every episode of every seed)
         if rec.prefix:  # one of several runs in a file: label and colour its curves
             scene.log_series_styles(st, rec.prefix, label=f"{method} s{seed}",
                                     colour=scene.method_colour(method))
         else:
             scene.log_series_styles(st, rec.prefix)
-        if blueprint:
-            st.send_blueprint(scene.run_blueprint(rec.prefix, scenario), make_active=True,
-                              make_default=True)
+        if blueprint:  # True: a training run's; "route": a saved agent's route, no curves
+            bp = (scene.route_blueprint if blueprint == "route" else scene.run_blueprint)
+            st.send_blueprint(bp(rec.prefix, scenario), make_active=True, make_default=True)
         return rec
 
     def _p(self, rest: str) -> str:
@@ -276,8 +281,16 @@ class Recorder:
         steps_f = np.asarray(steps, dtype=np.float64)
         succ = np.asarray(success, dtype=np.float64)
         ret = np.asarray(returns, dtype=np.float64)
-        rps = (ret / np.maximum(steps_f, 1.0) if reward_per_step is None
-               else np.asarray(reward_per_step, dtype=np.float64))
+        # reward per step: total return / total steps over the last SUCCESS_WINDOW episodes
+        # (a per-episode ratio is all spikes from one-step episodes next to G)
+        rs_hist = np.concatenate([self._rps_tail, np.stack([ret, steps_f])], axis=1)
+        crs = np.concatenate([np.zeros((2, 1)), np.cumsum(rs_hist, axis=1)], axis=1)
+        j = np.arange(self._rps_tail.shape[1], rs_hist.shape[1]) + 1
+        jlo = np.maximum(j - SUCCESS_WINDOW, 0)
+        tot = crs[1, j] - crs[1, jlo]
+        rps = (np.divide(crs[0, j] - crs[0, jlo], tot, out=np.zeros(len(j)), where=tot > 0)
+               if reward_per_step is None else np.asarray(reward_per_step, dtype=np.float64))
+        self._rps_tail = rs_hist[:, -(SUCCESS_WINDOW - 1):]
         hist = np.concatenate([self._success_tail, succ])
         cs = np.concatenate([[0.0], np.cumsum(hist)])
         idx = np.arange(len(self._success_tail), len(hist)) + 1
@@ -290,9 +303,10 @@ class Recorder:
             "success": succ, "success_rate": rate, "return": ret, "reward_per_step": rps,
             "wall_time_ms": None if wall_time_s is None else 1e3 * np.asarray(wall_time_s),
             "shaping/mean": shaping_mean, "shaping/std": shaping_std}
+        keep = slice(None) if self.curve_stride == 1 else (ep + 1) % self.curve_stride == 0
         for name, values in series.items():
-            if values is not None:
-                self._add_scalars(name, ep, values)
+            if values is not None and np.any(keep if isinstance(keep, np.ndarray) else True):
+                self._add_scalars(name, ep[keep], np.asarray(values)[keep])
         self._maybe_flush()
 
     # ---------------------------------------------------------------- every K episodes
@@ -342,17 +356,28 @@ class Recorder:
         states = np.asarray(states)
         reached = len(states) > 0 and int(states[-1]) == self.model.goal
         label = (f"{name}: {len(pts) - 1} moves" if reached
-                 else f"{name}: G not reached (loops after {len(pts) - 1} moves)")
-        strip = rr.LineStrips2D([pts], radii=0.1 * self.scenario.cell_size_m, colors=[colour],
-                                labels=[label], show_labels=True,
+                 else f"{name}: no G (loops at {len(pts) - 1})")
+        sc, m = self.scenario, self.model
+        strip = rr.LineStrips2D([pts], radii=0.1 * sc.cell_size_m, colors=[colour],
+                                labels=[label], show_labels=False,
                                 draw_order=scene.Z_ROUTE + 1)
+        # the text on its own anchor: away from S and G, inside the map
+        sg = [tuple(m.coords[m.start]), tuple(m.coords[m.goal])]
+        # text is drawn at a fixed pixel size, centred on its anchor: a map view is a few
+        # hundred pixels wide, so a label of k characters needs about k/70 of the width
+        anchor = scene.label_anchor(pts, sg, m.bounds_m,
+                                    margin=min(0.5, len(label) / 70) * sc.width_m)
+        text = rr.Points2D([anchor], radii=0.0, colors=[colour], labels=[label],
+                           show_labels=True, draw_order=100.0)
         ent = self._p(f"world/routes/{rr.escape_entity_path_part(name)}")
         if episode is None:
             self.stream.log(ent, strip, static=True)
+            self.stream.log(f"{ent}/label", text, static=True)
             return
         self.stream.set_time("episode", sequence=int(episode))
         try:
             self.stream.log(ent, strip)
+            self.stream.log(f"{ent}/label", text)
         finally:
             self.stream.disable_timeline("episode")
 

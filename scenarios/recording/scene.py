@@ -64,11 +64,16 @@ Z_HEAT, Z_OCC, Z_GRID, Z_VISITED, Z_ROUTE, Z_TRAJ = -30.0, -20.0, -15.0, -10.0, 
 Z_OBST, Z_SG, Z_POLICY, Z_CONTACT, Z_ROBOT, Z_HEADING = 20.0, 25.0, 28.0, 30.0, 40.0, 45.0
 
 SUCCESS_WINDOW = 50  # episodes in the moving success rate
+SUMMARY_WINDOW = 50  # episodes per window of a comparison's summary curves
+SUMMARY_FIGURES = {  # figure -> view title (scenarios.recording.summary)
+    "steps": "Steps per episode", "success": f"Success rate (last {SUMMARY_WINDOW} episodes)",
+    "reward_per_step": f"Reward per step (total return / total steps, last {SUMMARY_WINDOW})"}
 KIND_STYLE = {"train": (TRAIN, TRAIN_VISITED), "greedy-test": (GREEDY, GREEDY_VISITED)}
 METRICS = {  # entity under <prefix>/metrics -> (series name, plot)
     "steps/episode": ("steps", "steps"), "steps/optimal": ("BFS optimum", "steps"),
     "success": ("success (0/1)", "success"), "success_rate": ("success rate", "success"),
-    "return": ("return", "return"), "reward_per_step": ("reward / step", "reward_per_step"),
+    "return": ("return", "return"),
+    "reward_per_step": (f"reward / step (last {SUCCESS_WINDOW})", "reward_per_step"),
     "wall_time_ms": ("wall time [ms]", "wall_time"),
     "shaping/mean": ("shaping F mean", "shaping"), "shaping/std": ("shaping F std", "shaping"),
     "policy_optimal": ("cells whose greedy move is optimal", "success"),
@@ -170,6 +175,27 @@ def grid_lines(sc: Scenario) -> list[np.ndarray]:
     xs = [np.array([[i * c, 0.0], [i * c, h]]) for i in range(1, sc.nx)]
     ys = [np.array([[0.0, j * c], [w, j * c]]) for j in range(1, sc.ny)]
     return xs + ys
+
+
+def label_anchor(points: np.ndarray, avoid: Sequence[tuple[float, float]],
+                 bounds: tuple[float, float, float, float], margin: float) -> np.ndarray:
+    """Where a route's label goes: the route point farthest from S and G (so the text never
+    sits on them), pulled at least ``margin`` inside the map (so it never runs off the view).
+
+    Labels are drawn centred on their anchor; ``margin`` should be about half the label's
+    width in map units.
+    """
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    xmin, ymin, xmax, ymax = bounds
+    centre = np.array([(xmin + xmax) / 2, (ymin + ymax) / 2])
+    cand = np.vstack([pts, centre]) if len(pts) else centre[None, :]
+    av = np.asarray(avoid, dtype=np.float64).reshape(-1, 2)
+    far = np.min(np.linalg.norm(cand[:, None, :] - av[None, :, :], axis=2), axis=1)
+    best = cand[int(np.argmax(far))]
+    mx = min(margin, (xmax - xmin) / 2)
+    my = 0.06 * (ymax - ymin)  # about one line of text
+    return np.array([np.clip(best[0], xmin + mx, xmax - mx), np.clip(best[1], ymin + my,
+                                                                       ymax - my)])
 
 
 def route_points(model: TabularModel, states: Sequence[int] | np.ndarray) -> np.ndarray:
@@ -299,6 +325,18 @@ def _panels(timeline: str = "episode") -> list[Any]:
             rrb.TimePanel(state="collapsed", timeline=timeline)]
 
 
+def route_blueprint(prefix: str, sc: Scenario) -> rrb.Blueprint:
+    """A saved agent's route (``rnhql route --record``): only panels that have data (the map,
+    the value maps and the run card; no training curves exist)."""
+    right = rrb.Vertical(
+        rrb.Horizontal(value_view(prefix, sc, "v_nn", "V_NN (RBF upper layer)"),
+                       value_view(prefix, sc, "max_q", "max_a Q + greedy policy")),
+        rrb.TextDocumentView(origin=path(prefix, "meta") or "/meta", name="Run info"),
+        row_shares=[3, 2])
+    return rrb.Blueprint(rrb.Horizontal(map_view(prefix, sc), right, column_shares=[5, 4]),
+                         *_panels())
+
+
 def run_blueprint(prefix: str, sc: Scenario) -> rrb.Blueprint:
     """One run: the map on the left; values, curves and the run card on the right."""
     p = path(prefix, "")
@@ -319,7 +357,9 @@ def run_blueprint(prefix: str, sc: Scenario) -> rrb.Blueprint:
 
 def comparison_blueprint(runs: Sequence[tuple[str, int]], sc: Scenario,
                          prefix_of: Any) -> rrb.Blueprint:
-    """Methods x seeds: one map per method (its first seed) and overlaid curves of every run."""
+    """Methods x seeds: one map per method (its first seed), and per method one median curve
+    with its interquartile band (:mod:`scenarios.recording.summary`). The per-seed curves
+    stay in the file under each run, out of the default views."""
     methods: list[str] = []
     for m, _ in runs:
         if m not in methods:
@@ -327,17 +367,9 @@ def comparison_blueprint(runs: Sequence[tuple[str, int]], sc: Scenario,
     first = {m: min(s for mm, s in runs if mm == m) for m in methods}
     maps = [map_view(prefix_of(m, first[m]), sc, name=f"{m} (seed {first[m]})", legend=False)
             for m in methods]
-
-    def overlay(name: str, series: str, legend: bool = False) -> rrb.TimeSeriesView:
-        ents = [f"+ /{path(prefix_of(m, s), 'metrics')}/{series}" for m, s in runs]
-        if series == "steps/episode":  # one BFS reference line is enough
-            ents.append(f"+ /{path(prefix_of(*runs[0]), 'metrics')}/steps/optimal")
-        return rrb.TimeSeriesView(name=name, contents=ents,
-                                  plot_legend=rrb.PlotLegend(corner="RightTop", visible=legend))
-
-    curves = rrb.Horizontal(overlay("Steps per episode", "steps/episode", legend=True),
-                            overlay(f"Success rate (last {SUCCESS_WINDOW} episodes)",
-                                    "success_rate"),
-                            overlay("Reward per step", "reward_per_step"))
+    curves = rrb.Horizontal(*[
+        rrb.TimeSeriesView(name=f"{title}: median, IQR over seeds", origin=f"/summary/{fig}",
+                           plot_legend=rrb.PlotLegend(corner="RightTop", visible=i == 0))
+        for i, (fig, title) in enumerate(SUMMARY_FIGURES.items())])
     return rrb.Blueprint(rrb.Vertical(rrb.Grid(*maps), curves, row_shares=[3, 2]),
                          *_panels())

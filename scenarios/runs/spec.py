@@ -168,6 +168,7 @@ def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dic
         "optimal_action_fraction": float(result.optimal_action_fraction),
         "steps_per_episode": steps.astype(int).tolist(),
         "return_per_episode": np.round(returns, 6).tolist(),
+        "success_per_episode": np.asarray(result.success).astype(int).tolist(),
         "wall_time_per_episode_s": np.round(np.asarray(result.wall_time_s), 9).tolist(),
         "test_episodes": test_e.tolist(),
         "test_route_length": test_l.tolist(),
@@ -205,7 +206,7 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
                          with_scene=spec.record_detail) as rec:
         result = _train(spec, sc, model, cfg, rec, plan)
         if spec.record_detail:
-            rec.log_route("greedy final", result.final_route)
+            rec.log_route("final route", result.final_route)
         return run_record(spec, cfg, result, model)
 
 

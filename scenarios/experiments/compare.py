@@ -18,8 +18,8 @@ from scenarios.runs.outdir import check_out_dir, sweep_lock
 from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
 from scenarios.runs.spec import RunSpec, load
 
-ALL_METHODS = ("rnh-ql", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt", "q-lambda",
-               "dyna-q")
+ALL_METHODS = ("rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt",
+               "q-lambda", "dyna-q")
 PARTIAL = "runs.partial.jsonl"
 
 

@@ -87,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", default="results/reward-design")
     p.add_argument("--scenario", default="paper-50")
-    p.add_argument("--methods", default=",".join((*ALL_METHODS, "rnh-ql+")))
+    p.add_argument("--methods", default=",".join(ALL_METHODS))
     p.add_argument("--seeds", type=int, default=10)
     p.add_argument("--episodes", type=int, default=3000)
     p.add_argument("--jobs", type=int, default=None)

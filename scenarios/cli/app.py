@@ -55,7 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("compare", help="methods x seeds (x worlds): results, summary, figures")
     add_scenario_args(p)
-    p.add_argument("--methods", help="comma-separated (default: all nine)")
+    p.add_argument("--methods", help="comma-separated (default: all ten)")
     p.add_argument("--seeds", type=int, default=10, help="number of seeds (default 10)")
     p.add_argument("--seed-base", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--episodes", type=int, default=3000)

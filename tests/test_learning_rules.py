@@ -223,11 +223,20 @@ def test_rnh_ql_warmup_and_freeze():
     assert ag.state.q[0, RIGHT] == pytest.approx(0.1)  # no shaping in episode 0
     assert np.any(ag.state.w != 0)  # V_NN trained from the first episode
     ag.end_episode()
+    assert ag.last_shaping == (0.0, 0.0)  # episode 0 had no shaping term
     w = ag.state.w.copy()
+    phi = ag.state.feat @ w  # Phi = V_NN, frozen from here on
+    f = G * phi[1] - phi[0]
+    assert abs(f) > 1e-6  # a real shaping term, not a vacuous check
+    q_before = ag.state.q[0, RIGHT]
     ag.begin_episode(0)
     ag.update(0, RIGHT, 1.0, 1, False, False)
     assert np.array_equal(ag.state.w, w)  # frozen from episode 1
-    assert ag.last_shaping == (0.0, 0.0) and ag.state.ivar[K.I_NF] == 1
+    # episode 1 is past the warm-up: the Q update adds F = gamma Phi(s') - Phi(s)
+    assert ag.state.q[0, RIGHT] == pytest.approx(q_before + A * (1.0 + f + G * 0.0 - q_before))
+    ag.end_episode()
+    assert ag.state.ivar[K.I_NF] == 1
+    assert ag.last_shaping == pytest.approx((f, 0.0))
 
 
 # ---------------------------------------------------------------- RN-QL nets

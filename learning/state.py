@@ -101,7 +101,7 @@ def init_state(cfg: MethodConfig, geom: Geometry, rng: np.random.Generator) -> A
         w, e = _f(feat.shape[1]), _f(feat.shape[1])
         fvar[K.F_STEP_V] = cfg.beta / float(np.mean(np.sum(feat * feat, axis=1)))
     elif kind == K.RNHQLP:  # RNH-QL+: layout in learning.rules_plus
-        from learning.rules_plus import init_plus
+        from learning.plus_features import init_plus
 
         sl = init_plus(cfg, geom)
         q, w, e, feat = sl["q"], sl["w"], sl["e"], sl["feat"]

@@ -6,7 +6,7 @@ import numpy as np
 
 from learning import METHODS, geometry_of, train_tabular
 from learning.methods import RNHQLPlus
-from learning.rules_plus import sparse_features
+from learning.plus_features import sparse_features
 
 
 def test_sparse_features_match_dense_within_cutoff(paper50_model):

@@ -9,7 +9,7 @@ API (all arrays are numpy; nothing is logged per step)::
     rec.log_episode_metrics(episodes, steps, success, returns, reward_per_step=None,
                             wall_time_s=None, shaping_mean=None, shaping_std=None)
     rec.log_values(episode, q, greedy=None, v_nn=None)   # every K episodes
-    rec.log_route("greedy-final", states)                # e.g. the final greedy route
+    rec.log_route("final route", states)                 # e.g. the final greedy route
     rec.close()                                          # idempotent; also `with Recorder...`
 
 ``states[k]`` is the state after ``k`` moves (``states[0]`` the start), so an
@@ -33,25 +33,8 @@ so an interrupted run leaves a verified recording of everything logged so far.
 A hard kill (SIGKILL, power loss) leaves ``<path>.part`` without a footer; it
 still opens in the viewer and passes ``rerun rrd verify --check-footers false``.
 
-Entity paths (``P`` = ``prefix``, empty for a single run); [timelines]::
-
-    P/meta                      TextDocument: versions, git commit, scenario, method, config
-    P/world                     static Transform3D y-flip; everything below in metres, y up
-    P/world/arena|grid|occupancy|obstacles|start|goal|legend   static scene
-    P/world/routes/bfs          static BFS shortest route; routes/<name> from log_route
-    P/world/robot               Points2D disc + Arrows2D heading, a row per state
-                                                                [step, episode, sim_time]
-    P/world/train|greedy/trajectory|visited|contacts   a row per episode [step, episode]
-    P/world/train|greedy/events TextLog: a summary per episode, given contacts [step, episode]
-    P/world/values/v_nn|max_q   DepthImage heat maps (viridis) + /legend; values/policy
-                                Arrows2D; values/mask static blocked cells [episode, step]
-    P/metrics/...               Scalars: steps/episode, steps/optimal, success, success_rate,
-                                return, reward_per_step, wall_time_ms, shaping/mean,
-                                shaping/std, policy_optimal                      [episode]
-
-Timelines: ``episode`` (training episode; the latest recorded trajectory, heat
-maps and curves follow it), ``step`` (the recorded episodes played back to back,
-one row per state), ``sim_time`` (the same in simulated seconds, physics world).
+Entity paths and timelines: ``docs/recording.md`` (``P`` = ``prefix``, empty for a
+single run; timelines ``episode``, ``step``, and ``sim_time`` in the physics world).
 
 Comparisons (methods x seeds): each run is a subtree ``runs/<method>/s<seed>``
 (:func:`run_prefix`); see :mod:`scenarios.recording.comparison`.

@@ -26,6 +26,7 @@ _VALID = {
     "gamma": (lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
     "lam": (lambda v: 0.0 <= v <= 1.0, "in [0, 1]"),
     "k": (lambda v: v >= 1, ">= 1"),
+    "spacing_m": (lambda v: v >= 0.0, ">= 0 (0: k x k centres)"),
     "block": (lambda v: v >= 1, ">= 1"),
     "n_planning": (lambda v: v >= 0, ">= 0"),
     "warmup_episodes": (lambda v: v >= 0, ">= 0"),
@@ -238,7 +239,8 @@ class RNHQL(MethodConfig):
     cli: ClassVar[str] = "rnh-ql"
     kind: ClassVar[int] = K.RNHQL
     lam: float = 0.85  # V_NN trace decay lambda
-    k: int = 10  # RBF centres per axis (k * k in all)
+    k: int = 10  # RBF centres per axis (k * k in all), the paper's 10 x 10
+    spacing_m: float = 0.0  # > 0: a centre every spacing_m metres per axis instead of k x k
     beta: float = 0.1  # V_NN step per unit of mean squared feature norm
     warmup_episodes: int = 300  # shaping starts at this 0-based episode index
     freeze_after_episodes: int | None = None  # stop training V_NN from this episode (None: never)

@@ -14,23 +14,39 @@ import numpy as np
 from numba import njit
 
 
-def rbf_centres(bounds_m: tuple[float, float, float, float],
-                k: int) -> tuple[np.ndarray, np.ndarray]:
-    """(centres float64[k*k, 2] [m], sigma float64[2] [m]) of the cell-centred k x k lattice."""
-    if k < 1:
-        raise ValueError(f"RBF lattice size k must be >= 1, got {k}")
+def lattice_size(bounds_m: tuple[float, float, float, float], k: int,
+                 spacing_m: float = 0.0) -> tuple[int, int]:
+    """Centres per axis: ``k`` x ``k`` (the paper's), or one every ``spacing_m`` metres when
+    ``spacing_m > 0``, so a large map is not covered by a 50 x 50 map's lattice."""
+    if spacing_m > 0:
+        xmin, ymin, xmax, ymax = bounds_m
+        return (max(1, round((xmax - xmin) / spacing_m)),
+                max(1, round((ymax - ymin) / spacing_m)))
+    return k, k
+
+
+def rbf_centres(bounds_m: tuple[float, float, float, float], k: int,
+                ky: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(centres float64[k*ky, 2] [m], sigma float64[2] [m]) of the cell-centred k x ky lattice
+    (``ky`` defaults to ``k``)."""
+    ky = k if ky is None else ky
+    if k < 1 or ky < 1:
+        raise ValueError(f"RBF lattice size must be >= 1 per axis, got {k} x {ky}")
     xmin, ymin, xmax, ymax = bounds_m
-    hx, hy = (xmax - xmin) / k, (ymax - ymin) / k
+    hx, hy = (xmax - xmin) / k, (ymax - ymin) / ky
     cx = xmin + (np.arange(k) + 0.5) * hx
-    cy = ymin + (np.arange(k) + 0.5) * hy
+    cy = ymin + (np.arange(ky) + 0.5) * hy
     gx, gy = np.meshgrid(cx, cy)  # row-major: centre index = iy * k + ix
     return np.column_stack([gx.ravel(), gy.ravel()]), np.array([hx, hy])
 
 
 def rbf_features(coords: np.ndarray, bounds_m: tuple[float, float, float, float],
-                 k: int) -> np.ndarray:
-    """phi float64[nS, k*k]: exp(-((x-cx)^2/sx^2 + (y-cy)^2/sy^2) / 2) at each cell centre."""
-    centres, sigma = rbf_centres(bounds_m, k)
+                 k: int, ky: int | None = None) -> np.ndarray:
+    """phi float64[nS, k*ky]: exp(-((x-cx)^2/sx^2 + (y-cy)^2/sy^2) / 2) at each cell centre.
+
+    Dense: nS x K floats. For large maps with a fine lattice use ``rnh-ql+`` (sparse).
+    """
+    centres, sigma = rbf_centres(bounds_m, k, ky)
     d = (coords[:, None, :] - centres[None, :, :]) / sigma
     return np.ascontiguousarray(np.exp(-0.5 * np.sum(d * d, axis=2)))
 

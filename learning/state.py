@@ -97,7 +97,8 @@ def init_state(cfg: MethodConfig, geom: Geometry, rng: np.random.Generator) -> A
         imap[:, n_a:] = 0
         fmap, ilist = _f(n_s, n_a), _i(n_s * n_a)
     elif kind == K.RNHQL:
-        feat = rbf.rbf_features(geom.coords, geom.bounds_m, cfg.k)
+        feat = rbf.rbf_features(geom.coords, geom.bounds_m,
+                                *rbf.lattice_size(geom.bounds_m, cfg.k, cfg.spacing_m))
         w, e = _f(feat.shape[1]), _f(feat.shape[1])
         fvar[K.F_STEP_V] = cfg.beta / float(np.mean(np.sum(feat * feat, axis=1)))
     elif kind == K.RNHQLP:  # RNH-QL+: layout in learning.rules_plus

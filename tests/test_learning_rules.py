@@ -269,3 +269,13 @@ def test_rn_ql_first_update_is_one_gradient_step():
     ag.update(0, a, 1.0, 1, False, False)
     np.testing.assert_allclose(ag.state.w, w0 + A * delta * grad, rtol=1e-12)
     np.testing.assert_allclose(ag.state.e, grad)
+
+
+def test_rbf_lattice_by_spacing_follows_the_map():
+    from learning.rbf import lattice_size
+
+    assert lattice_size((0.0, 0.0, 50.0, 50.0), 10) == (10, 10)  # the paper's, by count
+    assert lattice_size((0.0, 0.0, 512.0, 256.0), 10, spacing_m=8.0) == (64, 32)
+    cfg = RNHQL(spacing_m=1.0)
+    ag = make_agent(cfg, geom(), np.random.default_rng(0))  # a 3 x 1 m corridor
+    assert ag.state.feat.shape == (3, 3 * 1)

@@ -43,3 +43,20 @@ def test_leak_free_supports_only_grow_along_seen_moves(paper50_model):
     seen = r.state.imap[:, :4][r.state.imap[:, :4] >= 0]
     ends[seen] = True
     assert np.all((visited | ends)[on.any(axis=1)])
+
+
+def test_readout_potential_equals_the_networks_value():
+    """The recorder's V_NN heat map for rnh-ql+ is the value the rules compute."""
+    import numpy as np
+
+    from learning.methods import METHODS
+    from learning.readout import potential
+    from learning.rules_plus import v_of
+    from learning.train import train_tabular
+    from scenarios.runs.spec import load
+
+    _, m = load("paper-40", None, None, "goal-only")
+    st = train_tabular(METHODS["rnh-ql+"](), m, 100, np.random.default_rng(0)).state
+    ref = np.array([v_of(st.w, st.feat, st.imap, s) for s in range(m.n_states)])
+    np.testing.assert_allclose(potential(st), ref, atol=1e-12)
+    assert np.abs(ref).max() > 0

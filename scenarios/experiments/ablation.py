@@ -106,6 +106,34 @@ def table(summary: dict, maps: list[dict], labels: list[str]) -> str:
     return "\n".join(lines)
 
 
+def figure(summary: dict, maps: list[dict], labels: list[str], path: Path, title: str) -> None:
+    """Variants x maps: colour = seeds whose final route is optimal, text = that count and the
+    median episodes to a stable optimal route."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    grid = np.full((len(labels), len(maps)), np.nan)
+    fig, ax = plt.subplots(figsize=(1.0 + 0.75 * len(maps), 1.2 + 0.45 * len(labels)), dpi=110)
+    for i, lab in enumerate(labels):
+        for j, m in enumerate(maps):
+            c = summary.get(lab, {}).get(m["name"])
+            if c is None:
+                continue
+            grid[i, j] = c["optimal_seeds"] / c["seeds"]
+            med = "—" if math.isinf(c["median"]) else f"{c['median']:.0f}"
+            ax.text(j, i, f"{c['optimal_seeds']}\n{med}", ha="center", va="center", fontsize=6)
+    ax.imshow(grid, cmap="RdYlGn", vmin=0, vmax=1, aspect="auto")
+    ax.set_xticks(range(len(maps)), [m["name"] + ("*" if m["held_out"] else "") for m in maps],
+                  rotation=45, ha="right", fontsize=7)
+    ax.set_yticks(range(len(labels)), [lab[:48] for lab in labels], fontsize=7)
+    ax.set_title(title, fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="results/ablation")
@@ -157,13 +185,19 @@ def main(argv: list[str] | None = None) -> int:
             if ep == a.episodes and lab in labels and s < a.seeds
             and mp in {m["name"] for m in maps}]
     summary = summarise(runs, maps, labels)
-    md = (f"Goal-only rewards, {a.seeds} seeds x {a.episodes} episodes. Cell: seeds whose "
-          "final greedy route is optimal · median [q25, q75] episodes to stable optimal.\n\n"
+    from scenarios.runs.results import atomic_write_text
+
+    md = (f"Rewards `{a.rewards}`, {a.seeds} seeds x {a.episodes} episodes. Cell: seeds whose "
+          "final greedy route is optimal · median [q25, q75] episodes to stable optimal "
+          "(`*`/held out: maps generated from seeds nobody tuned on).\n\n"
           + table(summary, maps, labels) + "\n")
-    (out / "ablation.md").write_text(md)
-    (out / "ablation.json").write_text(json.dumps(dict(maps=maps, variants=[
+    atomic_write_text(out / "ablation.md", md)
+    atomic_write_text(out / "ablation.json", json.dumps(dict(maps=maps, variants=[
         dict(label=lab, method=m, overrides=dict(ov)) for lab, m, ov in rows],
         summary=summary, runs=runs), indent=1, default=str))
+    figure(summary, maps, labels, out / "ablation.png",
+           f"rnh-ql+ ablation, rewards {a.rewards}, {a.seeds} seeds x {a.episodes} episodes: "
+           "optimal seeds (colour, top) and median episodes to stable optimal (bottom)")
     print(md)
     return 0
 

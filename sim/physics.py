@@ -91,6 +91,15 @@ class PhysicsWorld:
         space.add(*static_shapes(sc, space.static_body))
 
         x, y, th = pose if pose is not None else (*_centre(sc, sc.start), 0.0)
+        self._add_robot(x, y, th)
+        for kind in STATIC_KINDS:
+            space.on_collision(CollisionType.ROBOT, kind, begin=self._on_begin, data=kind)
+        sigint.install(PhysicsWorld._on_begin)  # Ctrl-C inside a callback is not lost
+
+    def _add_robot(self, x: float, y: float, th: float) -> None:
+        """A new robot disc and control body at rest at a pose, joined as in tank.py."""
+        sc, cfg, space = self.scenario, self.config, self.space
+        rb = sc.robot
         moment = pymunk.moment_for_circle(rb.mass_kg, 0.0, rb.radius_m)
         robot = pymunk.Body(rb.mass_kg, moment)
         robot.position, robot.angle = (x, y), th
@@ -111,15 +120,23 @@ class PhysicsWorld:
         space.add(robot, shape, control, pivot, gear)
         self.robot, self.robot_shape, self.control = robot, shape, control
         self.pivot, self.gear = pivot, gear
-
         self.steps = 0
         self.contacts: list[Contact] = []
         self.contact_counts = dict.fromkeys(STATIC_KINDS, 0)
         self._pending: list[tuple[Any, ...]] = []
-        for kind in STATIC_KINDS:
-            space.on_collision(CollisionType.ROBOT, kind, begin=self._on_begin, data=kind)
-        sigint.install(PhysicsWorld._on_begin)  # Ctrl-C inside a callback is not lost
         self._bind_fast()
+
+    def respawn(self, pose: tuple[float, float, float]) -> None:
+        """Start a new episode in this world: a new robot at rest at ``pose``, clocks and
+        contacts reset, the static shapes kept.
+
+        Building the static shapes is what a reset costs on a large map (0.04 s for
+        3,000 circles, against ~0.02 s for a whole 600-primitive episode); the
+        robot's bodies, joints and contact pairs are all new, so an episode replays
+        bit for bit like one in a fresh space (tested).
+        """
+        self.space.remove(self.robot, self.robot_shape, self.control, self.pivot, self.gear)
+        self._add_robot(*pose)
 
     # ------------------------------------------------------------- internals
     def _bind_fast(self) -> None:

@@ -4,7 +4,8 @@
 same reward scheme, same ``reset`` options as :class:`sim.grid_env.GridRouteEnv`,
 but every action is a motion primitive (:mod:`sim.motion`) and the next state is
 the cell the robot's measured pose lies in. ``DiffDriveEnv`` hands the wheels to
-the agent. Both build a fresh :class:`sim.physics.PhysicsWorld` per reset.
+the agent. Both keep one :class:`sim.physics.PhysicsWorld` and respawn the robot
+per reset (the static shapes are built once; replays equal a fresh world, tested).
 """
 
 from __future__ import annotations
@@ -149,8 +150,11 @@ class PhysicsRouteEnv(gym.Env):
         super().reset(seed=seed)
         s = start_state_from_options(options, self.model, self.np_random)
         x, y = self.disc.state_centre(s)
-        self.world = PhysicsWorld(self.scenario, self.config, (x, y, 0.0),
-                                  cast_cache=self._cast_cache)
+        if self.world is None:
+            self.world = PhysicsWorld(self.scenario, self.config, (x, y, 0.0),
+                                      cast_cache=self._cast_cache)
+        else:  # a new robot, the static shapes kept: replays like a fresh space (tested)
+            self.world.respawn((x, y, 0.0))
         self._s = s
         pose = (x, y, 0.0)
         if self.render_mode is not None:
@@ -273,7 +277,10 @@ class DiffDriveEnv(gym.Env):
         if not math.isfinite(heading):
             raise ValueError(f"options['heading'] must be finite, got {heading!r}")
         x, y = self.disc.state_centre(s)
-        self.world = PhysicsWorld(self.scenario, self.config, (x, y, heading))
+        if self.world is None:
+            self.world = PhysicsWorld(self.scenario, self.config, (x, y, heading))
+        else:
+            self.world.respawn((x, y, heading))
         self._wheels = (0.0, 0.0)
         self._cell = s
         if self.render_mode is not None:

@@ -70,14 +70,18 @@ def drive_transitions(sc: Scenario, config: PhysicsConfig) -> np.ndarray:
     seen = np.zeros(n, dtype=bool)
     seen[model.start] = True
     queue = deque([model.start])
+    world = None
     while queue:
         s = queue.popleft()
         if s == model.goal:
             continue
         x, y = disc.state_centre(int(s))
         for a in range(len(ACTION_DELTAS)):
-            # a fresh world at rest on the cell centre, as the env's reset makes it
-            world = PhysicsWorld(sc, config, (x, y, 0.0), cast_cache=cast_cache)
+            # the robot at rest on the cell centre, as the env's reset puts it
+            if world is None:
+                world = PhysicsWorld(sc, config, (x, y, 0.0), cast_cache=cast_cache)
+            else:
+                world.respawn((x, y, 0.0))
             res = controller.run(world, a)
             t = int(s) if res.bumped else int(res.state)
             nxt[s, a] = t

@@ -84,6 +84,12 @@ def test_ctrl_c_stops_a_recorded_sweep_and_resume_completes_it(tmp_path):
 
 
 def test_ctrl_c_stops_physics_training(tmp_path):
+    # compile the step agent's kernels into numba's disk cache first: the subject here is
+    # Ctrl-C during training, not during a cold JIT compile (minutes of LLVM on CI)
+    from scenarios.cli import main
+
+    assert main(["train", "paper-40", "--method", "st-ql", "--world", "physics",
+                 "--episodes", "1"]) == 0
     proc = start(["train", "paper-40", "--method", "st-ql", "--world", "physics",
                   "--episodes", "300"], tmp_path)
     assert wait_for(lambda: proc.poll() is not None, 4.0) is False  # still training

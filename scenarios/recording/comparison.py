@@ -27,6 +27,20 @@ from scenarios.recording.recorder import RecordingFile, rerun_cli, run_prefix, s
 from sim.scenario import Scenario
 
 
+def _log_header(stream: rr.RecordingStream, scenario: Scenario, runs: Sequence[tuple[str, int]],
+                curves: dict | None) -> None:
+    table = "\n".join(f"| {m} | {s} | `{run_prefix(m, s)}` |" for m, s in runs)
+    stream.log("meta", rr.TextDocument(
+        f"# rnhql comparison on {scenario.name}\n\n| method | seed | subtree |\n"
+        f"|---|---|---|\n{table}\n", media_type="text/markdown"), static=True)
+    if curves:
+        from scenarios.recording.summary import log_summary
+
+        log_summary(stream, curves)
+    stream.send_blueprint(scene.comparison_blueprint(runs, scenario, run_prefix),
+                          make_active=True, make_default=True)
+
+
 def write_comparison_header(path: str | Path, scenario: Scenario,
                             runs: Sequence[tuple[str, int]], *, recording_id: str,
                             application_id: str = "rnhql", title: str | None = None,
@@ -35,16 +49,7 @@ def write_comparison_header(path: str | Path, scenario: Scenario,
     summary curves (:mod:`scenarios.recording.summary`)."""
     with RecordingFile(path, application_id=application_id, recording_id=recording_id,
                        recording_name=title or f"{scenario.name} · compare") as f:
-        table = "\n".join(f"| {m} | {s} | `{run_prefix(m, s)}` |" for m, s in runs)
-        f.stream.log("meta", rr.TextDocument(
-            f"# rnhql comparison on {scenario.name}\n\n| method | seed | subtree |\n"
-            f"|---|---|---|\n{table}\n", media_type="text/markdown"), static=True)
-        if curves:
-            from scenarios.recording.summary import log_summary
-
-            log_summary(f.stream, curves)
-        f.stream.send_blueprint(scene.comparison_blueprint(runs, scenario, run_prefix),
-                                make_active=True, make_default=True)
+        _log_header(f.stream, scenario, runs, curves)
     return Path(path)
 
 
@@ -65,18 +70,21 @@ def gather_recordings(parts: Sequence[str | Path], out: str | Path) -> Path:
 def gather_comparison(out: str | Path, parts: Sequence[str | Path], scenario: Scenario,
                       runs: Sequence[tuple[str, int]], *, recording_id: str,
                       application_id: str = "rnhql", curves: dict | None = None) -> Path:
-    """Header (blueprint, summary curves) + per-run parts -> one verified ``.rrd``.
+    """Header (blueprint, summary curves) first, then every run's part: one ``.rrd``.
 
-    The parts are left in place. Known limit: ``rerun rrd merge`` orders chunks by id
-    (creation time), so the summary curves, made last from the finished runs, end up at
-    the end of the file, and the web viewer draws them only once it has read everything
-    (``rrd route`` would keep the order but does not accept files with footers in 0.41).
+    The order matters: the web viewer reads a file front to back and draws the
+    curve panels from the summary, so the summary comes first and the curves show
+    while the runs' detail is still loading. (``rerun rrd merge`` would order chunks
+    by creation time and put the summary, made last, at the very end.) Each part is
+    re-logged into this recording with ``log_file_from_path``, which keeps its
+    chunks. The parts are left in place.
     """
     out = Path(out)
-    header = write_comparison_header(out.with_name(out.stem + ".header.rrd"), scenario, runs,
-                                     recording_id=recording_id, application_id=application_id,
-                                     curves=curves)
-    try:
-        return gather_recordings([header, *parts], out)
-    finally:
-        header.unlink(missing_ok=True)
+    with RecordingFile(out, application_id=application_id, recording_id=recording_id,
+                       recording_name=f"{scenario.name} · compare") as f:
+        _log_header(f.stream, scenario, runs, curves)
+        f.stream.flush()
+        for part in parts:
+            f.stream.log_file_from_path(part)
+        f.stream.flush()
+    return out

@@ -16,7 +16,12 @@ in physics, which gives the continuous figures (metres, contacts, sim time).
 
 from __future__ import annotations
 
+import contextlib
+import os
+import signal
+import threading
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -129,6 +134,52 @@ class PhysicsTrainResult:
                                   self.optimal_length)
 
 
+class _StopAtStep(gym.Wrapper):
+    """Ctrl-C during physics training is raised here, between env steps, never elsewhere.
+
+    A SIGINT delivered while Python is inside a numba call's argument handling (the
+    step agent passes its ``numpy.random.Generator`` on every update) or inside a
+    Chipmunk callback crashes the process (SIGSEGV) or is lost. While training runs,
+    the signal only sets a flag; this wrapper raises ``KeyboardInterrupt`` at the next
+    ``step``/``reset``, in plain Python. A second Ctrl-C exits at once (status 130).
+    """
+
+    def __init__(self, env: Any) -> None:
+        super().__init__(env)
+        self.requested = False
+
+    def request(self, _sig: int, _frame: Any) -> None:
+        if self.requested:
+            os._exit(130)
+        self.requested = True
+
+    def _check(self) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+
+    def step(self, action: Any) -> Any:
+        out = self.env.step(action)
+        self._check()
+        return out
+
+    def reset(self, **kwargs: Any) -> Any:
+        self._check()
+        return self.env.reset(**kwargs)
+
+
+@contextlib.contextmanager
+def _sigint_to(stopper: _StopAtStep) -> Iterator[None]:
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is signal.SIG_IGN:  # e.g. a pool worker
+        yield
+        return
+    old = signal.signal(signal.SIGINT, stopper.request)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
 def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
                   rng: np.random.Generator, test_every: int = 10,
                   recorder: Any = None, plan: Any = None,
@@ -139,11 +190,22 @@ def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
     with :func:`learning.streams.streams` a grid run and a physics run of one seed
     start their episodes in the same cells.
     """
-    from scenarios.recording.hooks import ChunkLogger, EpisodeTap
+    from scenarios.recording.hooks import EpisodeTap
 
     counter = ContactCounter(gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
                                       max_episode_steps=sc.steps_per_episode))
     env = EpisodeTap(counter)
+    stopper = _StopAtStep(env)
+    with _sigint_to(stopper):
+        return _train(cfg, sc, model, n_episodes, rng, test_every, recorder, plan, start_rng,
+                      counter, env, stopper)
+
+
+def _train(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
+           rng: np.random.Generator, test_every: int, recorder: Any, plan: Any,
+           start_rng: np.random.Generator | None, counter: Any, env: Any,
+           stopper: _StopAtStep) -> PhysicsTrainResult:
+    from scenarios.recording.hooks import ChunkLogger
     from sim.physics_graph import physics_model
 
     graded = physics_model(sc)  # the physics world's own transitions and optimum
@@ -160,7 +222,7 @@ def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
             j = i + 1 if marks[i] else next((k for k in range(i, n) if marks[k]), n)
             env.armed = marks[i]
             t0 = time.perf_counter()
-            logs.append(run_env_episodes(agent, env, j - i, start_rng))
+            logs.append(run_env_episodes(agent, stopper, j - i, start_rng))
             walls.append(np.full(j - i, (time.perf_counter() - t0) / (j - i)))
             if marks[i] and recorder is not None:
                 env.log_to(recorder, done + i)

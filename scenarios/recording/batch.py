@@ -72,16 +72,16 @@ def grid_poses(model: TabularModel, states: np.ndarray,
 
 def _visited(model: TabularModel, states: np.ndarray, lens: np.ndarray) -> tuple[np.ndarray, ...]:
     """Distinct cells per episode: (centres, count per episode)."""
-    e = len(lens)
-    ep = np.repeat(np.arange(e), lens)
-    if e * model.n_states <= 20_000_000:
-        mark = np.zeros((e, model.n_states), dtype=bool)
-        mark[ep, states] = True
-        rows, cells = np.nonzero(mark)
+    e, ns = len(lens), model.n_states
+    keys = np.repeat(np.arange(e, dtype=np.int64) * ns, lens) + states
+    if e * ns <= 50_000_000:  # a flat mark and one scan: ~4x faster than a 2-D nonzero
+        mark = np.zeros(e * ns, dtype=bool)
+        mark[keys] = True
+        keys = np.flatnonzero(mark)
     else:
-        keys = np.unique(ep * model.n_states + states)
-        rows, cells = np.divmod(keys, model.n_states)
-    return model.coords[cells], np.bincount(rows, minlength=e)
+        keys = np.unique(keys)
+    rows = keys // ns
+    return model.coords[keys - rows * ns], np.bincount(rows, minlength=e)
 
 
 def _timecols(tl: dict[str, np.ndarray]) -> list[rr.TimeColumn]:

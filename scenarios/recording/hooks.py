@@ -34,6 +34,15 @@ class RecordPlan:
         return self.detail and (episode == 0 or episode == self.n_episodes - 1
                                 or episode % self.every == 0)
 
+    def wanted(self, first: int, n: int) -> list[int]:
+        """The episodes in ``first .. first + n - 1`` recorded in full (no per-episode loop:
+        this runs after every chunk of a 0.06 ms/episode kernel)."""
+        if not self.detail or n <= 0:
+            return []
+        eps = set(range(first + (-first) % self.every, first + n, self.every))
+        eps.update(e for e in (0, self.n_episodes - 1) if first <= e < first + n)
+        return sorted(eps)
+
     def wants_values(self, episodes_done: int) -> bool:
         return episodes_done % self.values_every == 0 or episodes_done == self.n_episodes
 
@@ -83,17 +92,17 @@ class GridRecorder:
         self.views = ChunkLogger(rec, plan)
 
     def trace_chunk(self, first_episode: int, n: int) -> bool:
-        return any(self.plan.wants(e) for e in range(first_episode, first_episode + n))
+        return bool(self.plan.wanted(first_episode, n))
 
     def after_chunk(self, first_episode: int, n: int, trace: np.ndarray | None,
                     arrays: dict[str, np.ndarray], state: AgentState,
                     test: tuple[int, list[int]]) -> None:
         if trace is not None:
-            for i in range(n):
-                ep = first_episode + i
-                if self.plan.wants(ep):
-                    k = int(arrays["steps"][ep])
-                    self.rec.log_episode_trajectory(ep, trace[i, :k + 1], kind="train")
+            steps = arrays["steps"]
+            for ep in self.plan.wanted(first_episode, n):
+                k = int(steps[ep])
+                self.rec.log_episode_trajectory(ep, trace[ep - first_episode, :k + 1],
+                                                kind="train")
         self.views.after_chunk(first_episode + n, arrays, state, test[1])
 
 

@@ -32,9 +32,10 @@ from numba.extending import overload
 
 from learning import kinds as K
 from learning import steps as S
-from learning.rules_plus import begin_plus, exploit_plus, update_plus
+from learning.rules_plus import act_plus, begin_plus, exploit_plus, update_plus
 
 _ACT = {K.SARSARS: S.act_sarsars, K.HAQL: S.act_haql, K.RNQL: S.act_rnql}
+_ACT[K.RNHQLP] = act_plus
 _EXPLOIT = {K.HAQL: S.exploit_haql, K.RNQL: S.exploit_rnql}
 _EXPLOIT[K.RNHQLP] = exploit_plus
 _UPDATE = {K.QL: S.update_ql, K.HAQL: S.update_haql, K.PFH: S.update_pfh,
@@ -63,6 +64,8 @@ def act(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng):
         return S.act_haql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
     if kind == K.RNQL:
         return S.act_rnql(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
+    if kind == K.RNHQLP:
+        return act_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
     return S.act_eps_greedy(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
 
 

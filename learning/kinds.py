@@ -32,7 +32,8 @@ N_PARAMS = 8
 PP_BETA, PP_WARMUP, PP_FREEZE, PP_NPLAN = 4, 5, 6, 7
 PP_VTARGET, PP_SCALE, PP_LAMQ, PP_TRACE_MIN = 8, 9, 10, 11
 PP_NORMALISE, PP_LEAKFREE, PP_REBASE = 12, 13, 14
-N_PARAMS_PLUS = 15
+PP_LOOKAHEAD, PP_NFIT = 15, 16
+N_PARAMS_PLUS = 17
 
 # ---- ivar: int64[N_IVAR], scalar integer state
 I_KIND = 0  # rule family
@@ -44,6 +45,7 @@ I_ZCUR = 5  # SARSARS: abstract state the agent is in
 I_SHAPING = 6  # 1 if shaping is added to the Q update this episode (RNHQL)
 I_TRAIN_V = 7  # 1 if V_NN is trained this episode (RNHQL)
 I_NF = 8  # number of shaping terms added this episode
+I_GOAL = 9  # RNHQLP: the goal state (the optimistic model's BFS root)
 N_IVAR = 10
 
 # ---- fvar: float64[N_FVAR], scalar float state
@@ -53,4 +55,6 @@ F_GK = 2  # SARSARS: gamma^k, k = steps since entering the abstract state
 F_FSUM, F_FSQ = 3, 4  # sum and sum of squares of the shaping terms this episode
 F_FMEAN, F_FSTD = 5, 6  # shaping mean and std of the last finished episode
 F_STEP_V = 7  # RNHQL: V_NN step size, beta / mean |phi|^2
-N_FVAR = 8
+F_RGOAL = 8  # RNHQLP: reward seen on entering G (0: not seen yet)
+F_RFREE = 9  # RNHQLP: reward seen on the last free move
+N_FVAR = 10

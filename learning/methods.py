@@ -40,11 +40,15 @@ _VALID = {
     "sigma": (lambda v: v > 0.0, "> 0"),
     "cutoff": (lambda v: v >= 0.0, ">= 0 (0: no cut-off)"),
     "normalise": (lambda v: v in (0, 1), "0 or 1"),
-    "v_target": (lambda v: v in (0, 1, 2), "0 (TD on rewards), 1 (max_a Q + Phi), 2 (its log)"),
+    "v_target": (lambda v: v in (0, 1, 2, 3, 4, 5), "0 (TD on rewards), 1 (max_a Q + Phi), 2 "
+                 "(its log), 3 (log of the optimistic model's value), 4 (that value, no "
+                 "network), 5 (log of max_a Q + Phi over that value)"),
     "shaping_scale": (lambda v: v >= 0.0, ">= 0"),
     "lam_q": (lambda v: 0.0 <= v <= 1.0, "in [0, 1]"),
     "leak_free": (lambda v: v in (0, 1), "0 or 1"),
     "rebase": (lambda v: v in (0, 1), "0 or 1"),
+    "lookahead": (lambda v: v in (0, 1), "0 or 1"),
+    "n_fit": (lambda v: v >= 0, ">= 0"),
 }
 
 
@@ -290,22 +294,27 @@ class RNHQLPlus(MethodConfig):
     cutoff: float = 2.0  # feature support radius [widths]; 0: no cut-off (dense)
     normalise: int = 0  # 1: normalised RBF (a cell's features sum to 1)
     leak_free: int = 0  # 1: features limited to cells connected to the centre by seen moves
-    v_target: int = 1  # V_NN target: 0 TD(lambda) on rewards, 1 max_a Q(s,.) + Phi(s), 2 its log
+    # V_NN target: 0 TD(lambda) on rewards, 1 max_a Q(s,.) + Phi(s), 2 its log, 3 the log of
+    # the optimistic model's value (learning.plus_optimism); 4: Phi = that value, no network
+    v_target: int = 4
     lam: float = 0.85  # V_NN trace decay lambda (v_target = 0)
     beta: float = 0.1  # V_NN step per unit of mean squared feature norm
     warmup_episodes: int = 0  # shaping starts at this 0-based episode index
     freeze_after_episodes: int | None = None  # stop training V_NN from this episode (None: never)
-    shaping_scale: float = 0.25  # Phi = shaping_scale * V_NN [dimensionless]; 0: no shaping
+    shaping_scale: float = 1.0  # Phi = shaping_scale * V_NN (or * y) [dimensionless]; 0: none
     n_planning: int = 10  # shaped model-based Q updates per real step [updates]
     lam_q: float = 0.0  # Q-table trace decay (Watkins Q(lambda), replacing); 0: Q-learning
     trace_min: float = 1e-8  # Q traces below this are dropped
-    rebase: int = 1  # 1: re-base a row's tried actions when Phi(s) changes (see above)
+    rebase: int = 0  # 1: re-base a row's tried actions when Phi(s) changes (see above)
+    lookahead: int = 1  # 1: untried actions valued by one step of look-ahead on Phi
+    n_fit: int = 0  # v_target = 3: extra V_NN fits at random states per real step [fits]
 
     def extra(self) -> tuple[float, ...]:
         freeze = math.inf if self.freeze_after_episodes is None else self.freeze_after_episodes
         return (self.beta, float(self.warmup_episodes), float(freeze), float(self.n_planning),
                 float(self.v_target), self.shaping_scale, self.lam_q, self.trace_min,
-                float(self.normalise), float(self.leak_free), float(self.rebase))
+                float(self.normalise), float(self.leak_free), float(self.rebase),
+                float(self.lookahead), float(self.n_fit))
 
     def params(self) -> np.ndarray:
         """float64[N_PARAMS_PLUS]: a longer vector than the other families (slots PP_*)."""

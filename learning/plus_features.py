@@ -13,7 +13,9 @@ import math
 import numpy as np
 from numba import njit
 
+from learning.explored import COL_NEXT, init_explored
 from learning.geometry import Geometry
+from learning.plus_optimism import optimistic_bfs
 
 # ---------------------------------------------------------------- features (numpy, once)
 
@@ -99,11 +101,16 @@ def init_plus(cfg, geom: Geometry) -> dict[str, np.ndarray]:
     imap = np.full((n_s, 3 * n_a + m), -1, dtype=np.int32)
     imap[:, n_a:2 * n_a] = 0
     imap[:, 2 * n_a:2 * n_a + m] = cids
-    ilist = np.zeros(2 * n_s * n_a + n_c + n_s, dtype=np.int32)
-    ilist[2 * n_s * n_a:2 * n_s * n_a + n_c] = -1
+    ilist = np.zeros(2 * n_s * n_a + n_c + n_s * n_a + 3 * n_s, dtype=np.int32)
+    a0 = 2 * n_s * n_a
+    ilist[a0:a0 + n_c] = -1
+    # the arena's neighbour table (the agent knows the cells, not the obstacles)
+    ilist[a0 + n_c:a0 + n_c + n_s * n_a] = init_explored(geom, False)[0][:, COL_NEXT:].ravel()
+    optimistic_bfs(imap, ilist, n_s, n_a, n_c, int(geom.goal))
     step_v = cfg.beta / float(np.mean(np.sum(base * base, axis=1)))
     return dict(q=np.zeros((n_s, n_a)), w=np.zeros(n_c), e=np.zeros(n_c + n_s), feat=feat,
-                imap=imap, fmap=np.zeros((2 * n_s, n_a)), ilist=ilist, step_v=step_v)
+                imap=imap, fmap=np.zeros((2 * n_s + 1, n_a)), ilist=ilist, step_v=step_v,
+                goal=int(geom.goal))
 
 
 # ---------------------------------------------------------------- V_NN over sparse features

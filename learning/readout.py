@@ -47,18 +47,16 @@ def q_table(st: AgentState) -> np.ndarray:
 
 
 def potential(st: AgentState) -> np.ndarray | None:
-    """float64[nS]: V_NN(s) of RNH-QL or RNH-QL+ over every state; None for other methods.
-
-    RNH-QL+'s features are sparse (see learning.rules_plus): M effective values per
-    state in ``feat[:, :M]`` and their centre ids in ``imap[:, 2nA:2nA+M]`` (-1: none).
-    """
+    """float64[nS]: the shaping potential over every state: V_NN(s) of RNH-QL, Phi(s) of
+    RNH-QL+ (the value its rules shape with, :func:`learning.rules_plus.potential`);
+    None for other methods."""
     kind = int(st.ivar[K.I_KIND])
     if kind == K.RNHQL:
         return st.feat @ st.w
     if kind == K.RNHQLP:
-        m = st.feat.shape[1] // 2
-        n_a = st.q.shape[1]
-        ids = st.imap[:, 2 * n_a:2 * n_a + m]
-        w = st.w[np.maximum(ids, 0)]
-        return np.sum(np.where(ids >= 0, st.feat[:, :m] * w, 0.0), axis=1)
+        from learning.rules_plus import potential_table
+
+        out = np.zeros(st.q.shape[0])
+        potential_table(st.fvar, st.par, st.w, st.feat, st.imap, st.ilist, out)
+        return out
     return None

@@ -44,10 +44,27 @@ from numba import njit
 
 from learning import kinds as K
 from learning.plus_features import leak_free_edge, leak_free_enter
-from learning.rules import clear_traces, is_greedy, q_lambda, q_learning, record_shaping, row_max
+from learning.plus_optimism import (
+    neighbour_base,
+    observe_rewards,
+    optimistic_bfs,
+    optimistic_value,
+)
+from learning.rules import (
+    argmax_first,
+    argmax_random,
+    clear_traces,
+    eps_greedy,
+    is_greedy,
+    q_lambda,
+    q_learning,
+    record_shaping,
+    row_max,
+)
 
 INLINE = dict(cache=True, inline="always")
 LOG_FLOOR = 1e-3  # v_target = 2: values below this [reward units] are learned as this
+OPT_FLOOR = 1e-12  # v_target = 3: optimistic values below this are learned as this
 
 
 @njit(**INLINE)
@@ -94,11 +111,23 @@ def v_td_lambda(w, e, feat, imap, s, r, v_s2, greedy, gamma, lam, step):
 
 
 @njit(**INLINE)
-def potential(w, feat, imap, s, par):
-    """Phi(s) = scale * V_NN(s), or scale * exp(V_NN(s)) when V_NN learns log values
-    (v_target = 2)."""
+def potential(fvar, par, w, feat, imap, ilist, s):
+    """Phi(s) = scale * V_NN(s); scale * exp(V_NN(s)) when V_NN learns log values
+    (v_target 2, 3); scale * y(s), the optimistic model's value itself, with no network
+    (v_target 4, the reference row of the ablation)."""
+    vt = par[K.PP_VTARGET]
+    if vt == 4.0:
+        m_n = feat.shape[1] // 2
+        n_a = (imap.shape[1] - m_n) // 3
+        return par[K.PP_SCALE] * optimistic_value(fvar, par, ilist, imap.shape[0], n_a,
+                                                  w.shape[0], s)
     v = v_of(w, feat, imap, s)
-    if par[K.PP_VTARGET] == 2.0:
+    if vt == 5.0:  # V_NN learns log(V / y), at most 0: Phi never above the optimistic value
+        m_n = feat.shape[1] // 2
+        n_a = (imap.shape[1] - m_n) // 3
+        y = optimistic_value(fvar, par, ilist, imap.shape[0], n_a, w.shape[0], s)
+        return par[K.PP_SCALE] * y * math.exp(min(v, 0.0))
+    if vt == 2.0 or vt == 3.0:
         v = math.exp(min(v, 50.0))
     return par[K.PP_SCALE] * v
 
@@ -107,11 +136,11 @@ def potential(w, feat, imap, s, par):
 
 
 @njit(**INLINE)
-def rebase(q, w, e, feat, imap, s, par):
+def rebase(fvar, par, q, w, e, feat, imap, ilist, s):
     """Phi(s) now; row s's tried actions re-based onto it (Q + Phi unchanged), untried ones
     left at 0, i.e. valued at Phi(s). Returns Phi(s)."""
     n_c = w.shape[0]
-    phi = potential(w, feat, imap, s, par)
+    phi = potential(fvar, par, w, feat, imap, ilist, s)
     d = e[n_c + s] - phi
     if d != 0.0:
         for a in range(q.shape[1]):
@@ -132,8 +161,57 @@ def tried_max(q, imap, s):
 
 
 @njit(**INLINE)
+def action_values(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
+    """Row s's action values (in re-based units, Q + Phi - Phi(s)) into the scratch row
+    fmap[2 nS]: a tried action its Q; an untried one one step of look-ahead in the
+    optimistic model, r_free + gamma * Phi(neighbour) - Phi(s) (r_goal - Phi(s) into G,
+    -inf off the arena). Returns the scratch row's index."""
+    n_s, n_a = q.shape[0], q.shape[1]
+    n_c = w.shape[0]
+    row = 2 * n_s
+    phi_s = e[n_c + s] if par[K.PP_REBASE] != 0.0 else potential(fvar, par, w, feat, imap,
+                                                                   ilist, s)
+    nb0 = neighbour_base(n_s, n_a, n_c)
+    for a in range(n_a):
+        if imap[s, a] >= 0:
+            fmap[row, a] = q[s, a]
+            continue
+        u = ilist[nb0 + s * n_a + a]
+        if u < 0:
+            fmap[row, a] = -np.inf
+        elif u == ivar[K.I_GOAL]:
+            fmap[row, a] = (fvar[K.F_RGOAL] if fvar[K.F_RGOAL] > 0.0 else 1.0) - phi_s
+        else:
+            fmap[row, a] = (fvar[K.F_RFREE] + par[K.P_GAMMA]
+                            * potential(fvar, par, w, feat, imap, ilist, u) - phi_s)
+    return row
+
+
+@njit(**INLINE)
+def lookahead_on(ivar, par):
+    return par[K.PP_LOOKAHEAD] != 0.0 and ivar[K.I_SHAPING] != 0
+
+
+@njit(**INLINE)
+def act_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng):
+    """Epsilon-greedy; with look-ahead, greedy over :func:`action_values` (ties drawn)."""
+    if not lookahead_on(ivar, par):
+        return eps_greedy(q, s, par[K.P_EPS], rng)
+    if rng.random() < par[K.P_EPS]:
+        return rng.integers(0, q.shape[1])
+    row = action_values(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
+    return argmax_random(fmap, row, rng)
+
+
+@njit(**INLINE)
 def exploit_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
-    """Greedy test policy: argmax over tried actions (re-based rows), ties to the lowest."""
+    """Greedy test policy, ties to the lowest index: with look-ahead over
+    :func:`action_values`; else over tried actions (re-based rows), or over Q."""
+    if lookahead_on(ivar, par):
+        if par[K.PP_REBASE] != 0.0:
+            rebase(fvar, par, q, w, e, feat, imap, ilist, s)
+        return argmax_first(fmap, action_values(ivar, fvar, par, q, w, e, feat, imap, fmap,
+                                                ilist, s))
     a = 0
     if par[K.PP_REBASE] != 0.0:
         m = -np.inf
@@ -166,24 +244,30 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     based = shaping and par[K.PP_REBASE] != 0.0
     n_c = w.shape[0]
     if based:
-        rebase(q, w, e, feat, imap, s, par)
+        rebase(fvar, par, q, w, e, feat, imap, ilist, s)
+    vt = par[K.PP_VTARGET]
+    observe_rewards(fvar, s, r, s2, terminated)
     # model first: a new move may join s' to supports before Phi(s') is read
+    new_bump = False
     if imap[s, a] < 0:
         ilist[ivar[K.I_NSEEN]] = s * n_a + a
         ivar[K.I_NSEEN] += 1
         if leak_free and s2 != s:
             leak_free_edge(feat, imap, ilist, n_s, n_a, s, s2, normalise)
+        new_bump = s2 == s and not terminated
     imap[s, a] = s2
     imap[s, n_a + a] = 1 if terminated else 0
     fmap[s, a] = r
+    if new_bump and vt >= 3.0:  # the optimistic model changed
+        optimistic_bfs(imap, ilist, n_s, n_a, n_c, ivar[K.I_GOAL])
     if leak_free and not terminated:
         leak_free_enter(feat, imap, ilist, n_s, n_a, s2, normalise)
     v2 = 0.0 if terminated else v_of(w, feat, imap, s2)
-    phi_s2 = 0.0 if terminated else potential(w, feat, imap, s2, par)
+    phi_s2 = 0.0 if terminated else potential(fvar, par, w, feat, imap, ilist, s2)
     if based and not terminated:
-        phi_s2 = rebase(q, w, e, feat, imap, s2, par)
+        phi_s2 = rebase(fvar, par, q, w, e, feat, imap, ilist, s2)
     train_v = ivar[K.I_TRAIN_V] != 0
-    td = par[K.PP_VTARGET] == 0.0
+    td = vt == 0.0
     if train_v and td:
         v_td_lambda(w, e, feat, imap, s, r, v2, is_greedy(q, s, a), gamma, par[K.P_LAMBDA],
                     fvar[K.F_STEP_V])
@@ -197,16 +281,30 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
                  par[K.PP_LAMQ], par[K.PP_TRACE_MIN], f)
     else:
         q_learning(q, s, a, r, s2, terminated, alpha, gamma, f)
-    if train_v and not td:
+    if train_v and vt == 3.0:  # V_NN learns log y: at s and at n_fit random states
+        y = optimistic_value(fvar, par, ilist, n_s, n_a, n_c, s)
+        v_regress(w, feat, imap, s, math.log(max(y, OPT_FLOOR)), fvar[K.F_STEP_V])
+        for _ in range(int(par[K.PP_NFIT])):
+            j = rng.integers(0, n_s)
+            y = optimistic_value(fvar, par, ilist, n_s, n_a, n_c, j)
+            v_regress(w, feat, imap, j, math.log(max(y, OPT_FLOOR)), fvar[K.F_STEP_V])
+    elif train_v and not td and vt != 4.0:
         if based:
             target = tried_max(q, imap, s) + e[n_c + s]
         else:
             target = row_max(q, s)
             if shaping:
                 target += fvar[K.F_PHI]
-        if par[K.PP_VTARGET] == 2.0:  # V_NN learns log values: Phi = scale * exp(V_NN)
+        fit = True
+        if vt == 2.0:  # V_NN learns log values: Phi = scale * exp(V_NN)
             target = math.log(max(target, LOG_FLOOR))
-        v_regress(w, feat, imap, s, target, fvar[K.F_STEP_V])
+        elif vt == 5.0:  # V_NN learns the log of the table's value over the optimistic one
+            y = optimistic_value(fvar, par, ilist, n_s, n_a, n_c, s) * par[K.PP_SCALE]
+            fit = y > 0.0
+            if fit:
+                target = math.log(max(target, OPT_FLOOR) / y)
+        if fit:
+            v_regress(w, feat, imap, s, target, fvar[K.F_STEP_V])
     n_seen = ivar[K.I_NSEEN]
     for _ in range(int(par[K.PP_NPLAN])):
         j = ilist[rng.integers(0, n_seen)]
@@ -216,12 +314,12 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
         pterm = imap[ps, n_a + pa] != 0
         pf = 0.0
         if based:
-            p1 = rebase(q, w, e, feat, imap, ps, par)
-            p2 = 0.0 if pterm else rebase(q, w, e, feat, imap, ps2, par)
+            p1 = rebase(fvar, par, q, w, e, feat, imap, ilist, ps)
+            p2 = 0.0 if pterm else rebase(fvar, par, q, w, e, feat, imap, ilist, ps2)
             pf = gamma * p2 - p1
         elif shaping:
-            p2 = 0.0 if pterm else potential(w, feat, imap, ps2, par)
-            pf = gamma * p2 - potential(w, feat, imap, ps, par)
+            p2 = 0.0 if pterm else potential(fvar, par, w, feat, imap, ilist, ps2)
+            pf = gamma * p2 - potential(fvar, par, w, feat, imap, ilist, ps)
         q_learning(q, ps, pa, fmap[ps, pa], ps2, pterm, alpha, gamma, pf)
     fvar[K.F_PHI] = phi_s2
 
@@ -244,4 +342,14 @@ def begin_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
     ivar[K.I_TRAIN_V] = 1 if ep < par[K.PP_FREEZE] else 0
     if par[K.PP_LEAKFREE] != 0.0:
         leak_free_enter(feat, imap, ilist, n_s, n_a, s0, par[K.PP_NORMALISE] != 0.0)
-    fvar[K.F_PHI] = potential(w, feat, imap, s0, par)
+    if ivar[K.I_SHAPING] != 0 and par[K.PP_REBASE] != 0.0:
+        fvar[K.F_PHI] = rebase(fvar, par, q, w, e, feat, imap, ilist, s0)
+    else:
+        fvar[K.F_PHI] = potential(fvar, par, w, feat, imap, ilist, s0)
+
+
+@njit(cache=True)
+def potential_table(fvar, par, w, feat, imap, ilist, out):
+    """out[s] = Phi(s) for every state (the recorder's potential panel)."""
+    for s in range(out.shape[0]):
+        out[s] = potential(fvar, par, w, feat, imap, ilist, s)

@@ -108,6 +108,7 @@ def init_state(cfg: MethodConfig, geom: Geometry, rng: np.random.Generator) -> A
         q, w, e, feat = sl["q"], sl["w"], sl["e"], sl["feat"]
         imap, fmap, ilist = sl["imap"], sl["fmap"], sl["ilist"]
         fvar[K.F_STEP_V] = sl["step_v"]
+        ivar[K.I_GOAL] = sl["goal"]
     else:
         raise ValueError(f"{type(cfg).__name__} has unknown rule family {kind}")
     return AgentState(ivar=ivar, fvar=fvar, par=cfg.params(), q=q, w=w, e=e,

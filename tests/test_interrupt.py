@@ -20,8 +20,11 @@ CLI = [sys.executable, "-m", "scenarios.cli"]
 
 
 def start(args: list[str], cwd: Path) -> subprocess.Popen:
+    # SIGINT back to its default in the child: a test run started in the background of a
+    # non-interactive shell inherits SIGINT ignored, and Python then never raises on it
     return subprocess.Popen([*CLI, *args], cwd=cwd, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
                             env={**os.environ, "PYTHONPATH": str(Path(__file__).parent.parent)})
 
 

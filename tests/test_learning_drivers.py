@@ -33,6 +33,8 @@ CONFIGS = [cls() for cls in METHODS.values()] + [
     RNHQLPlus(leak_free=1, normalise=1), RNHQLPlus(lam_q=0.8, n_planning=2),
     RNHQLPlus(v_target=0, rebase=0, warmup_episodes=20, freeze_after_episodes=40),
     RNHQLPlus(v_target=2, spacing=0, cutoff=0),
+    RNHQLPlus(v_target=3, spacing=2, sigma=0.5, n_fit=3), RNHQLPlus(v_target=5),
+    RNHQLPlus(v_target=1, rebase=1, shaping_scale=0.25),  # look-ahead on re-based rows
 ]
 
 

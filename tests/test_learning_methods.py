@@ -68,9 +68,10 @@ def test_rnh_ql_plus_defaults_packing_and_validation():
     p = cfg.params()
     assert p.shape == (K.N_PARAMS_PLUS,)
     assert p[K.PP_NPLAN] == cfg.n_planning and p[K.PP_SCALE] == cfg.shaping_scale
-    assert math.isinf(p[K.PP_FREEZE]) and p[K.PP_REBASE] == 1
+    assert math.isinf(p[K.PP_FREEZE]) and p[K.PP_REBASE] == 0 and p[K.PP_LOOKAHEAD] == 1
+    assert p[K.PP_VTARGET] == 4 and p[K.PP_NFIT] == cfg.n_fit
     assert config_from_fields("rnh-ql+", cfg.fields()) == cfg
-    for bad in (dict(v_target=3), dict(leak_free=2), dict(sigma=0.0), dict(lam_q=1.5)):
+    for bad in (dict(v_target=6), dict(lookahead=2), dict(leak_free=2), dict(sigma=0.0), dict(lam_q=1.5)):
         with pytest.raises(ValueError, match=f"RNHQLPlus.{next(iter(bad))}"):
             RNHQLPlus(**bad)
 

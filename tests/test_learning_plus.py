@@ -1,4 +1,4 @@
-"""RNH-QL+: sparse features, leak-free supports, and the Dyna-Q limit (shaping_scale = 0)."""
+"""RNH-QL+: sparse features, leak-free supports, the optimistic model, the Dyna-Q limit."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ def test_sparse_features_match_dense_within_cutoff(paper50_model):
 
 
 def test_scale_zero_is_dyna_q(paper50_model):
-    a = train_tabular(RNHQLPlus(shaping_scale=0.0, n_planning=5), paper50_model, 30,
+    a = train_tabular(RNHQLPlus(shaping_scale=0.0, lookahead=0, n_planning=5), paper50_model, 30,
                       np.random.default_rng(3))
     b = train_tabular(METHODS["dyna-q"](), paper50_model, 30, np.random.default_rng(3))
     np.testing.assert_array_equal(a.state.q, b.state.q)
@@ -45,18 +45,57 @@ def test_leak_free_supports_only_grow_along_seen_moves(paper50_model):
     assert np.all((visited | ends)[on.any(axis=1)])
 
 
-def test_readout_potential_equals_the_networks_value():
-    """The recorder's V_NN heat map for rnh-ql+ is the value the rules compute."""
-    import numpy as np
-
-    from learning.methods import METHODS
+def test_readout_potential_is_the_potential_the_rules_shape_with():
+    """The recorder's potential heat map for rnh-ql+ is Phi as the rules compute it, for the
+    default (the optimistic model's value) and for a network potential."""
     from learning.readout import potential
-    from learning.rules_plus import v_of
-    from learning.train import train_tabular
+    from learning.rules_plus import potential as rule_potential
     from scenarios.runs.spec import load
 
     _, m = load("paper-40", None, None, "goal-only")
-    st = train_tabular(METHODS["rnh-ql+"](), m, 100, np.random.default_rng(0)).state
-    ref = np.array([v_of(st.w, st.feat, st.imap, s) for s in range(m.n_states)])
-    np.testing.assert_allclose(potential(st), ref, atol=1e-12)
-    assert np.abs(ref).max() > 0
+    refs = []
+    for cfg in (RNHQLPlus(), RNHQLPlus(v_target=1, shaping_scale=0.25, rebase=1)):
+        st = train_tabular(cfg, m, 100, np.random.default_rng(0)).state
+        ref = np.array([rule_potential(st.fvar, st.par, st.w, st.feat, st.imap, st.ilist, s)
+                        for s in range(m.n_states)])
+        np.testing.assert_allclose(potential(st), ref, atol=1e-12)
+        assert np.abs(ref).max() > 0
+        refs.append(ref)
+    # the default's potential: the goal reward next to G, 0 at G, gamma per move further
+    assert refs[0].max() == 100.0 and refs[0][m.goal] == 0.0
+
+
+def test_optimistic_distances_are_free_space_bfs_then_go_round_a_seen_bump():
+    """Before any move the optimistic model is the empty arena: BFS distance = Manhattan
+    distance to G; after a bump on the way, the BFS goes round it."""
+    from learning import kinds as K
+    from learning.plus_optimism import neighbour_base, optimistic_bfs
+    from learning.state import init_state
+    from scenarios.runs.spec import load
+
+    _, m = load("paper-40", None, None, "goal-only")
+    geom = geometry_of(m)
+    st = init_state(RNHQLPlus(), geom, np.random.default_rng(0))
+    n_s, n_a, n_c = geom.n_states, 4, st.w.shape[0]
+    d0 = neighbour_base(n_s, n_a, n_c) + n_s * n_a
+    dist = st.ilist[d0:d0 + n_s]
+    g = geom.cells[geom.goal]
+    manhattan = np.abs(geom.cells - g).sum(axis=1)
+    np.testing.assert_array_equal(dist, manhattan)
+    # mark the move "right" from the cell left of G as failed: that cell must go round
+    left = int(np.flatnonzero((geom.cells == g - [1, 0]).all(axis=1))[0])
+    st.imap[left, 3] = left
+    optimistic_bfs(st.imap, st.ilist, n_s, n_a, n_c, int(st.ivar[K.I_GOAL]))
+    assert dist[left] == 3 and dist[geom.goal] == 0
+
+
+def test_rnh_ql_plus_learns_zigzag_where_rnh_ql_does_not():
+    """zigzag-50 (a 212-move route round large walls): the default rnh-ql+ finds the optimal
+    route within 300 episodes; the paper's rnh-ql does not (goal-only rewards, seed 0)."""
+    from scenarios.runs.spec import load
+
+    _, m = load("zigzag-50", None, None, "goal-only")
+    plus = train_tabular(RNHQLPlus(), m, 300, np.random.default_rng(0))
+    assert plus.final_route_length == m.optimal_route_length == 212
+    base = train_tabular(METHODS["rnh-ql"](), m, 300, np.random.default_rng(0))
+    assert base.final_route_length != 212

@@ -24,16 +24,25 @@ import numpy as np
 
 from scenarios.experiments.suite import build_suite
 
-# label, method, overrides: each row adds one ingredient to the row above it
+# label, method, overrides: each row adds one ingredient to the row above it, down to
+# rnh-ql+; the rows after it take one ingredient away again, or are references
+_V1 = (("v_target", 1), ("shaping_scale", 0.25), ("rebase", 1), ("lookahead", 0))
 _OFF = (("v_target", 0), ("warmup_episodes", 300), ("shaping_scale", 1.0), ("rebase", 0),
-        ("n_planning", 0))
+        ("n_planning", 0), ("lookahead", 0))
 VARIANTS: list[tuple[str, str, tuple[tuple[str, float], ...]]] = [
     ("rnh-ql", "rnh-ql", ()),
     ("+A lattice every 4 cells, sparse (cut-off 2 widths)", "rnh-ql+", _OFF),
-    ("+B V_NN toward max Q + Phi, no warm-up", "rnh-ql+", _OFF[2:]),
-    ("+C re-based rows, Phi = 0.25 V_NN", "rnh-ql+", _OFF[4:]),
-    ("+D 10 shaped planning updates (= rnh-ql+)", "rnh-ql+", ()),
-    ("rnh-ql+ leak_free=1", "rnh-ql+", (("leak_free", 1),)),
+    ("+B V_NN toward max Q + Phi, no warm-up", "rnh-ql+", _V1[:2] + _OFF[2:]),
+    ("+C re-based rows, Phi = 0.25 V_NN", "rnh-ql+", _V1 + _OFF[4:5]),
+    ("+D 10 shaped planning updates", "rnh-ql+", _V1),
+    ("+E Phi = the optimistic model's value, look-ahead on untried moves, no re-basing "
+     "(= rnh-ql+)", "rnh-ql+", ()),
+    ("rnh-ql+, V_NN (a centre per cell) learns that value", "rnh-ql+",
+     (("v_target", 3), ("spacing", 1), ("sigma", 0.5), ("n_fit", 10), ("beta", 0.5))),
+    ("rnh-ql+, V_NN learns the table's value over it (residual)", "rnh-ql+",
+     (("v_target", 5),)),
+    ("rnh-ql+ without look-ahead", "rnh-ql+", (("lookahead", 0),)),
+    ("rnh-ql+ without planning", "rnh-ql+", (("n_planning", 0),)),
     ("dyna-q", "dyna-q", ()),
     ("dyna-q, 10 planning updates (rnh-ql+'s budget)", "dyna-q", (("n_planning", 10),)),
     ("q-lambda", "q-lambda", ()),

@@ -256,20 +256,29 @@ class RNHQL(MethodConfig):
 
 @dataclass(frozen=True)
 class RNHQLPlus(MethodConfig):
-    """RNH-QL+: RNH-QL's two layers (Q-table below, RBF V_NN shaping it above), fixed where
-    the measurements of issue 10 show it breaking. Rules in :mod:`learning.rules_plus`.
+    """RNH-QL+: RNH-QL's two layers (Q-table below, a potential shaping it above), fixed
+    where the measurements of issue 10 show it breaking. Rules in :mod:`learning.rules_plus`.
 
     Every ingredient is a field, so an ablation is ``--set field=value``; with
     ``spacing=0, cutoff=0, v_target=0, warmup_episodes=300, shaping_scale=1, rebase=0,
-    n_planning=0`` it is the paper's RNH-QL (dense 10 x 10 lattice, TD(lambda) on
-    rewards, no planning); with ``shaping_scale=0`` it is Dyna-Q (bit for bit).
+    n_planning=0, lookahead=0`` it is the paper's RNH-QL (dense 10 x 10 lattice, TD(lambda)
+    on rewards, no planning); with ``shaping_scale=0, lookahead=0`` it is Dyna-Q (bit for
+    bit).
 
+    * ``v_target``: where the potential comes from. 0: V_NN by TD(lambda) on the env
+      rewards (the paper); 1: V_NN regressed (normalised LMS) toward the table's own
+      max_a Q(s, .) + Phi(s); 2: the log of that; 3: V_NN regressed toward the log of
+      the optimistic model's value y(s) (:mod:`learning.plus_optimism`: the value of the
+      shortest route to G over the moves not seen to fail), at s and ``n_fit`` random
+      states per step; **4 (default): Phi = y itself, no network** (every network
+      variant measured worse, see the README's ablation); 5: Phi = y * exp(V_NN), V_NN
+      learning log(max_a Q + Phi over y), at most 0.
+    * ``lookahead=1``: an untried action is valued by one step of look-ahead in the
+      optimistic model, r_free + gamma * Phi(neighbour) - Phi(s) (Wiewiora's look-ahead
+      advice), in acting and in the greedy test.
     * ``spacing``: centres every ``spacing`` cells (a lattice tied to the map
       size, centred on it), width ``sigma * spacing`` cells; ``cutoff`` makes
       the features sparse (the hot loop touches ~13-20 weights, not K).
-    * ``v_target=1``: V_NN is regressed (normalised LMS) toward the table's own
-      value of the state it leaves, max_a Q(s, .) + Phi(s) (the Q-table learns
-      Q* - Phi), instead of TD(lambda) on the env rewards.
     * ``leak_free=1``: a centre's feature is 0 at a cell not connected to the
       centre's anchor cell (the first visited cell nearest the centre) by moves
       the agent has seen succeed, staying within the support window: the
@@ -281,8 +290,9 @@ class RNHQLPlus(MethodConfig):
     * ``rebase=1``: when Phi(s) changes, the tried actions of row s are re-based
       (Q(s, a) += Phi_old(s) - Phi_new(s)) so what was learned is never moved by
       the potential drifting; the potential then values only the actions not
-      tried yet (Wiewiora 2003: shaping = initialising Q with Phi), and greedy
-      tests pick among tried actions.
+      tried yet (Wiewiora 2003: shaping = initialising Q with Phi). Off by default:
+      values learned while the optimistic model was too optimistic would stay
+      inflated after it learns of a wall (measured: no route on zigzag-50).
     """
 
     name: ClassVar[str] = "RNH-QL+"

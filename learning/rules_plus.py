@@ -1,21 +1,31 @@
 """RNH-QL+ (``rnh-ql+``, :class:`learning.methods.RNHQLPlus`): rules and agent events.
 
-Features (lattice, sparse Gaussians, leak-free supports) are in :mod:`learning.plus_features`.
+Features (lattice, sparse Gaussians, leak-free supports) are in
+:mod:`learning.plus_features`; the optimistic model in :mod:`learning.plus_optimism`.
 
-The architecture is RNH-QL's: a Q-table below, a Gaussian RBF value network
-V_NN above, shaping the Q update with F = gamma * Phi(s') - Phi(s), Phi =
-shaping_scale * V_NN cached when a state is entered, Phi(goal) = 0. What
-changes (each a config field, see the class docs):
+The architecture is RNH-QL's: a Q-table below, a potential above that shapes
+the Q update with F = gamma * Phi(s') - Phi(s), Phi(goal) = 0. What changes
+(each a config field, see the class docs):
 
+* the potential (``v_target``): 0 the paper's V_NN by TD(lambda) on rewards;
+  1 V_NN toward the table's own max_a Q(s, .) + Phi(s); 2 its log; 3 V_NN
+  toward the log of the optimistic model's value y(s); **4 (the default)
+  Phi = y(s) itself, no network**; 5 Phi = y(s) * exp(V_NN(s)), V_NN learning
+  the log of the table's value over y (a residual, at most 0);
+* ``lookahead``: an untried action is valued by one step of look-ahead on Phi
+  in the optimistic model (Wiewiora's look-ahead advice), so the agent heads
+  for G along the route it believes free instead of trying actions in index
+  order;
 * the lattice is tied to the map (a centre every ``spacing`` cells) and the
   features are **sparse**: each state lists its M nearest centres within
   ``cutoff`` widths, so a step costs O(M), not O(K), on any map size;
-* V_NN is trained toward the table's own value of the state just left,
-  max_a Q(s, .) + Phi(s) (``v_target=1``), or by TD(lambda) on rewards (0);
 * ``leak_free``: a centre's feature is switched on at a cell only once the
   cell is connected to the centre's anchor by moves the agent has seen
   succeed, inside the centre's support window; supports only grow, by a flood
   fill each time a new move is seen, so each (cell, centre) pair is added once;
+* ``rebase``: when Phi(s) changes, row s's tried actions are shifted so Q + Phi
+  is unchanged (off by default: when the optimistic model learns of a wall,
+  Phi falls and so should the values learned through it);
 * a learned deterministic model drives ``n_planning`` shaped Q updates per
   step (Dyna), and ``lam_q`` adds Watkins Q(lambda) traces to the real step.
 
@@ -29,8 +39,9 @@ e           [K + nS]: V_NN traces [:K] (v_target = 0), Phi each row is based on 
 feat        [nS, 2M]: effective feature values [:, :M], Gaussian values [:, M:]
 imap        [nS, 3nA + M]: model s' [:, :nA] (-1 unseen), terminated [:, nA:2nA],
             feature centre ids [:, 2nA:2nA+M], seen predecessors [:, 2nA+M:] (-1)
-fmap        [2nS, nA]: model reward [:nS], Q(lambda) traces [nS:]
-ilist       [2nS*nA + K + nS]: seen pairs, Q-trace list, centre anchors (-1 none),
+fmap        [2nS + 1, nA]: model reward [:nS], Q(lambda) traces [nS:2nS], scratch row
+ilist       [2nS*nA + K + nS*nA + 3nS]: seen pairs, Q-trace list, centre anchors (-1 none),
+            arena neighbours, BFS distances, BFS queue (learning.plus_optimism),
             flood-fill stack
 ==========  ==================================================================
 """

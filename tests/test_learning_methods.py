@@ -71,7 +71,8 @@ def test_rnh_ql_plus_defaults_packing_and_validation():
     assert math.isinf(p[K.PP_FREEZE]) and p[K.PP_REBASE] == 0 and p[K.PP_LOOKAHEAD] == 1
     assert p[K.PP_VTARGET] == 4 and p[K.PP_NFIT] == cfg.n_fit
     assert config_from_fields("rnh-ql+", cfg.fields()) == cfg
-    for bad in (dict(v_target=6), dict(lookahead=2), dict(leak_free=2), dict(sigma=0.0), dict(lam_q=1.5)):
+    for bad in (dict(v_target=6), dict(lookahead=2), dict(leak_free=2), dict(sigma=0.0),
+                dict(lam_q=1.5)):
         with pytest.raises(ValueError, match=f"RNHQLPlus.{next(iter(bad))}"):
             RNHQLPlus(**bad)
 

@@ -16,8 +16,9 @@ Every random number either driver uses is drawn inside these functions (or
 runs. Draw order per step: ``act`` (one ``random()``, then ``integers(0, nA)``
 when exploring or ``integers(0, n_ties)`` on a greedy tie; SARSA-RS draws
 nothing when it replays the action chosen at its last update), then ``update``
-(SARSA-RS: the next action's draws unless terminated; Dyna-Q: ``n_planning``
-``integers(0, n_seen)``). Per episode: ``draw_start`` first (one ``integers``).
+(SARSA-RS: the next action's draws unless terminated; Dyna-Q and RNH-QL+: ``n_planning``
+``draw_below(n_seen)``, one ``random()`` each; RNH-QL+'s look-ahead ``act`` draws its
+exploring move and ties the same way). Per episode: ``draw_start`` first (one ``integers``).
 
 The agent state is passed as its ten arrays (``*state``): a tuple argument is
 passed field by field to a compiled callee, which measured 4x slower.

@@ -108,7 +108,9 @@ def init_plus(cfg, geom: Geometry) -> dict[str, np.ndarray]:
     ilist[a0 + n_c:a0 + n_c + n_s * n_a] = init_explored(geom, False)[0][:, COL_NEXT:].ravel()
     optimistic_bfs(imap, ilist, n_s, n_a, n_c, int(geom.goal))
     step_v = cfg.beta / float(np.mean(np.sum(base * base, axis=1)))
-    return dict(q=np.zeros((n_s, n_a)), w=np.zeros(n_c), e=np.zeros(n_c + n_s), feat=feat,
+    e = np.zeros(n_c + 2 * n_s + 2)
+    e[n_c + 2 * n_s] = -1.0  # y not computed yet (learning.plus_optimism)
+    return dict(q=np.zeros((n_s, n_a)), w=np.zeros(n_c), e=e, feat=feat,
                 imap=imap, fmap=np.zeros((2 * n_s + 1, n_a)), ilist=ilist, step_v=step_v,
                 goal=int(geom.goal))
 

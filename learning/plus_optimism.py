@@ -22,7 +22,9 @@ is seen to fail for the first time: O(states) per new blocked move.
 Slots (appended to :mod:`learning.rules_plus`'s ``ilist``, K centres, nS
 states, nA actions): ``[2 nS nA + K, + nS nA)`` the arena neighbour of each
 move (-1 off the arena), then ``nS`` BFS distances (-1: no route), then an
-``nS`` BFS queue; ``fmap[2 nS]`` is a scratch row for the action values.
+``nS`` BFS queue; ``fmap[2 nS]`` is a scratch row for the action values. ``e``
+(after the K traces and nS cached potentials of the rows) holds y of every state and,
+last, the two rewards it was computed with (the first -1 after a new BFS: stale).
 """
 
 from __future__ import annotations
@@ -72,19 +74,44 @@ def optimistic_bfs(imap, ilist, n_s, n_a, n_c, goal):
             tail += 1
 
 
-@njit(**INLINE)
-def optimistic_value(fvar, par, ilist, n_s, n_a, n_c, s):
-    """y(s), the value of s in the optimistic model (see the module docs)."""
-    d = ilist[neighbour_base(n_s, n_a, n_c) + n_s * n_a + s]
+@njit(cache=True)
+def refresh_values(fvar, par, ilist, e, n_s, n_a, n_c):
+    """Fill the cache of y (``e[nK + nS + s]``) from the BFS distances and the rewards
+    seen, and stamp it with those rewards. O(states); runs after a BFS and when a
+    reward of the model changes, so a read of y is a load, not a power."""
+    d0 = neighbour_base(n_s, n_a, n_c) + n_s * n_a
+    y0 = n_c + n_s
     g = par[K.P_GAMMA]
     r_free = fvar[K.F_RFREE]
-    if d < 0:
-        return r_free / (1.0 - g) if r_free > 0.0 else 0.0
-    if d == 0:
-        return 0.0
     r_goal = fvar[K.F_RGOAL] if fvar[K.F_RGOAL] > 0.0 else 1.0
-    gd = g ** (d - 1)
-    return r_free * (1.0 - gd) / (1.0 - g) + gd * r_goal
+    wander = r_free / (1.0 - g) if r_free > 0.0 else 0.0
+    for s in range(n_s):
+        d = ilist[d0 + s]
+        if d < 0:
+            e[y0 + s] = wander
+        elif d == 0:
+            e[y0 + s] = 0.0
+        else:
+            gd = g ** (d - 1)
+            e[y0 + s] = r_free * (1.0 - gd) / (1.0 - g) + gd * r_goal
+    e[y0 + n_s] = r_goal
+    e[y0 + n_s + 1] = r_free
+
+
+@njit(**INLINE)
+def mark_stale(e, n_s, n_c):
+    """The BFS distances changed: the next read of y refreshes the cache."""
+    e[n_c + 2 * n_s] = -1.0  # never a goal reward in force (those are > 0)
+
+
+@njit(**INLINE)
+def optimistic_value(fvar, par, ilist, e, n_s, n_a, n_c, s):
+    """y(s), the value of s in the optimistic model (see the module docs), from the cache."""
+    y0 = n_c + n_s
+    r_goal = fvar[K.F_RGOAL] if fvar[K.F_RGOAL] > 0.0 else 1.0
+    if e[y0 + n_s] != r_goal or e[y0 + n_s + 1] != fvar[K.F_RFREE]:  # -1: stale
+        refresh_values(fvar, par, ilist, e, n_s, n_a, n_c)
+    return e[y0 + s]
 
 
 @njit(**INLINE)

@@ -57,6 +57,6 @@ def potential(st: AgentState) -> np.ndarray | None:
         from learning.rules_plus import potential_table
 
         out = np.zeros(st.q.shape[0])
-        potential_table(st.fvar, st.par, st.w, st.feat, st.imap, st.ilist, out)
+        potential_table(st.fvar, st.par, st.w, st.e, st.feat, st.imap, st.ilist, out)
         return out
     return None

@@ -69,6 +69,39 @@ def argmax_random(q, s, rng):
 
 
 @njit(cache=True, inline="always")
+def draw_below(rng, n):
+    """A uniform index in [0, n) from one ``rng.random()``: ~15x cheaper than numba's
+    ``rng.integers`` (which re-draws bounded integers), for hot loops that draw per update."""
+    k = int(rng.random() * n)
+    return k if k < n else n - 1
+
+
+@njit(cache=True, inline="always")
+def argmax_drawn(q, s, rng):
+    """:func:`argmax_random` with its tie drawn by :func:`draw_below`."""
+    best = q[s, 0]
+    a = 0
+    ties = 1
+    for b in range(1, q.shape[1]):
+        v = q[s, b]
+        if v > best:
+            best = v
+            a = b
+            ties = 1
+        elif v == best:
+            ties += 1
+    if ties == 1:
+        return a
+    k = draw_below(rng, ties)
+    for b in range(q.shape[1]):
+        if q[s, b] == best:
+            if k == 0:
+                return b
+            k -= 1
+    return a
+
+
+@njit(cache=True, inline="always")
 def eps_greedy(q, s, eps, rng):
     """Draw order: one ``rng.random()``; then ``integers(0, nA)`` if exploring, else
     ``argmax_random``'s tie draw (if any)."""
@@ -164,7 +197,7 @@ def q_lambda(q, e, tl, ivar, s, a, r, s2, terminated, alpha, gamma, lam, trace_m
 @njit(cache=True)
 def dyna_q(q, imap, fmap, seen, ivar, s, a, r, s2, terminated, alpha, gamma, n_plan, rng):
     """Q-learning, then record (s,a) -> (r, s', terminated) in the model, then ``n_plan``
-    Q updates on pairs drawn with ``rng.integers(0, n_seen)`` (Sutton & Barto 8.2).
+    Q updates on pairs drawn with ``draw_below(rng, n_seen)`` (Sutton & Barto 8.2).
 
     Model: ``imap[s, a]`` = s' (-1 unseen), ``imap[s, nA + a]`` = terminated,
     ``fmap[s, a]`` = r; ``seen[:n_seen]`` lists the seen flat pairs.
@@ -179,7 +212,7 @@ def dyna_q(q, imap, fmap, seen, ivar, s, a, r, s2, terminated, alpha, gamma, n_p
     fmap[s, a] = r
     n_seen = ivar[K.I_NSEEN]
     for _ in range(n_plan):
-        j = seen[rng.integers(0, n_seen)]
+        j = seen[draw_below(rng, n_seen)]
         ps = j // n_a
         pa = j % n_a
         q_learning(q, ps, pa, fmap[ps, pa], imap[ps, pa], imap[ps, n_a + pa] != 0,

@@ -56,15 +56,17 @@ from numba import njit
 from learning import kinds as K
 from learning.plus_features import leak_free_edge, leak_free_enter
 from learning.plus_optimism import (
+    mark_stale,
     neighbour_base,
     observe_rewards,
     optimistic_bfs,
     optimistic_value,
 )
 from learning.rules import (
+    argmax_drawn,
     argmax_first,
-    argmax_random,
     clear_traces,
+    draw_below,
     eps_greedy,
     is_greedy,
     q_lambda,
@@ -109,7 +111,7 @@ def v_td_lambda(w, e, feat, imap, s, r, v_s2, greedy, gamma, lam, step):
     off = imap.shape[1] - m_n - (imap.shape[1] - m_n) // 3
     delta = r + gamma * v_s2 - v_of(w, feat, imap, s)
     gl = gamma * lam
-    for i in range(e.shape[0]):
+    for i in range(w.shape[0]):  # e's tail caches potentials, not traces
         e[i] *= gl
     for m in range(m_n):
         e[imap[s, off + m]] += feat[s, m]
@@ -122,7 +124,7 @@ def v_td_lambda(w, e, feat, imap, s, r, v_s2, greedy, gamma, lam, step):
 
 
 @njit(**INLINE)
-def potential(fvar, par, w, feat, imap, ilist, s):
+def potential(fvar, par, w, e, feat, imap, ilist, s):
     """Phi(s) = scale * V_NN(s); scale * exp(V_NN(s)) when V_NN learns log values
     (v_target 2, 3); scale * y(s), the optimistic model's value itself, with no network
     (v_target 4, the reference row of the ablation)."""
@@ -130,13 +132,13 @@ def potential(fvar, par, w, feat, imap, ilist, s):
     if vt == 4.0:
         m_n = feat.shape[1] // 2
         n_a = (imap.shape[1] - m_n) // 3
-        return par[K.PP_SCALE] * optimistic_value(fvar, par, ilist, imap.shape[0], n_a,
+        return par[K.PP_SCALE] * optimistic_value(fvar, par, ilist, e, imap.shape[0], n_a,
                                                   w.shape[0], s)
     v = v_of(w, feat, imap, s)
     if vt == 5.0:  # V_NN learns log(V / y), at most 0: Phi never above the optimistic value
         m_n = feat.shape[1] // 2
         n_a = (imap.shape[1] - m_n) // 3
-        y = optimistic_value(fvar, par, ilist, imap.shape[0], n_a, w.shape[0], s)
+        y = optimistic_value(fvar, par, ilist, e, imap.shape[0], n_a, w.shape[0], s)
         return par[K.PP_SCALE] * y * math.exp(min(v, 0.0))
     if vt == 2.0 or vt == 3.0:
         v = math.exp(min(v, 50.0))
@@ -151,7 +153,7 @@ def rebase(fvar, par, q, w, e, feat, imap, ilist, s):
     """Phi(s) now; row s's tried actions re-based onto it (Q + Phi unchanged), untried ones
     left at 0, i.e. valued at Phi(s). Returns Phi(s)."""
     n_c = w.shape[0]
-    phi = potential(fvar, par, w, feat, imap, ilist, s)
+    phi = potential(fvar, par, w, e, feat, imap, ilist, s)
     d = e[n_c + s] - phi
     if d != 0.0:
         for a in range(q.shape[1]):
@@ -180,7 +182,7 @@ def action_values(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
     n_s, n_a = q.shape[0], q.shape[1]
     n_c = w.shape[0]
     row = 2 * n_s
-    phi_s = e[n_c + s] if par[K.PP_REBASE] != 0.0 else potential(fvar, par, w, feat, imap,
+    phi_s = e[n_c + s] if par[K.PP_REBASE] != 0.0 else potential(fvar, par, w, e, feat, imap,
                                                                    ilist, s)
     nb0 = neighbour_base(n_s, n_a, n_c)
     for a in range(n_a):
@@ -194,7 +196,7 @@ def action_values(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
             fmap[row, a] = (fvar[K.F_RGOAL] if fvar[K.F_RGOAL] > 0.0 else 1.0) - phi_s
         else:
             fmap[row, a] = (fvar[K.F_RFREE] + par[K.P_GAMMA]
-                            * potential(fvar, par, w, feat, imap, ilist, u) - phi_s)
+                            * potential(fvar, par, w, e, feat, imap, ilist, u) - phi_s)
     return row
 
 
@@ -209,9 +211,9 @@ def act_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng):
     if not lookahead_on(ivar, par):
         return eps_greedy(q, s, par[K.P_EPS], rng)
     if rng.random() < par[K.P_EPS]:
-        return rng.integers(0, q.shape[1])
+        return draw_below(rng, q.shape[1])
     row = action_values(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
-    return argmax_random(fmap, row, rng)
+    return argmax_drawn(fmap, row, rng)
 
 
 @njit(**INLINE)
@@ -271,10 +273,11 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     fmap[s, a] = r
     if new_bump and vt >= 3.0:  # the optimistic model changed
         optimistic_bfs(imap, ilist, n_s, n_a, n_c, ivar[K.I_GOAL])
+        mark_stale(e, n_s, n_c)
     if leak_free and not terminated:
         leak_free_enter(feat, imap, ilist, n_s, n_a, s2, normalise)
     v2 = 0.0 if terminated else v_of(w, feat, imap, s2)
-    phi_s2 = 0.0 if terminated else potential(fvar, par, w, feat, imap, ilist, s2)
+    phi_s2 = 0.0 if terminated else potential(fvar, par, w, e, feat, imap, ilist, s2)
     if based and not terminated:
         phi_s2 = rebase(fvar, par, q, w, e, feat, imap, ilist, s2)
     train_v = ivar[K.I_TRAIN_V] != 0
@@ -293,11 +296,11 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     else:
         q_learning(q, s, a, r, s2, terminated, alpha, gamma, f)
     if train_v and vt == 3.0:  # V_NN learns log y: at s and at n_fit random states
-        y = optimistic_value(fvar, par, ilist, n_s, n_a, n_c, s)
+        y = optimistic_value(fvar, par, ilist, e, n_s, n_a, n_c, s)
         v_regress(w, feat, imap, s, math.log(max(y, OPT_FLOOR)), fvar[K.F_STEP_V])
         for _ in range(int(par[K.PP_NFIT])):
-            j = rng.integers(0, n_s)
-            y = optimistic_value(fvar, par, ilist, n_s, n_a, n_c, j)
+            j = draw_below(rng, n_s)
+            y = optimistic_value(fvar, par, ilist, e, n_s, n_a, n_c, j)
             v_regress(w, feat, imap, j, math.log(max(y, OPT_FLOOR)), fvar[K.F_STEP_V])
     elif train_v and not td and vt != 4.0:
         if based:
@@ -310,7 +313,7 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
         if vt == 2.0:  # V_NN learns log values: Phi = scale * exp(V_NN)
             target = math.log(max(target, LOG_FLOOR))
         elif vt == 5.0:  # V_NN learns the log of the table's value over the optimistic one
-            y = optimistic_value(fvar, par, ilist, n_s, n_a, n_c, s) * par[K.PP_SCALE]
+            y = optimistic_value(fvar, par, ilist, e, n_s, n_a, n_c, s) * par[K.PP_SCALE]
             fit = y > 0.0
             if fit:
                 target = math.log(max(target, OPT_FLOOR) / y)
@@ -318,7 +321,7 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
             v_regress(w, feat, imap, s, target, fvar[K.F_STEP_V])
     n_seen = ivar[K.I_NSEEN]
     for _ in range(int(par[K.PP_NPLAN])):
-        j = ilist[rng.integers(0, n_seen)]
+        j = ilist[draw_below(rng, n_seen)]
         ps = j // n_a
         pa = j % n_a
         ps2 = imap[ps, pa]
@@ -329,8 +332,8 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
             p2 = 0.0 if pterm else rebase(fvar, par, q, w, e, feat, imap, ilist, ps2)
             pf = gamma * p2 - p1
         elif shaping:
-            p2 = 0.0 if pterm else potential(fvar, par, w, feat, imap, ilist, ps2)
-            pf = gamma * p2 - potential(fvar, par, w, feat, imap, ilist, ps)
+            p2 = 0.0 if pterm else potential(fvar, par, w, e, feat, imap, ilist, ps2)
+            pf = gamma * p2 - potential(fvar, par, w, e, feat, imap, ilist, ps)
         q_learning(q, ps, pa, fmap[ps, pa], ps2, pterm, alpha, gamma, pf)
     fvar[K.F_PHI] = phi_s2
 
@@ -356,11 +359,11 @@ def begin_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
     if ivar[K.I_SHAPING] != 0 and par[K.PP_REBASE] != 0.0:
         fvar[K.F_PHI] = rebase(fvar, par, q, w, e, feat, imap, ilist, s0)
     else:
-        fvar[K.F_PHI] = potential(fvar, par, w, feat, imap, ilist, s0)
+        fvar[K.F_PHI] = potential(fvar, par, w, e, feat, imap, ilist, s0)
 
 
 @njit(cache=True)
-def potential_table(fvar, par, w, feat, imap, ilist, out):
+def potential_table(fvar, par, w, e, feat, imap, ilist, out):
     """out[s] = Phi(s) for every state (the recorder's potential panel)."""
     for s in range(out.shape[0]):
-        out[s] = potential(fvar, par, w, feat, imap, ilist, s)
+        out[s] = potential(fvar, par, w, e, feat, imap, ilist, s)

@@ -56,7 +56,7 @@ def test_readout_potential_is_the_potential_the_rules_shape_with():
     refs = []
     for cfg in (RNHQLPlus(), RNHQLPlus(v_target=1, shaping_scale=0.25, rebase=1)):
         st = train_tabular(cfg, m, 100, np.random.default_rng(0)).state
-        ref = np.array([rule_potential(st.fvar, st.par, st.w, st.feat, st.imap, st.ilist, s)
+        ref = np.array([rule_potential(st.fvar, st.par, st.w, st.e, st.feat, st.imap, st.ilist, s)
                         for s in range(m.n_states)])
         np.testing.assert_allclose(potential(st), ref, atol=1e-12)
         assert np.abs(ref).max() > 0

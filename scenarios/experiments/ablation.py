@@ -115,6 +115,58 @@ def table(summary: dict, maps: list[dict], labels: list[str]) -> str:
     return "\n".join(lines)
 
 
+def compact_table(summary: dict, maps: list[dict], labels: list[str], min_seeds: int) -> str:
+    """The README's form: optimal seeds · median episodes (— never), and how many maps reach
+    ``min_seeds`` optimal seeds."""
+    head = "| variant | " + " | ".join(
+        m["name"] + ("*" if m["held_out"] else "") for m in maps) + f" | maps ≥ {min_seeds} |"
+    lines = [head, "|" + "---|" * (len(maps) + 2)]
+    for lab in labels:
+        cells, good, have = [], 0, 0
+        for m in maps:
+            c = summary.get(lab, {}).get(m["name"])
+            if c is None:
+                cells.append("")
+                continue
+            have += 1
+            good += c["optimal_seeds"] >= min_seeds
+            med = "—" if math.isinf(c["median"]) else f"{c['median']:.0f}"
+            cells.append(f"{c['optimal_seeds']} · {med}")
+        lines.append(f"| {lab} | " + " | ".join(cells) + f" | {good}/{have} |")
+    return "\n".join(lines)
+
+
+def verdict(summary: dict, maps: list[dict], ours: str, ref: str, min_seeds: int,
+            open_maps: tuple[str, ...] = ("paper-40", "paper-50"),
+            max_median: float = 650.0) -> list[str]:
+    """Issue 10's targets, judged from the summary: ``ours`` reaches ``min_seeds`` optimal
+    seeds on every map, a median of at most ``max_median`` episodes on ``open_maps``, at
+    least ``ref``'s optimal seeds everywhere and fewer median episodes on most maps."""
+    a, b = summary.get(ours, {}), summary.get(ref, {})
+    names = [m["name"] for m in maps if m["name"] in a]
+    if not names:
+        return []
+    short = [n for n in names if a[n]["optimal_seeds"] < min_seeds]
+    slow = [n for n in open_maps if n in a and a[n]["median"] > max_median]
+    out = [f"- `{ours}`: ≥ {min_seeds} optimal seeds on {len(names) - len(short)}/{len(names)} "
+           f"maps" + (f" (short on {', '.join(short)})" if short else "") + "; median episodes "
+           "to stable optimal on " + ", ".join(f"{n} {_fmt(a[n]['median'])}" for n in open_maps
+                                                if n in a)
+           + (f" (above {max_median:.0f} on {', '.join(slow)})" if slow else
+              f" (all ≤ {max_median:.0f})")]
+    both = [n for n in names if n in b]
+    if both:
+        fewer_seeds = [n for n in both if a[n]["optimal_seeds"] < b[n]["optimal_seeds"]]
+        faster = [n for n in both if a[n]["median"] < b[n]["median"]]
+        slower = [n for n in both if a[n]["median"] > b[n]["median"]]
+        out.append(f"- against `{ref}`: at least as many optimal seeds on "
+                   f"{len(both) - len(fewer_seeds)}/{len(both)} maps"
+                   + (f" (fewer on {', '.join(fewer_seeds)})" if fewer_seeds else "")
+                   + f"; fewer median episodes on {len(faster)}/{len(both)}"
+                   + (f", more on {', '.join(slower)}" if slower else ""))
+    return out
+
+
 def figure(summary: dict, maps: list[dict], labels: list[str], path: Path, title: str) -> None:
     """Variants x maps: colour = seeds whose final route is optimal, text = that count and the
     median episodes to a stable optimal route."""
@@ -155,9 +207,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--extra", action="append", default=[],
                     help="an extra row METHOD[:FIELD=VALUE,...] (e.g. rnh-ql+:n_planning=10)")
     ap.add_argument("--rewards", default="goal-only", help="reward scheme of the suite")
+    ap.add_argument("--held-out-seeds", default="101,102",
+                    help="generator seeds of the held-out maze and rooms maps (e.g. 101,...,110)")
     a = ap.parse_args(argv)
     out = Path(a.out)
-    maps = build_suite(out / "suite", a.rewards)
+    try:
+        held = tuple(int(x) for x in a.held_out_seeds.split(",") if x)
+    except ValueError:
+        ap.error(f"--held-out-seeds: {a.held_out_seeds!r} is not a comma-separated list of "
+                 "integers")
+    maps = build_suite(out / "suite", a.rewards, held_out_seeds=held)
     if a.maps:
         want = a.maps.split(",")
         maps = [m for m in maps if m["name"] in want]
@@ -200,6 +259,12 @@ def main(argv: list[str] | None = None) -> int:
           "final greedy route is optimal · median [q25, q75] episodes to stable optimal "
           "(`*`/held out: maps generated from seeds nobody tuned on).\n\n"
           + table(summary, maps, labels) + "\n")
+    ours = next((lab for lab in labels if lab.endswith("(= rnh-ql+)")), None)
+    lines = verdict(summary, maps, ours, "dyna-q", 9) if ours else []
+    if lines:
+        md += "\nTargets (issue 10), computed from the table:\n\n" + "\n".join(lines) + "\n"
+    md += ("\nCompact (optimal seeds · median episodes to stable optimal, — never):\n\n"
+           + compact_table(summary, maps, labels, 9) + "\n")
     atomic_write_text(out / "ablation.md", md)
     atomic_write_text(out / "ablation.json", json.dumps(dict(maps=maps, variants=[
         dict(label=lab, method=m, overrides=dict(ov)) for lab, m, ov in rows],

@@ -170,8 +170,11 @@ def _builtin_toml(name: str, rewards: tuple[float, float, float], scheme: str) -
     return "\n".join(out) + f"\n\n[rewards]   # {scheme}\ngoal = {g}\nbump = {b}\nstep = {s}\n"
 
 
-def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True) -> list[dict]:
-    """Write the suite into ``out``; returns its entries (also in ``out/suite.json``)."""
+def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True,
+                held_out_seeds: tuple[int, ...] = HELD_OUT_SEEDS) -> list[dict]:
+    """Write the suite into ``out``; returns its entries (also in ``out/suite.json``).
+    ``held_out_seeds``: the generator seeds of the held-out maze and rooms maps (more
+    seeds: more maps of those kinds nobody tuned on)."""
     from sim.grid import build_model
     from sim.scenario_io import load_scenario
 
@@ -199,7 +202,7 @@ def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True) ->
     for name in BUILTIN:
         add(name, kinds[name], _builtin_toml(name, rewards, scheme))
     gens = [("maze", maze, "maze"), ("rooms", rooms, "rooms")]
-    for seed in (*TUNE_SEEDS, *HELD_OUT_SEEDS):
+    for seed in (*TUNE_SEEDS, *held_out_seeds):
         for prefix, gen, kind in gens:
             free = gen(seed)
             mp = out / "maps" / f"{prefix}-{seed}.map"
@@ -207,7 +210,7 @@ def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True) ->
             s, g, _ = far_pair(free)
             add(f"{prefix}-{seed}", kind,
                 _toml(f"{prefix}-{seed}", f"generated {prefix}, seed {seed}", mp, s, g, 600,
-                      rewards, scheme), held_out=seed in HELD_OUT_SEEDS)
+                      rewards, scheme), held_out=seed not in TUNE_SEEDS)
     if moving_ai:
         mkinds = {"room-32-32-8": "rooms", "random-64-64-20": "random obstacles",
                   "lak307d": "large obstacles", "ost003d": "large"}

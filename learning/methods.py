@@ -319,6 +319,13 @@ class RNHQLPlus(MethodConfig):
     lookahead: int = 1  # 1: untried actions valued by one step of look-ahead on Phi
     n_fit: int = 0  # v_target = 3: extra V_NN fits at random states per real step [fits]
 
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.v_target >= 3 and self.gamma >= 1.0:
+            raise ValueError(f"RNHQLPlus.gamma = {self.gamma!r} must be < 1 with v_target = "
+                             f"{self.v_target} (the optimistic model's value discounts: "
+                             "use v_target 0-2 for gamma = 1)")
+
     def extra(self) -> tuple[float, ...]:
         freeze = math.inf if self.freeze_after_episodes is None else self.freeze_after_episodes
         return (self.beta, float(self.warmup_episodes), float(freeze), float(self.n_planning),

@@ -8,8 +8,9 @@ and values a state by the route to G that assumption allows:
     y(s) = r_free * (1 - gamma^(d-1)) / (1 - gamma) + gamma^(d-1) * r_goal,
 
 d = the BFS distance from s to G over the moves not known to fail, r_goal the
-reward seen on entering G (1 until G is first reached), r_free the reward seen
-on the last free move (0 under goal-only rewards). A state with no such route
+reward seen on entering G (until G is first reached, :func:`goal_reward`'s optimistic
+stand-in), r_free the reward seen on the last free move (0 under goal-only
+rewards). A state with no such route
 is worth wandering forever, r_free / (1 - gamma) (0 if that is not positive).
 
 V_NN learns this value (``v_target = 3``, in the log domain, where it is
@@ -74,6 +75,19 @@ def optimistic_bfs(imap, ilist, n_s, n_a, n_c, goal):
             tail += 1
 
 
+@njit(**INLINE)
+def goal_reward(fvar, par):
+    """r_G of the model: the reward seen on entering G; until then an optimistic stand-in,
+    one more than wandering forever on free moves (r_free / (1 - gamma) + 1; 1 when a free
+    move earns nothing or less), so that y falls with the distance to G under any reward
+    scheme. (A stand-in of 1 under the paper's +1 per free move made y *rise* with the
+    distance and drove the agent away from a G it had not reached yet.)"""
+    if fvar[K.F_RGOAL] > 0.0:
+        return fvar[K.F_RGOAL]
+    r_free = fvar[K.F_RFREE]
+    return r_free / (1.0 - par[K.P_GAMMA]) + 1.0 if r_free > 0.0 else 1.0
+
+
 @njit(cache=True)
 def refresh_values(fvar, par, ilist, e, n_s, n_a, n_c):
     """Fill the cache of y (``e[nK + nS + s]``) from the BFS distances and the rewards
@@ -83,7 +97,7 @@ def refresh_values(fvar, par, ilist, e, n_s, n_a, n_c):
     y0 = n_c + n_s
     g = par[K.P_GAMMA]
     r_free = fvar[K.F_RFREE]
-    r_goal = fvar[K.F_RGOAL] if fvar[K.F_RGOAL] > 0.0 else 1.0
+    r_goal = goal_reward(fvar, par)
     wander = r_free / (1.0 - g) if r_free > 0.0 else 0.0
     for s in range(n_s):
         d = ilist[d0 + s]
@@ -98,27 +112,41 @@ def refresh_values(fvar, par, ilist, e, n_s, n_a, n_c):
     e[y0 + n_s + 1] = r_free
 
 
+@njit(cache=True)
+def ensure_values(fvar, par, ilist, e, feat, imap, n_c):
+    """Refresh the cache of y if it is stale: computed with other rewards than those now
+    in force, or stamped -1 by a new BFS. Runs where the model can change (a real step,
+    the start of an episode, a read-out), never in the reads themselves: a call with
+    arrays inside a hot read cost it ~15x (measured: 37 ns against 2.3 ns a read)."""
+    n_s = imap.shape[0]
+    y0 = n_c + n_s
+    if e[y0 + n_s + 1] != fvar[K.F_RFREE] or e[y0 + n_s] != goal_reward(fvar, par):
+        n_a = (imap.shape[1] - feat.shape[1] // 2) // 3
+        refresh_values(fvar, par, ilist, e, n_s, n_a, n_c)
+
+
 @njit(**INLINE)
 def mark_stale(e, n_s, n_c):
-    """The BFS distances changed: the next read of y refreshes the cache."""
+    """The BFS distances changed: the next :func:`ensure_values` refreshes the cache."""
     e[n_c + 2 * n_s] = -1.0  # never a goal reward in force (those are > 0)
 
 
 @njit(**INLINE)
-def optimistic_value(fvar, par, ilist, e, n_s, n_a, n_c, s):
-    """y(s), the value of s in the optimistic model (see the module docs), from the cache."""
-    y0 = n_c + n_s
-    r_goal = fvar[K.F_RGOAL] if fvar[K.F_RGOAL] > 0.0 else 1.0
-    if e[y0 + n_s] != r_goal or e[y0 + n_s + 1] != fvar[K.F_RFREE]:  # -1: stale
-        refresh_values(fvar, par, ilist, e, n_s, n_a, n_c)
-    return e[y0 + s]
+def optimistic_value(e, n_c, n_s, s):
+    """y(s), the value of s in the optimistic model (see the module docs): a load from the
+    cache, which :func:`ensure_values` keeps fresh."""
+    return e[n_c + n_s + s]
 
 
 @njit(**INLINE)
 def observe_rewards(fvar, s, r, s2, terminated):
-    """Remember the reward of entering G and of a free move (the optimistic model's rewards)."""
+    """Remember the reward of entering G and of a free move (the optimistic model's
+    rewards); True if either changed (the cache of y is then stale)."""
     if terminated:
         if r > fvar[K.F_RGOAL]:
             fvar[K.F_RGOAL] = r
-    elif s2 != s:
+            return True
+    elif s2 != s and fvar[K.F_RFREE] != r:
         fvar[K.F_RFREE] = r
+        return True
+    return False

@@ -56,6 +56,8 @@ from numba import njit
 from learning import kinds as K
 from learning.plus_features import leak_free_edge, leak_free_enter
 from learning.plus_optimism import (
+    ensure_values,
+    goal_reward,
     mark_stale,
     neighbour_base,
     observe_rewards,
@@ -130,15 +132,10 @@ def potential(fvar, par, w, e, feat, imap, ilist, s):
     (v_target 4, the reference row of the ablation)."""
     vt = par[K.PP_VTARGET]
     if vt == 4.0:
-        m_n = feat.shape[1] // 2
-        n_a = (imap.shape[1] - m_n) // 3
-        return par[K.PP_SCALE] * optimistic_value(fvar, par, ilist, e, imap.shape[0], n_a,
-                                                  w.shape[0], s)
+        return par[K.PP_SCALE] * optimistic_value(e, w.shape[0], imap.shape[0], s)
     v = v_of(w, feat, imap, s)
     if vt == 5.0:  # V_NN learns log(V / y), at most 0: Phi never above the optimistic value
-        m_n = feat.shape[1] // 2
-        n_a = (imap.shape[1] - m_n) // 3
-        y = optimistic_value(fvar, par, ilist, e, imap.shape[0], n_a, w.shape[0], s)
+        y = optimistic_value(e, w.shape[0], imap.shape[0], s)
         return par[K.PP_SCALE] * y * math.exp(min(v, 0.0))
     if vt == 2.0 or vt == 3.0:
         v = math.exp(min(v, 50.0))
@@ -193,7 +190,7 @@ def action_values(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
         if u < 0:
             fmap[row, a] = -np.inf
         elif u == ivar[K.I_GOAL]:
-            fmap[row, a] = (fvar[K.F_RGOAL] if fvar[K.F_RGOAL] > 0.0 else 1.0) - phi_s
+            fmap[row, a] = goal_reward(fvar, par) - phi_s
         else:
             fmap[row, a] = (fvar[K.F_RFREE] + par[K.P_GAMMA]
                             * potential(fvar, par, w, e, feat, imap, ilist, u) - phi_s)
@@ -259,7 +256,7 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     if based:
         rebase(fvar, par, q, w, e, feat, imap, ilist, s)
     vt = par[K.PP_VTARGET]
-    observe_rewards(fvar, s, r, s2, terminated)
+    stale = observe_rewards(fvar, s, r, s2, terminated)
     # model first: a new move may join s' to supports before Phi(s') is read
     new_bump = False
     if imap[s, a] < 0:
@@ -274,6 +271,9 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     if new_bump and vt >= 3.0:  # the optimistic model changed
         optimistic_bfs(imap, ilist, n_s, n_a, n_c, ivar[K.I_GOAL])
         mark_stale(e, n_s, n_c)
+        stale = True
+    if stale and vt >= 3.0:
+        ensure_values(fvar, par, ilist, e, feat, imap, n_c)
     if leak_free and not terminated:
         leak_free_enter(feat, imap, ilist, n_s, n_a, s2, normalise)
     v2 = 0.0 if terminated else v_of(w, feat, imap, s2)
@@ -296,11 +296,11 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     else:
         q_learning(q, s, a, r, s2, terminated, alpha, gamma, f)
     if train_v and vt == 3.0:  # V_NN learns log y: at s and at n_fit random states
-        y = optimistic_value(fvar, par, ilist, e, n_s, n_a, n_c, s)
+        y = optimistic_value(e, n_c, n_s, s)
         v_regress(w, feat, imap, s, math.log(max(y, OPT_FLOOR)), fvar[K.F_STEP_V])
         for _ in range(int(par[K.PP_NFIT])):
             j = draw_below(rng, n_s)
-            y = optimistic_value(fvar, par, ilist, e, n_s, n_a, n_c, j)
+            y = optimistic_value(e, n_c, n_s, j)
             v_regress(w, feat, imap, j, math.log(max(y, OPT_FLOOR)), fvar[K.F_STEP_V])
     elif train_v and not td and vt != 4.0:
         if based:
@@ -313,7 +313,7 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
         if vt == 2.0:  # V_NN learns log values: Phi = scale * exp(V_NN)
             target = math.log(max(target, LOG_FLOOR))
         elif vt == 5.0:  # V_NN learns the log of the table's value over the optimistic one
-            y = optimistic_value(fvar, par, ilist, e, n_s, n_a, n_c, s) * par[K.PP_SCALE]
+            y = optimistic_value(e, n_c, n_s, s) * par[K.PP_SCALE]
             fit = y > 0.0
             if fit:
                 target = math.log(max(target, OPT_FLOOR) / y)
@@ -344,6 +344,8 @@ def begin_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
     ``freeze``; anchor s0's centre (leak-free); cache Phi(s0)."""
     ivar[K.I_PENDING] = -1
     ivar[K.I_NF] = 0
+    if par[K.PP_VTARGET] >= 3.0:  # the first episode, or a state changed from outside
+        ensure_values(fvar, par, ilist, e, feat, imap, w.shape[0])
     fvar[K.F_FSUM] = 0.0
     fvar[K.F_FSQ] = 0.0
     n_s, n_a = q.shape[0], q.shape[1]
@@ -365,5 +367,7 @@ def begin_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s0):
 @njit(cache=True)
 def potential_table(fvar, par, w, e, feat, imap, ilist, out):
     """out[s] = Phi(s) for every state (the recorder's potential panel)."""
+    if par[K.PP_VTARGET] >= 3.0:
+        ensure_values(fvar, par, ilist, e, feat, imap, w.shape[0])
     for s in range(out.shape[0]):
         out[s] = potential(fvar, par, w, e, feat, imap, ilist, s)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from learning import METHODS, geometry_of, train_tabular
 from learning.methods import RNHQLPlus
@@ -99,3 +100,40 @@ def test_rnh_ql_plus_learns_zigzag_where_rnh_ql_does_not():
     assert plus.final_route_length == m.optimal_route_length == 212
     base = train_tabular(METHODS["rnh-ql"](), m, 300, np.random.default_rng(0))
     assert base.final_route_length != 212
+
+
+def test_potential_falls_toward_an_unseen_goal_under_the_paper_rewards():
+    """With +1 per free move and G not reached yet, Phi must still fall with the distance to
+    G (the stand-in goal reward beats wandering forever); a stand-in of 1 made it rise."""
+    from learning import kinds as K
+    from learning.plus_optimism import goal_reward
+    from learning.readout import potential
+    from learning.state import init_state
+    from scenarios.runs.spec import load
+
+    _, m = load("paper-40", None, None, "paper")
+    geom = geometry_of(m)
+    st = init_state(RNHQLPlus(), geom, np.random.default_rng(0))
+    st.fvar[K.F_RFREE] = 1.0  # a free move seen, G not yet
+    assert goal_reward(st.fvar, st.par) == 1.0 / (1.0 - 0.95) + 1.0
+    phi = potential(st)
+    dist = np.abs(geom.cells - geom.cells[geom.goal]).sum(axis=1)
+    near, far = np.argmin(np.where(dist > 0, dist, 99)), np.argmax(dist)
+    assert phi[near] > phi[far] > 1.0 / (1.0 - 0.95)  # both above wandering forever
+    st.fvar[K.F_RFREE] = 0.0  # goal-only: the stand-in is 1, as before
+    assert goal_reward(st.fvar, st.par) == 1.0 and potential(st)[near] == 1.0
+
+
+def test_rnh_ql_plus_learns_paper_50_under_the_paper_rewards():
+    """The paper's own rewards (+1 per free move): the optimal 80-move route, seed 0."""
+    from scenarios.runs.spec import load
+
+    _, m = load("paper-50", None, None, "paper")
+    run = train_tabular(RNHQLPlus(), m, 1000, np.random.default_rng(0))
+    assert run.final_route_length == m.optimal_route_length == 80
+
+
+def test_optimistic_model_needs_a_discount():
+    with pytest.raises(ValueError, match=r"RNHQLPlus\.gamma = 1\.0 must be < 1 with v_target = 4"):
+        RNHQLPlus(gamma=1.0)
+    assert RNHQLPlus(gamma=1.0, v_target=0).gamma == 1.0

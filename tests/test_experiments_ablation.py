@@ -60,3 +60,10 @@ def test_suite_held_out_maps_are_generated_from_the_seeds_asked_for(tmp_path):
     for e in entries:  # start and goal far apart, room to explore in an episode
         assert e["optimal"] > 0 and e["steps_per_episode"] >= max(600, 4 * e["optimal"])
     assert json.loads((tmp_path / "suite.json").read_text()) == entries
+
+
+def test_verdict_without_the_open_maps_says_nothing_about_them():
+    maps = [dict(name="maze-103", held_out=True)]
+    summary = {"x": {"maze-103": _cell(10, 50)}}
+    (ours,) = verdict(summary, maps, "x", "dyna-q", 9)
+    assert ours == "- `x`: ≥ 9 optimal seeds on 1/1 maps"

@@ -149,12 +149,15 @@ def verdict(summary: dict, maps: list[dict], ours: str, ref: str, min_seeds: int
         return []
     short = [n for n in names if a[n]["optimal_seeds"] < min_seeds]
     slow = [n for n in open_maps if n in a and a[n]["median"] > max_median]
-    out = [f"- `{ours}`: ≥ {min_seeds} optimal seeds on {len(names) - len(short)}/{len(names)} "
-           f"maps" + (f" (short on {', '.join(short)})" if short else "") + "; median episodes "
-           "to stable optimal on " + ", ".join(f"{n} {_fmt(a[n]['median'])}" for n in open_maps
-                                                if n in a)
-           + (f" (above {max_median:.0f} on {', '.join(slow)})" if slow else
-              f" (all ≤ {max_median:.0f})")]
+    line = (f"- `{ours}`: ≥ {min_seeds} optimal seeds on {len(names) - len(short)}/{len(names)} "
+            "maps" + (f" (short on {', '.join(short)})" if short else ""))
+    shown = [n for n in open_maps if n in a]
+    if shown:
+        line += ("; median episodes to stable optimal on "
+                 + ", ".join(f"{n} {_fmt(a[n]['median'])}" for n in shown)
+                 + (f" (above {max_median:.0f} on {', '.join(slow)})" if slow else
+                    f" (all ≤ {max_median:.0f})"))
+    out = [line]
     both = [n for n in names if n in b]
     if both:
         fewer_seeds = [n for n in both if a[n]["optimal_seeds"] < b[n]["optimal_seeds"]]

@@ -51,13 +51,14 @@ EPISODES = 3000
 
 
 def kernel_steps_per_s(method: str, model, episodes: int = EPISODES, repeats: int = 3,
-                       seed: int = 0) -> float:
-    """Best-of-``repeats`` env steps/s of a fresh agent trained ``episodes`` episodes."""
+                       seed: int = 0, **fields) -> float:
+    """Best-of-``repeats`` env steps/s of a fresh agent trained ``episodes`` episodes
+    (``fields`` override the method's config)."""
     geom = geometry_of(model)
     best = 0.0
     for r in range(repeats + 1):  # the first pass only warms the JIT
         rng = np.random.default_rng(seed)
-        st = init_state(METHODS[method](), geom, rng)
+        st = init_state(METHODS[method](**fields), geom, rng)
         n = episodes if r else 1
         out = (np.zeros(n, np.int32), np.zeros(n), np.zeros(n, bool), np.zeros(n), np.zeros(n))
         t0 = time.perf_counter()
@@ -171,6 +172,22 @@ def cold_start_s() -> dict[str, float]:
     return {"jit_cold_s": res[0][0], "jit_cached_s": res[1][0], "import_s": res[1][1]}
 
 
+def planning_steps_per_s(scenario: str = "paper-50", rewards: str = "goal-only") -> dict:
+    """Kernel env steps/s of rnh-ql+ (issue 10's target: >= 2M on paper-50) at 10 (its
+    default), 3 and 0 shaped planning updates per step, and of dyna-q at 5 (its default)
+    and 10, under the rewards the route-learning targets use."""
+    from scenarios.runs.spec import load
+
+    _, model = load(scenario, None, None, rewards)
+    return {
+        "rewards": rewards,
+        **{f"rnh_ql_plus_planning{n}_steps_per_s":
+           kernel_steps_per_s("rnh-ql+", model, n_planning=n) for n in (10, 3, 0)},
+        **{f"dyna_q_planning{n}_steps_per_s":
+           kernel_steps_per_s("dyna-q", model, n_planning=n) for n in (5, 10)},
+    }
+
+
 def run_bench(scenario: str = "paper-50", python_steps: int = 300_000) -> dict:
     model = build_model(resolve_scenario(scenario))
     st_ql = kernel_steps_per_s("st-ql", model)
@@ -188,6 +205,7 @@ def run_bench(scenario: str = "paper-50", python_steps: int = 300_000) -> dict:
         "step_agent_gym_steps_per_s": step_agent_steps_per_s(scenario),
         "paper_protocol_s_per_seed": paper_protocol_s_per_seed(model),
         **cold_start_s(),
+        "planning": planning_steps_per_s(scenario),
     }
 
 

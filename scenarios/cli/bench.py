@@ -7,18 +7,29 @@ import argparse
 import json
 
 
+def _flat(values: dict, prefix: str = ""):
+    """(key, value) pairs of a nested dict, nested keys joined with a dot."""
+    for k, v in values.items():
+        if isinstance(v, dict):
+            yield from _flat(v, f"{prefix}{k}.")
+        else:
+            yield f"{prefix}{k}", v
+
+
+def _number(v) -> str:
+    """Large rates in full with thousands separators (not 7e+05), small figures to 4 digits."""
+    if not isinstance(v, float):
+        return str(v)
+    return f"{v:,.0f}" if abs(v) >= 1e4 else f"{v:.4g}"
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
-    from scenarios.bench.learners import grid as bench_grid
+    from scenarios.bench import grid as bench_grid
+    from scenarios.bench import learners as bench
 
-    figures: dict = {"foundation": bench_grid.run_bench()}
-    try:
-        from scenarios.bench.learners import learners as bench
-
-        figures["learning"] = bench.run_bench()
-    except ImportError:
-        pass
+    figures: dict = {"foundation": bench_grid.run_bench(), "learning": bench.run_bench()}
     if args.physics:
-        from scenarios.bench.learners import physics as bench_physics
+        from scenarios.bench import physics as bench_physics
 
         figures["physics"] = bench_physics.run_bench()
     if args.json:
@@ -26,6 +37,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
     else:
         for section, values in figures.items():
             print(f"[{section}]")
-            for k, v in values.items():
-                print(f"  {k:<44} {v:,.4g}" if isinstance(v, float) else f"  {k:<44} {v}")
+            for k, v in _flat(values):
+                print(f"  {k:<44} {_number(v)}")
     return 0

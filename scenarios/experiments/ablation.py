@@ -205,7 +205,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--episodes", type=int, default=3000)
     ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--maps", default="", help="comma-separated suite names (default: all)")
+    ap.add_argument("--maps", default="",
+                    help="comma-separated suite names, or held-out (default: all)")
     ap.add_argument("--variants", default="", help="comma-separated labels or row numbers "
                     "(0-based) of the table (default: all)")
     ap.add_argument("--extra", action="append", default=[],
@@ -221,7 +222,9 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--held-out-seeds: {a.held_out_seeds!r} is not a comma-separated list of "
                  "integers")
     maps = build_suite(out / "suite", a.rewards, held_out_seeds=held)
-    if a.maps:
+    if a.maps == "held-out":
+        maps = [m for m in maps if m["held_out"]]
+    elif a.maps:
         want = a.maps.split(",")
         maps = [m for m in maps if m["name"] in want]
     rows = list(VARIANTS)

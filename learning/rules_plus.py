@@ -142,6 +142,15 @@ def potential(fvar, par, w, e, feat, imap, ilist, s):
     return par[K.PP_SCALE] * v
 
 
+@njit(**INLINE)
+def model_phi(par):
+    """True when Phi is the optimistic model's value itself (v_target 4, no re-basing): hot
+    loops then read scale * y from its cache in ``e`` (from nK + nS on) instead of calling
+    :func:`potential`, whose eight array arguments numba reference-counts on every call
+    it cannot prune (measured: 37 ns a call against 4 ns for the load)."""
+    return par[K.PP_VTARGET] == 4.0 and par[K.PP_REBASE] == 0.0
+
+
 # ---------------------------------------------------------------- re-based rows
 
 
@@ -179,8 +188,15 @@ def action_values(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
     n_s, n_a = q.shape[0], q.shape[1]
     n_c = w.shape[0]
     row = 2 * n_s
-    phi_s = e[n_c + s] if par[K.PP_REBASE] != 0.0 else potential(fvar, par, w, e, feat, imap,
-                                                                   ilist, s)
+    direct = model_phi(par)
+    scale = par[K.PP_SCALE]
+    y0 = n_c + n_s
+    if direct:
+        phi_s = scale * e[y0 + s]
+    elif par[K.PP_REBASE] != 0.0:
+        phi_s = e[n_c + s]
+    else:
+        phi_s = potential(fvar, par, w, e, feat, imap, ilist, s)
     nb0 = neighbour_base(n_s, n_a, n_c)
     for a in range(n_a):
         if imap[s, a] >= 0:
@@ -192,8 +208,9 @@ def action_values(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
         elif u == ivar[K.I_GOAL]:
             fmap[row, a] = goal_reward(fvar, par) - phi_s
         else:
-            fmap[row, a] = (fvar[K.F_RFREE] + par[K.P_GAMMA]
-                            * potential(fvar, par, w, e, feat, imap, ilist, u) - phi_s)
+            phi_u = scale * e[y0 + u] if direct else potential(fvar, par, w, e, feat, imap,
+                                                                  ilist, u)
+            fmap[row, a] = fvar[K.F_RFREE] + par[K.P_GAMMA] * phi_u - phi_s
     return row
 
 
@@ -276,13 +293,18 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
         ensure_values(fvar, par, ilist, e, feat, imap, n_c)
     if leak_free and not terminated:
         leak_free_enter(feat, imap, ilist, n_s, n_a, s2, normalise)
-    v2 = 0.0 if terminated else v_of(w, feat, imap, s2)
-    phi_s2 = 0.0 if terminated else potential(fvar, par, w, e, feat, imap, ilist, s2)
+    if terminated:
+        phi_s2 = 0.0
+    elif model_phi(par):
+        phi_s2 = par[K.PP_SCALE] * e[n_c + n_s + s2]
+    else:
+        phi_s2 = potential(fvar, par, w, e, feat, imap, ilist, s2)
     if based and not terminated:
         phi_s2 = rebase(fvar, par, q, w, e, feat, imap, ilist, s2)
     train_v = ivar[K.I_TRAIN_V] != 0
     td = vt == 0.0
-    if train_v and td:
+    if train_v and td:  # V_NN(s') only where TD(lambda) needs it
+        v2 = 0.0 if terminated else v_of(w, feat, imap, s2)
         v_td_lambda(w, e, feat, imap, s, r, v2, is_greedy(q, s, a), gamma, par[K.P_LAMBDA],
                     fvar[K.F_STEP_V])
     f = 0.0
@@ -320,10 +342,17 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
         if fit:
             v_regress(w, feat, imap, s, target, fvar[K.F_STEP_V])
     n_seen = ivar[K.I_NSEEN]
+    direct = model_phi(par)
+    scale = par[K.PP_SCALE]
+    y0 = n_c + n_s
     for _ in range(int(par[K.PP_NPLAN])):
         j = ilist[draw_below(rng, n_seen)]
-        ps = j // n_a
-        pa = j % n_a
+        if n_a == 4:  # the grid's four moves: shifts, not two integer divisions
+            ps = j >> 2
+            pa = j & 3
+        else:
+            ps = j // n_a
+            pa = j % n_a
         ps2 = imap[ps, pa]
         pterm = imap[ps, n_a + pa] != 0
         pf = 0.0
@@ -331,6 +360,9 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
             p1 = rebase(fvar, par, q, w, e, feat, imap, ilist, ps)
             p2 = 0.0 if pterm else rebase(fvar, par, q, w, e, feat, imap, ilist, ps2)
             pf = gamma * p2 - p1
+        elif shaping and direct:
+            p2 = 0.0 if pterm else scale * e[y0 + ps2]
+            pf = gamma * p2 - scale * e[y0 + ps]
         elif shaping:
             p2 = 0.0 if pterm else potential(fvar, par, w, e, feat, imap, ilist, ps2)
             pf = gamma * p2 - potential(fvar, par, w, e, feat, imap, ilist, ps)

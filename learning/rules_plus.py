@@ -56,6 +56,7 @@ from numba import njit
 from learning import kinds as K
 from learning.plus_features import leak_free_edge, leak_free_enter
 from learning.plus_optimism import (
+    distances_change,
     ensure_values,
     goal_reward,
     mark_stale,
@@ -275,17 +276,21 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     vt = par[K.PP_VTARGET]
     stale = observe_rewards(fvar, s, r, s2, terminated)
     # model first: a new move may join s' to supports before Phi(s') is read
-    new_bump = False
+    was_fail = imap[s, a] == s and imap[s, n_a + a] == 0
+    now_fail = s2 == s and not terminated
     if imap[s, a] < 0:
         ilist[ivar[K.I_NSEEN]] = s * n_a + a
         ivar[K.I_NSEEN] += 1
         if leak_free and s2 != s:
             leak_free_edge(feat, imap, ilist, n_s, n_a, s, s2, normalise)
-        new_bump = s2 == s and not terminated
     imap[s, a] = s2
     imap[s, n_a + a] = 1 if terminated else 0
     fmap[s, a] = r
-    if new_bump and vt >= 3.0:  # the optimistic model changed
+    # the optimistic model changed: a move now known to fail (BFS only if a distance
+    # changes), or one known to fail that worked after all (physics worlds; on the grid a
+    # move's outcome never changes)
+    if vt >= 3.0 and now_fail != was_fail and (was_fail or distances_change(
+            imap, ilist, n_s, n_a, n_c, s, a)):
         optimistic_bfs(imap, ilist, n_s, n_a, n_c, ivar[K.I_GOAL])
         mark_stale(e, n_s, n_c)
         stale = True

@@ -90,6 +90,52 @@ def test_optimistic_distances_are_free_space_bfs_then_go_round_a_seen_bump():
     assert dist[left] == 3 and dist[geom.goal] == 0
 
 
+def test_bfs_skipped_only_where_no_distance_changes_and_values_match_the_formula():
+    """Walls of zigzag-50 revealed in a random order: where distances_change says a new wall
+    changes nothing, a full BFS agrees bit for bit; the cache of y filled in BFS order
+    equals the closed form state by state. Both branches are taken."""
+    from learning import kinds as K
+    from learning.plus_optimism import (
+        distances_change,
+        goal_reward,
+        neighbour_base,
+        optimistic_bfs,
+        refresh_values,
+    )
+    from learning.state import init_state
+    from scenarios.runs.spec import load
+
+    _, m = load("zigzag-50", None, None, "goal-only")
+    geom = geometry_of(m)
+    st = init_state(RNHQLPlus(), geom, np.random.default_rng(0))
+    n_s, n_a, n_c = geom.n_states, 4, st.w.shape[0]
+    d0 = neighbour_base(n_s, n_a, n_c) + n_s * n_a
+    goal = int(st.ivar[K.I_GOAL])
+    walls = [(s, a) for s in range(n_s) for a in range(n_a)
+             if m.next_state[s, a] == s and not m.terminal[s]]
+    order = np.random.default_rng(1).permutation(len(walls))
+    skipped = rerun = 0
+    for i in order:
+        s, a = walls[i]
+        st.imap[s, a] = s
+        if distances_change(st.imap, st.ilist, n_s, n_a, n_c, s, a):
+            optimistic_bfs(st.imap, st.ilist, n_s, n_a, n_c, goal)
+            rerun += 1
+        else:
+            before = st.ilist.copy()
+            optimistic_bfs(st.imap, st.ilist, n_s, n_a, n_c, goal)
+            np.testing.assert_array_equal(st.ilist[d0:d0 + n_s], before[d0:d0 + n_s])
+            skipped += 1
+    assert skipped > 0 and rerun > 0
+    st.fvar[K.F_RGOAL] = 100.0
+    refresh_values(st.fvar, st.par, st.ilist, st.e, n_s, n_a, n_c)
+    g, r_goal = float(st.par[K.P_GAMMA]), goal_reward(st.fvar, st.par)
+    d = st.ilist[d0:d0 + n_s]
+    want = np.array([0.0 if k < 0 or k == 0 else g ** (k - 1) * r_goal for k in d])
+    np.testing.assert_allclose(st.e[n_c + n_s:n_c + 2 * n_s], want, rtol=1e-12)
+    assert (d < 0).any() or d.max() > 1
+
+
 def test_rnh_ql_plus_learns_zigzag_where_rnh_ql_does_not():
     """zigzag-50 (a 212-move route round large walls): the default rnh-ql+ finds the optimal
     route within 300 episodes; the paper's rnh-ql does not (goal-only rewards, seed 0)."""

@@ -35,7 +35,9 @@ K centres, M feature slots per state:
 ==========  ==================================================================
 q           Q-table [nS, nA]
 w           V_NN weights [K]
-e           [K + nS]: V_NN traces [:K] (v_target = 0), Phi each row is based on [K:]
+e           [K + 2nS + 2]: V_NN traces [:K] (v_target = 0), Phi each row is based on
+            [K:K+nS], the optimistic model's y [K+nS:K+2nS] and the two rewards it was
+            computed with (learning.plus_optimism)
 feat        [nS, 2M]: effective feature values [:, :M], Gaussian values [:, M:]
 imap        [nS, 3nA + M]: model s' [:, :nA] (-1 unseen), terminated [:, nA:2nA],
             feature centre ids [:, 2nA:2nA+M], seen predecessors [:, 2nA+M:] (-1)

@@ -81,6 +81,10 @@ from learning.rules import (
 )
 
 INLINE = dict(cache=True, inline="always")
+# Paths the default configuration never takes on a step (V_NN fits, TD(lambda), the
+# potential as a function, re-basing) stay real calls: inlined at each of their ~15 call
+# sites they made the rnh-ql+ kernel take minutes to compile.
+COLD = dict(cache=True)
 LOG_FLOOR = 1e-3  # v_target = 2: values below this [reward units] are learned as this
 OPT_FLOOR = 1e-12  # v_target = 3: optimistic values below this are learned as this
 
@@ -96,7 +100,7 @@ def v_of(w, feat, imap, s):
     return v
 
 
-@njit(**INLINE)
+@njit(**COLD)
 def v_regress(w, feat, imap, s, target, step):
     """Normalised LMS: w += step * (target - V(s)) * phi(s)."""
     m_n = feat.shape[1] // 2
@@ -106,7 +110,7 @@ def v_regress(w, feat, imap, s, target, step):
         w[imap[s, off + m]] += c * feat[s, m]
 
 
-@njit(**INLINE)
+@njit(**COLD)
 def v_td_lambda(w, e, feat, imap, s, r, v_s2, greedy, gamma, lam, step):
     """TD(lambda) on env rewards with Watkins cutting (learning.rbf.td_lambda, sparse phi)."""
     if not greedy:
@@ -128,7 +132,7 @@ def v_td_lambda(w, e, feat, imap, s, r, v_s2, greedy, gamma, lam, step):
 # ---------------------------------------------------------------- leak-free supports
 
 
-@njit(**INLINE)
+@njit(**COLD)
 def potential(fvar, par, w, e, feat, imap, ilist, s):
     """Phi(s) = scale * V_NN(s); scale * exp(V_NN(s)) when V_NN learns log values
     (v_target 2, 3); scale * y(s), the optimistic model's value itself, with no network
@@ -157,7 +161,7 @@ def model_phi(par):
 # ---------------------------------------------------------------- re-based rows
 
 
-@njit(**INLINE)
+@njit(**COLD)
 def rebase(fvar, par, q, w, e, feat, imap, ilist, s):
     """Phi(s) now; row s's tried actions re-based onto it (Q + Phi unchanged), untried ones
     left at 0, i.e. valued at Phi(s). Returns Phi(s)."""

@@ -50,6 +50,12 @@ def back_move(a):
     return 1 if a == 0 else (0 if a == 1 else (3 if a == 2 else 2))
 
 
+@njit(**INLINE)
+def known_to_fail(imap, n_a, s, a):
+    """The move s -a-> was seen to leave the agent put (a wall, not G)."""
+    return imap[s, a] == s and imap[s, n_a + a] == 0
+
+
 @njit(cache=True)
 def optimistic_bfs(imap, ilist, n_s, n_a, n_c, goal):
     """BFS distances to G over the moves not known to fail (seen to leave the agent put)."""
@@ -69,8 +75,8 @@ def optimistic_bfs(imap, ilist, n_s, n_a, n_c, goal):
             if u < 0 or ilist[d0 + u] >= 0:
                 continue
             b = back_move(a)
-            if imap[u, b] == u and imap[u, n_a + b] == 0:
-                continue  # u -> v is known to fail
+            if known_to_fail(imap, n_a, u, b):
+                continue
             ilist[d0 + u] = ilist[d0 + v] + 1
             ilist[q0 + tail] = u
             tail += 1
@@ -93,8 +99,7 @@ def distances_change(imap, ilist, n_s, n_a, n_c, s, a):
         if b == a:
             continue
         v = ilist[nb0 + s * n_a + b]
-        if v >= 0 and ilist[d0 + v] == ds - 1 and not (imap[s, b] == s
-                                                         and imap[s, n_a + b] == 0):
+        if v >= 0 and ilist[d0 + v] == ds - 1 and not known_to_fail(imap, n_a, s, b):
             return False
     return True
 

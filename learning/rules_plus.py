@@ -61,6 +61,7 @@ from learning.plus_optimism import (
     distances_change,
     ensure_values,
     goal_reward,
+    known_to_fail,
     mark_stale,
     neighbour_base,
     observe_rewards,
@@ -277,12 +278,15 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     normalise = par[K.PP_NORMALISE] != 0.0
     based = shaping and par[K.PP_REBASE] != 0.0
     n_c = w.shape[0]
+    direct = model_phi(par)  # Phi read as scale * y from e[y0 + s]
+    scale = par[K.PP_SCALE]
+    y0 = n_c + n_s
     if based:
         rebase(fvar, par, q, w, e, feat, imap, ilist, s)
     vt = par[K.PP_VTARGET]
     stale = observe_rewards(fvar, s, r, s2, terminated)
     # model first: a new move may join s' to supports before Phi(s') is read
-    was_fail = imap[s, a] == s and imap[s, n_a + a] == 0
+    was_fail = known_to_fail(imap, n_a, s, a)
     now_fail = s2 == s and not terminated
     if imap[s, a] < 0:
         ilist[ivar[K.I_NSEEN]] = s * n_a + a
@@ -306,8 +310,8 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
         leak_free_enter(feat, imap, ilist, n_s, n_a, s2, normalise)
     if terminated:
         phi_s2 = 0.0
-    elif model_phi(par):
-        phi_s2 = par[K.PP_SCALE] * e[n_c + n_s + s2]
+    elif direct:
+        phi_s2 = scale * e[y0 + s2]
     else:
         phi_s2 = potential(fvar, par, w, e, feat, imap, ilist, s2)
     if based and not terminated:
@@ -353,9 +357,6 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
         if fit:
             v_regress(w, feat, imap, s, target, fvar[K.F_STEP_V])
     n_seen = ivar[K.I_NSEEN]
-    direct = model_phi(par)
-    scale = par[K.PP_SCALE]
-    y0 = n_c + n_s
     for _ in range(int(par[K.PP_NPLAN])):
         j = ilist[draw_below(rng, n_seen)]
         if n_a == 4:  # the grid's four moves: shifts, not two integer divisions

@@ -131,7 +131,7 @@ def test_bfs_skipped_only_where_no_distance_changes_and_values_match_the_formula
     refresh_values(st.fvar, st.par, st.ilist, st.e, n_s, n_a, n_c)
     g, r_goal = float(st.par[K.P_GAMMA]), goal_reward(st.fvar, st.par)
     d = st.ilist[d0:d0 + n_s]
-    want = np.array([0.0 if k < 0 or k == 0 else g ** (k - 1) * r_goal for k in d])
+    want = np.array([0.0 if k <= 0 else g ** (k - 1) * r_goal for k in d])
     np.testing.assert_allclose(st.e[n_c + n_s:n_c + 2 * n_s], want, rtol=1e-12)
     assert (d < 0).any() or d.max() > 1
 

@@ -11,8 +11,8 @@ from gymnasium.envs.registration import register, registry
 
 ENV_SPECS = {
     "rnhql/GridRoute-v0": ("sim.grid_env:GridRouteEnv", 600),
-    "rnhql/PhysicsRoute-v0": ("sim.physics_env:PhysicsRouteEnv", 600),
-    "rnhql/DiffDrive-v0": ("sim.physics_env:DiffDriveEnv", 2000),
+    "rnhql/PhysicsRoute-v0": ("sim.physics.envs:PhysicsRouteEnv", 600),
+    "rnhql/DiffDrive-v0": ("sim.physics.envs:DiffDriveEnv", 2000),
 }
 
 

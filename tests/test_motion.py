@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from sim.motion import (
+from sim.physics.controller import (
     CARDINAL_HEADINGS,
     DriveLimits,
     PrimitiveController,
@@ -19,7 +19,7 @@ from sim.motion import (
     wheels_to_twist,
     wrap_angle,
 )
-from sim.physics import PhysicsConfig, PhysicsWorld
+from sim.physics.world import PhysicsConfig, PhysicsWorld
 from sim.scenario import Robot, Scenario
 
 speeds = st.floats(-5.0, 5.0, allow_nan=False)

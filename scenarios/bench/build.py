@@ -31,8 +31,8 @@ t1 = time.perf_counter()
 spec, start, goal = sys.argv[1], eval(sys.argv[2]), eval(sys.argv[3])
 sc, model = load(spec, start, goal)
 t2 = time.perf_counter()
-from sim.physics import PhysicsWorld
-from sim.physics_static import PhysicsConfig
+from sim.physics.world import PhysicsWorld
+from sim.physics.static import PhysicsConfig
 t3 = time.perf_counter()
 PhysicsWorld(sc, PhysicsConfig())
 t4 = time.perf_counter()

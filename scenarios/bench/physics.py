@@ -27,9 +27,9 @@ import gymnasium as gym
 import numpy as np
 
 import sim.envs  # noqa: F401  (registers the ids)
-from sim.motion import PrimitiveController
-from sim.physics import PhysicsConfig, PhysicsWorld
-from sim.physics_env import PhysicsRouteEnv
+from sim.physics.controller import PrimitiveController
+from sim.physics.world import PhysicsConfig, PhysicsWorld
+from sim.physics.envs import PhysicsRouteEnv
 from sim.scenario import Scenario
 from sim.scenario_io import resolve_scenario
 

@@ -5,7 +5,7 @@ The learner is the step-by-step agent (:mod:`learning.agent`) on
 from the discretised pose, bumps from real contacts.
 
 Greedy tests every ``test_every`` episodes evaluate the learned policy on the
-*physics world's own* tabular model (:func:`sim.physics_graph.physics_model`:
+*physics world's own* tabular model (:func:`sim.physics.model.physics_model`:
 each primitive driven once from each reachable cell centre, cached), against
 the physics optimum: the real disc can enter cells the grid's clearance blocks,
 so grading on the grid model would call a route through them "no G". The
@@ -206,7 +206,7 @@ def _train(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
            start_rng: np.random.Generator | None, counter: Any, env: Any,
            stopper: _StopAtStep) -> PhysicsTrainResult:
     from scenarios.recording.hooks import ChunkLogger
-    from sim.physics_graph import physics_model
+    from sim.physics.model import physics_model
 
     graded = physics_model(sc)  # the physics world's own transitions and optimum
     agent = make_agent(cfg, geometry_of(model), rng)

@@ -34,7 +34,7 @@ import numpy as np
 import pymunk
 
 from sim.grid import TabularModel, build_model
-from sim.physics import PhysicsConfig
+from sim.physics.static import PhysicsConfig
 from sim.planning import ACTION_DELTAS
 from sim.scenario import Scenario
 
@@ -58,8 +58,8 @@ def digest(sc: Scenario, config: PhysicsConfig) -> str:
 def drive_transitions(sc: Scenario, config: PhysicsConfig) -> np.ndarray:
     """int32[nS, 4]: the state each primitive reaches from each cell reachable from S."""
     from sim.discretiser import Discretiser
-    from sim.motion import PrimitiveController
-    from sim.physics import PhysicsWorld
+    from sim.physics.controller import PrimitiveController
+    from sim.physics.world import PhysicsWorld
 
     model = build_model(sc)
     disc = Discretiser.from_scenario(sc)

@@ -41,8 +41,8 @@ from typing import Any
 
 import pymunk
 
-from sim import sigint
-from sim.physics_static import (
+from sim.physics import sigint
+from sim.physics.static import (
     ROBOT_CATEGORY,
     STATIC_CATEGORY,
     STATIC_KINDS,

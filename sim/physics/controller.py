@@ -42,7 +42,7 @@ from sim.discretiser import Discretiser
 from sim.planning import ACTION_DELTAS
 
 if TYPE_CHECKING:
-    from sim.physics import Contact, PhysicsConfig, PhysicsWorld
+    from sim.physics.world import Contact, PhysicsConfig, PhysicsWorld
     from sim.scenario import Robot, Scenario
 
 # Heading [rad] of each grid action: 0 up (+y), 1 down (-y), 2 left (-x), 3 right (+x).

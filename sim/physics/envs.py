@@ -2,7 +2,7 @@
 
 ``PhysicsRouteEnv`` is the grid route problem driven for real: same spaces,
 same reward scheme, same ``reset`` options as :class:`sim.grid_env.GridRouteEnv`,
-but every action is a motion primitive (:mod:`sim.motion`) and the next state is
+but every action is a motion primitive (:mod:`sim.physics.controller`) and the next state is
 the cell the robot's measured pose lies in. ``DiffDriveEnv`` hands the wheels to
 the agent. Both keep one :class:`sim.physics.PhysicsWorld` and respawn the robot
 per reset (the static shapes are built once; replays equal a fresh world, tested).
@@ -21,8 +21,8 @@ from sim.discretiser import Discretiser
 from sim.feasibility import validate
 from sim.grid import build_model
 from sim.grid_env import start_state_from_options
-from sim.motion import DriveLimits, PrimitiveController, rate_limit, wheels_to_twist, wrap_angle
-from sim.physics import PhysicsConfig, PhysicsWorld
+from sim.physics.controller import DriveLimits, PrimitiveController, rate_limit, wheels_to_twist, wrap_angle
+from sim.physics.world import PhysicsConfig, PhysicsWorld
 from sim.render import AGENT, PATH, MapCanvas
 from sim.scenario import Scenario
 from sim.scenario_io import resolve_scenario

@@ -11,8 +11,8 @@ import pytest
 import sim.envs  # noqa: F401  (registers the ids)
 from sim.errors import ScenarioError
 from sim.layouts import chain
-from sim.physics.static import PhysicsConfig
 from sim.physics.envs import DiffDriveEnv, PhysicsRouteEnv
+from sim.physics.static import PhysicsConfig
 from sim.scenario import Circle, Robot, Scenario
 
 OPEN = Scenario(name="open", width_m=10.0, height_m=10.0, start=(1, 1), goal=(8, 8))

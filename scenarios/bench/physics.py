@@ -28,8 +28,8 @@ import numpy as np
 
 import sim.envs  # noqa: F401  (registers the ids)
 from sim.physics.controller import PrimitiveController
-from sim.physics.world import PhysicsConfig, PhysicsWorld
 from sim.physics.envs import PhysicsRouteEnv
+from sim.physics.world import PhysicsConfig, PhysicsWorld
 from sim.scenario import Scenario
 from sim.scenario_io import resolve_scenario
 

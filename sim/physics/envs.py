@@ -21,7 +21,13 @@ from sim.discretiser import Discretiser
 from sim.feasibility import validate
 from sim.grid import build_model
 from sim.grid_env import start_state_from_options
-from sim.physics.controller import DriveLimits, PrimitiveController, rate_limit, wheels_to_twist, wrap_angle
+from sim.physics.controller import (
+    DriveLimits,
+    PrimitiveController,
+    rate_limit,
+    wheels_to_twist,
+    wrap_angle,
+)
 from sim.physics.world import PhysicsConfig, PhysicsWorld
 from sim.render import AGENT, PATH, MapCanvas
 from sim.scenario import Scenario

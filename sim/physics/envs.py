@@ -21,13 +21,8 @@ from sim.discretiser import Discretiser
 from sim.feasibility import validate
 from sim.grid import build_model
 from sim.grid_env import start_state_from_options
-from sim.physics.controller import (
-    DriveLimits,
-    PrimitiveController,
-    rate_limit,
-    wheels_to_twist,
-    wrap_angle,
-)
+from sim.physics.batch import RobotView, RouteBatch
+from sim.physics.controller import DriveLimits, rate_limit, wheels_to_twist, wrap_angle
 from sim.physics.world import PhysicsConfig, PhysicsWorld
 from sim.render import AGENT, PATH, MapCanvas
 from sim.scenario import Scenario
@@ -142,12 +137,12 @@ class PhysicsRouteEnv(gym.Env):
         self.observation_space = spaces.Discrete(self.model.n_states)
         self.action_space = spaces.Discrete(4)
         self.disc = Discretiser.from_scenario(self.scenario)
-        self.controller = PrimitiveController(self.scenario, self.config)
-        self._cast_cache: dict[tuple[float, ...], float | None] = {}
         rw = self.scenario.rewards
         self._r_goal, self._r_bump, self._r_step = rw.goal, rw.bump, rw.step
         self._goal = self.model.goal
-        self.world: PhysicsWorld | None = None
+        self.world: RobotView | None = None
+        self._batch: RouteBatch | None = None
+        self._action = np.zeros(1, dtype=np.int64)
         self._s = self.model.start
         self._trail: _Trail | None = None
 
@@ -156,11 +151,10 @@ class PhysicsRouteEnv(gym.Env):
         super().reset(seed=seed)
         s = start_state_from_options(options, self.model, self.np_random)
         x, y = self.disc.state_centre(s)
-        if self.world is None:
-            self.world = PhysicsWorld(self.scenario, self.config, (x, y, 0.0),
-                                      cast_cache=self._cast_cache)
-        else:  # a new robot, the static shapes kept: replays like a fresh space (tested)
-            self.world.respawn((x, y, 0.0))
+        if self._batch is None:  # a batch of one robot: the same world as the vector env's
+            self._batch = RouteBatch(self.scenario, 1, self.config, trajectories=True)
+            self.world = RobotView(self._batch, 0)
+        self._batch.place(0, x, y, 0.0)  # static shapes kept; the robot's state all new
         self._s = s
         pose = (x, y, 0.0)
         if self.render_mode is not None:
@@ -174,25 +168,29 @@ class PhysicsRouteEnv(gym.Env):
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
         if not (action.__class__ is int or isinstance(action, np.integer)) or not 0 <= action < 4:
             raise AssertionError(f"{action!r} ({type(action)}) invalid")
-        world = self.world
-        if world is None:
+        batch = self._batch
+        if batch is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        res = self.controller.run(world, int(action))
-        s = res.state
+        self._action[0] = action
+        n_before = len(batch.contacts[0])
+        out = batch.step(self._action)
+        s = int(out.state[0])
         self._s = s
-        if res.bumped:
+        bumped = bool(out.bumped[0])
+        if bumped:
             reward = self._r_bump
         elif s == self._goal:
             reward = self._r_goal
         else:
             reward = self._r_step
-        traj = np.array(res.trajectory)
+        traj = batch.trajectory(0)
         if self._trail is not None:
             self._trail.chunks.append(traj)
-        x, y, th = world.pose
-        info = {"pose": (float(x), float(y), wrap_angle(float(th))), "time_s": world.time_s,
-                "contacts": res.contacts, "bumped": res.bumped, "reached": res.reached,
-                "timeout": res.timeout, "steps": res.steps, "trajectory": traj}
+        x, y, th = batch.pose(0)
+        info = {"pose": (x, y, wrap_angle(th)), "time_s": batch.time_s(0),
+                "contacts": tuple(batch.contacts[0][n_before:]), "bumped": bumped,
+                "reached": bool(out.reached[0]), "timeout": bool(out.timeout[0]),
+                "steps": int(out.steps[0]), "trajectory": traj}
         return s, reward, s == self._goal, False, info
 
     def render(self) -> np.ndarray | None:

@@ -252,14 +252,7 @@ class PhysicsWorld:
         already keeps the robot from moving further into it (skipping it lets
         a robot resting against a wall drive along or away from it).
         """
-        r = self.radius_m
-        bb = pymunk.BB(min(x0, x1) - r, min(y0, y1) - r, max(x0, x1) + r, max(y0, y1) + r)
-        alpha = math.inf
-        for shape in self.space.bb_query(bb, self._query_filter):
-            info = shape.segment_query((x0, y0), (x1, y1), r)
-            if info is not None and 0.0 < info.alpha < alpha:
-                alpha = info.alpha
-        return None if alpha == math.inf else alpha
+        return sweep_alpha(self.space, self._query_filter, self.radius_m, x0, y0, x1, y1)
 
     def overlap_m(self) -> float:
         """Deepest overlap of the robot with static geometry right now [m] (0 if none)."""
@@ -359,6 +352,21 @@ class PhysicsWorld:
             if self._pending:
                 self._flush_contacts()
         return len(self.contacts) - before
+
+
+def sweep_alpha(space: pymunk.Space, query_filter: pymunk.ShapeFilter, radius_m: float,
+                x0: float, y0: float, x1: float, y1: float) -> float | None:
+    """Fraction of (x0, y0) -> (x1, y1) a disc of ``radius_m`` sweeps before touching a shape
+    that ``query_filter`` lets through; None if it touches none. See
+    :meth:`PhysicsWorld.cast_alpha` (one implementation for the world and the batch)."""
+    r = radius_m
+    bb = pymunk.BB(min(x0, x1) - r, min(y0, y1) - r, max(x0, x1) + r, max(y0, y1) + r)
+    alpha = math.inf
+    for shape in space.bb_query(bb, query_filter):
+        info = shape.segment_query((x0, y0), (x1, y1), r)
+        if info is not None and 0.0 < info.alpha < alpha:
+            alpha = info.alpha
+    return None if alpha == math.inf else alpha
 
 
 def _centre(sc: Scenario, cell: tuple[int, int]) -> tuple[float, float]:

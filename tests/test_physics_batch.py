@@ -1,0 +1,93 @@
+"""The batched physics world is the single-robot world: same cells, rewards, contacts and
+step counts, poses within 1e-9 m, whatever else shares the batch."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sim.grid import build_model
+from sim.physics.batch import RouteBatch
+from sim.physics.controller import PrimitiveController
+from sim.physics.static import PhysicsConfig
+from sim.physics.world import PhysicsWorld
+from sim.scenario_io import resolve_scenario
+
+POSE_TOL_M = 1e-9
+
+
+@pytest.mark.parametrize("name", ["paper-50", "arena"])
+def test_batch_robot_equals_the_reference_world(name):
+    """Every step through cpSpaceStep (reference) vs the compiled kernel + Chipmunk checks."""
+    sc = resolve_scenario(name)
+    model = build_model(sc)
+    cfg = PhysicsConfig()
+    rng = np.random.default_rng(7)
+    world = PhysicsWorld(sc, cfg)
+    ctl = PrimitiveController(sc, cfg)
+    batch = RouteBatch(sc, 1, cfg, trajectories=True)
+    starts = model.start_states
+    bumps = contacts = 0
+    for k in range(2500):
+        if k % 250 == 0:  # a new episode from a random start cell
+            s0 = int(rng.choice(starts))
+            x, y = batch.disc.state_centre(s0)
+            world.respawn((x, y, 0.0))
+            batch.place(0, x, y, 0.0)
+        a = int(rng.integers(0, 4))
+        ref = ctl.run(world, a)
+        n_before = len(batch.contacts[0])
+        out = batch.step(np.array([a]))
+        assert (ref.state, ref.bumped, ref.reached, ref.timeout, ref.steps) == (
+            out.state[0], out.bumped[0], out.reached[0], out.timeout[0], out.steps[0]), k
+        np.testing.assert_allclose(batch.pose(0), world.pose, rtol=0, atol=POSE_TOL_M)
+        np.testing.assert_allclose(batch.trajectory(0), np.array(ref.trajectory), rtol=0,
+                                   atol=POSE_TOL_M)
+        got = sorted(batch.contacts[0][n_before:])
+        want = sorted(ref.contacts)
+        assert [(c.step, c.kind) for c in got] == [(c.step, c.kind) for c in want], k
+        for c, d in zip(got, want, strict=True):
+            np.testing.assert_allclose(c[2:], d[2:], rtol=0, atol=POSE_TOL_M)
+        bumps += ref.bumped
+        contacts += len(ref.contacts)
+    assert bumps > 50 and contacts >= bumps  # the test saw plenty of bumps
+
+
+def test_a_robot_in_a_batch_is_the_single_robot():
+    """Eight robots with their own actions in one Space == eight batches of one."""
+    sc = resolve_scenario("paper-50")
+    model = build_model(sc)
+    rng = np.random.default_rng(3)
+    n = 8
+    batch = RouteBatch(sc, n)
+    singles = [RouteBatch(sc, 1) for _ in range(n)]
+    for k in range(400):
+        if k % 100 == 0:
+            for i, s0 in enumerate(rng.choice(model.start_states, n)):
+                x, y = batch.disc.state_centre(int(s0))
+                batch.place(i, x, y, 0.0)
+                singles[i].place(0, x, y, 0.0)
+        acts = rng.integers(0, 4, n)
+        active = rng.random(n) < 0.8  # some robots sit a step out
+        out = batch.step(acts, active)
+        for i in np.flatnonzero(active):
+            one = singles[i].step(acts[i:i + 1])
+            assert (out.state[i], out.bumped[i], out.steps[i], out.contacts[i]) == (
+                one.state[0], one.bumped[0], one.steps[0], one.contacts[0])
+            assert batch.pose(i) == singles[i].pose(0)  # bit for bit
+        assert not out.steps[~active].any()
+
+
+def test_robots_never_touch_each_other():
+    sc = resolve_scenario("paper-50")
+    batch = RouteBatch(sc, 2)
+    x, y = batch.disc.cell_centre(*sc.start)
+    batch.place(0, x, y)
+    batch.place(1, x, y)  # the same spot
+    out = batch.step(np.array([3, 2]))
+    assert not out.bumped.any() and out.contacts.sum() == 0
+
+
+def test_bad_batch_size_is_an_error():
+    with pytest.raises(ValueError, match="n_robots"):
+        RouteBatch(resolve_scenario("paper-50"), 0)

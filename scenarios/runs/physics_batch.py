@@ -1,0 +1,201 @@
+"""Physics training in batches: the runs of a sweep as the robots of one Pymunk Space.
+
+:func:`train_physics_batch` trains several groups of runs at once (a group: one method and
+config, several seeds), every run one robot of a :class:`sim.physics.batch.RouteBatch`
+and one agent of its group's :class:`learning.batch_agent.BatchAgent`. Per batched step
+there is one compiled call per group for ``act``, one for the world (plus Chipmunk where a
+leg needs a cast or a step may touch) and one per group for ``update``.
+
+Each run is exactly the run :func:`scenarios.runs.physics.train_physics` makes alone with
+its seed (tested, record for record): its robot is the single-robot world, its agent
+draws from its own learner stream in the same order, its start cells come from its own
+start stream, the greedy tests run after the same episodes on the same physics model.
+Only the wall time differs: a batched step's time is shared among the runs it advanced.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from learning.batch_agent import BatchAgent
+from learning.generator_handle import handles
+from learning.geometry import geometry_of
+from learning.train import greedy_test, shortest_fraction
+from scenarios.runs.physics import PhysicsTrainResult, drive_greedy
+from sim.grid import TabularModel
+from sim.physics.batch import RouteBatch
+from sim.scenario import Scenario
+
+
+@dataclass(frozen=True)
+class RunGroup:
+    """Runs of one method and config: one learner and one start stream per run."""
+
+    cfg: Any
+    learner_rngs: Sequence[np.random.Generator]
+    start_rngs: Sequence[np.random.Generator]
+
+
+class _Stop:
+    """Ctrl-C sets a flag; the loop raises KeyboardInterrupt between batched steps (a signal
+    inside a compiled call or a Chipmunk query is never acted on there)."""
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._old: Any = None
+
+    def _request(self, _sig: int, _frame: Any) -> None:
+        if self.requested:
+            raise KeyboardInterrupt  # a second Ctrl-C: now
+        self.requested = True
+
+    def __enter__(self) -> _Stop:
+        if threading.current_thread() is threading.main_thread() and \
+                signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+            self._old = signal.signal(signal.SIGINT, self._request)
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+
+
+class _Logs:
+    """Per-run, per-episode arrays, filled as episodes end."""
+
+    def __init__(self, n: int, episodes: int) -> None:
+        self.steps = np.zeros((n, episodes), np.int32)
+        self.returns = np.zeros((n, episodes))
+        self.success = np.zeros((n, episodes), bool)
+        self.shaping_mean = np.zeros((n, episodes))
+        self.shaping_std = np.zeros((n, episodes))
+        self.wall = np.zeros((n, episodes))
+        self.contacts = np.zeros((n, episodes), np.int64)
+        self.sim_time = np.zeros((n, episodes))
+        self.tests_e: list[list[int]] = [[] for _ in range(n)]
+        self.tests_l: list[list[int]] = [[] for _ in range(n)]
+
+
+def train_physics_batch(sc: Scenario, model: TabularModel, groups: Sequence[RunGroup],
+                        n_episodes: int, test_every: int = 10) -> list[list[PhysicsTrainResult]]:
+    """Train every run of every group in one batch; results per group, per run."""
+    from sim.physics.model import physics_model
+
+    graded = physics_model(sc)
+    geom = geometry_of(model)
+    starts = np.asarray(geom.start_states)
+    agents, bounds = [], []
+    lo = 0
+    for g in groups:
+        agents.append(BatchAgent(g.cfg, geom, list(g.learner_rngs)))
+        bounds.append((lo, lo + len(g.learner_rngs)))
+        lo += len(g.learner_rngs)
+    n = lo
+    start_h = handles([r for g in groups for r in g.start_rngs])
+    world = RouteBatch(sc, n)
+    rw = sc.rewards
+    goal, max_steps = model.goal, sc.steps_per_episode
+    logs = _Logs(n, n_episodes)
+    s = np.zeros(n, np.int64)
+    a = np.zeros(n, np.int64)
+    t = np.zeros(n, np.int64)
+    ret = np.zeros(n)
+    wall = np.zeros(n)
+    contacts = np.zeros(n, np.int64)
+    done = np.zeros(n, np.int64)
+    active = np.ones(n, bool)
+
+    def start_episodes(which: np.ndarray) -> None:
+        for ag, (b0, b1) in zip(agents, bounds, strict=True):
+            sub = which[b0:b1]
+            if sub.any():
+                s0 = ag.draw_starts(start_h[b0:b1], starts, sub)
+                s[b0:b1][sub] = s0[sub]
+                ag.begin_episode(sub, s[b0:b1])
+        for i in np.flatnonzero(which):
+            x, y = world.disc.state_centre(int(s[i]))
+            world.place(int(i), x, y, 0.0)
+
+    with _Stop() as stop:
+        start_episodes(active)
+        while active.any():
+            t0 = time.perf_counter()
+            for ag, (b0, b1) in zip(agents, bounds, strict=True):
+                a[b0:b1] = ag.act(active[b0:b1], s[b0:b1])
+            out = world.step(a, active)
+            s2 = out.state
+            term = active & (s2 == goal)
+            r = np.where(out.bumped, rw.bump, np.where(term, rw.goal, rw.step))
+            t += active
+            ret += np.where(active, r, 0.0)
+            contacts += out.contacts
+            trunc = active & (t >= max_steps)  # TimeLimit: also on a step that terminates
+            for ag, (b0, b1) in zip(agents, bounds, strict=True):
+                ag.update(active[b0:b1], s[b0:b1], a[b0:b1], r[b0:b1], s2[b0:b1],
+                          term[b0:b1], trunc[b0:b1])
+            np.copyto(s, s2, where=active)
+            wall[active] += (time.perf_counter() - t0) / active.sum()
+            ended = term | trunc
+            if ended.any():
+                _end_episodes(ended, agents, bounds, logs, world, graded, done, t, ret, term,
+                              wall, contacts, n_episodes, test_every, active)
+                start_episodes(ended & active)
+            if stop.requested:
+                raise KeyboardInterrupt
+    results: list[list[PhysicsTrainResult]] = []
+    for ag, (b0, b1) in zip(agents, bounds, strict=True):
+        results.append([_result(ag, k, b0 + k, logs, sc, model, graded, n_episodes)
+                        for k in range(b1 - b0)])
+    return results
+
+
+def _end_episodes(ended, agents, bounds, logs, world, graded, done, t, ret, term, wall,
+                  contacts, n_episodes, test_every, active) -> None:
+    for ag, (b0, b1) in zip(agents, bounds, strict=True):
+        sub = ended[b0:b1]
+        if not sub.any():
+            continue
+        ag.end_episode(sub)
+        fmean, fstd = ag.last_shaping()
+        for k in np.flatnonzero(sub):
+            i = b0 + k
+            e = done[i]
+            logs.steps[i, e], logs.returns[i, e], logs.success[i, e] = t[i], ret[i], term[i]
+            logs.shaping_mean[i, e], logs.shaping_std[i, e] = fmean[k], fstd[k]
+            logs.wall[i, e], logs.contacts[i, e] = wall[i], contacts[i]
+            logs.sim_time[i, e] = world.time_s(int(i))
+            done[i] = e + 1
+            t[i], ret[i], wall[i], contacts[i] = 0, 0.0, 0.0, 0
+            if done[i] % test_every == 0 or done[i] == n_episodes:
+                logs.tests_e[i].append(int(done[i]))
+                logs.tests_l[i].append(greedy_test(ag.state(int(k)), graded)[0])
+            if done[i] == n_episodes:
+                active[i] = False
+
+
+def _result(ag: BatchAgent, k: int, i: int, logs: _Logs, sc: Scenario, model: TabularModel,
+            graded: TabularModel, n_episodes: int) -> PhysicsTrainResult:
+    agent = ag.step_agent(k)
+    length, route = greedy_test(agent.state, graded)
+    driven = drive_greedy(agent, sc)
+    extras = {"grid_optimal_route_length": model.optimal_route_length,
+              "physics_optimal_route_length": graded.optimal_route_length,
+              "contacts_per_episode": logs.contacts[i].tolist(),
+              "sim_time_per_episode_s": np.round(logs.sim_time[i], 4).tolist(),
+              **driven.extras()}
+    return PhysicsTrainResult(
+        agent=agent, steps=logs.steps[i], returns=logs.returns[i], success=logs.success[i],
+        shaping_mean=logs.shaping_mean[i], shaping_std=logs.shaping_std[i],
+        wall_time_s=logs.wall[i], test_episodes=np.asarray(logs.tests_e[i]),
+        test_route_length=np.asarray(logs.tests_l[i]),
+        optimal_length=graded.optimal_route_length, final_route=route,
+        final_route_length=length,
+        optimal_action_fraction=shortest_fraction(agent.state, graded), driven=driven,
+        graded=graded, world_extras=extras)

@@ -15,11 +15,27 @@ from typing import Any
 
 import numpy as np
 
+from numba import njit
+
 from learning import dispatch
 from learning import kinds as K
+from learning.generator_handle import generator_from, handle
 from learning.geometry import Geometry
 from learning.methods import MethodConfig
 from learning.state import AgentState, init_state
+
+
+@njit(cache=True)
+def _act(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, h):
+    return dispatch.act(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s,
+                        generator_from(h))
+
+
+@njit(cache=True)
+def _update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
+            truncated, h):
+    dispatch.update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2,
+                    terminated, truncated, generator_from(h))
 
 
 class StepAgent:
@@ -38,6 +54,7 @@ class StepAgent:
         self.rng = rng
         self.state = init_state(cfg, geometry, rng) if state is None else state
         self.kind = int(cfg.kind)
+        self._h = handle(rng)  # the generator, passed to compiled code without unboxing
 
     @property
     def episodes_done(self) -> int:
@@ -54,13 +71,13 @@ class StepAgent:
 
     def act(self, s: int) -> int:
         """The behaviour (exploring) action at ``s``; draws from the agent's generator."""
-        return int(dispatch.act(self.kind, *self.state, int(s), self.rng))
+        return int(_act(self.kind, *self.state, int(s), self._h))
 
     def update(self, s: int, a: int, r: float, s2: int, terminated: bool,
                truncated: bool) -> None:
         """Learn from one transition; bootstraps from ``s2`` unless ``terminated``."""
-        dispatch.update(self.kind, *self.state, int(s), int(a), float(r), int(s2),
-                        bool(terminated), bool(truncated), self.rng)
+        _update(self.kind, *self.state, int(s), int(a), float(r), int(s2), bool(terminated),
+                bool(truncated), self._h)
 
     def end_episode(self) -> None:
         dispatch.end_episode(self.state.ivar, self.state.fvar)

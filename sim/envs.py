@@ -14,12 +14,17 @@ ENV_SPECS = {
     "rnhql/PhysicsRoute-v0": ("sim.physics.envs:PhysicsRouteEnv", 600),
     "rnhql/DiffDrive-v0": ("sim.physics.envs:DiffDriveEnv", 2000),
 }
+# make_vec(id, num_envs=N, vectorization_mode="vector_entry_point"): N robots in one Space
+VECTOR_ENTRY_POINTS = {
+    "rnhql/PhysicsRoute-v0": "sim.physics.vector:PhysicsRouteVectorEnv",
+}
 
 
 def register_envs() -> None:
     for env_id, (entry_point, max_steps) in ENV_SPECS.items():
         if env_id not in registry:
-            register(id=env_id, entry_point=entry_point, max_episode_steps=max_steps)
+            register(id=env_id, entry_point=entry_point, max_episode_steps=max_steps,
+                     vector_entry_point=VECTOR_ENTRY_POINTS.get(env_id))
 
 
 register_envs()

@@ -1,7 +1,10 @@
 """Where the runs of a sweep execute: a local process pool, or a Ray cluster.
 
 A backend takes specs and returns their records in spec order; ``on_result``
-sees each record as soon as it finishes so the caller can persist it. A run
+sees each record as soon as it finishes so the caller can persist it. Specs are
+planned into tasks first (:func:`scenarios.runs.physics_batch.plan_tasks`): a grid
+run is a task of its own, physics runs of one problem and budget are the robots of
+one batch (a task that returns several records at once). A run
 that fails (bad config, crashed worker) does not lose the others: the backend
 finishes the rest and raises :class:`SweepError` naming every failed run's
 parameters.
@@ -16,7 +19,8 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
 
-from scenarios.runs.spec import RunSpec, run_one
+from scenarios.runs.physics_batch import plan_tasks, run_task
+from scenarios.runs.spec import RunSpec
 from sim.errors import InputError
 
 OnResult = Callable[[dict[str, Any]], None] | None
@@ -117,25 +121,31 @@ def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = Non
     propagates; every run finished before it has already gone to ``on_result``.
     """
     col = _Collector(specs, on_result, progress)
-    if jobs <= 1 or len(specs) <= 1:
-        for i, spec in enumerate(specs):
+    tasks = plan_tasks(specs, max(jobs, 1))
+    if jobs <= 1 or len(tasks) <= 1:
+        for task in tasks:
             try:
-                rec = run_one(spec)
+                recs = run_task([specs[i] for i in task])
             except Exception as exc:  # keep going: report with its parameters at the end
-                col.failed(i, exc)
+                for i in task:
+                    col.failed(i, exc)
             else:
-                col.ok(i, rec)
+                for i, rec in zip(task, recs, strict=True):
+                    col.ok(i, rec)
         return col.result()
     pool = ProcessPoolExecutor(max_workers=jobs, initializer=_ignore_sigint)
     try:
-        futures = {pool.submit(run_one, spec): i for i, spec in enumerate(specs)}
+        futures = {pool.submit(run_task, [specs[i] for i in task]): task for task in tasks}
         for fut in as_completed(futures):
+            task = futures[fut]
             try:
-                rec = fut.result()
+                recs = fut.result()
             except Exception as exc:  # includes BrokenProcessPool from a crashed worker
-                col.failed(futures[fut], exc)
+                for i in task:
+                    col.failed(i, exc)
             else:
-                col.ok(futures[fut], rec)
+                for i, rec in zip(task, recs, strict=True):
+                    col.ok(i, rec)
     except BaseException:  # Ctrl-C (or a failing on_result): stop now, not after every run
         _end_workers(pool)
         raise
@@ -145,7 +155,8 @@ def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = Non
 
 def run_ray(specs: Sequence[RunSpec], address: str | None = None, num_cpus: int | None = None,
             on_result: OnResult = None, progress: Progress | None = None) -> list[dict[str, Any]]:
-    """Run each spec as a Ray task (one CPU each) on a cluster or a local runtime.
+    """Run each task (a run, or a physics batch) as a Ray task (one CPU each) on a cluster
+    or a local runtime.
 
     ``address``: ``None`` starts a local runtime (``num_cpus`` CPUs), ``"auto"``
     joins the cluster this machine belongs to, ``"ray://host:port"`` connects a
@@ -161,20 +172,23 @@ def run_ray(specs: Sequence[RunSpec], address: str | None = None, num_cpus: int 
         ray.init(address=address, num_cpus=num_cpus if address is None else None,
                  include_dashboard=False, log_to_driver=False, configure_logging=False)
     try:
-        task = ray.remote(num_cpus=1, max_retries=1)(run_one)
-        refs = {task.remote(spec): i for i, spec in enumerate(specs)}
+        remote = ray.remote(num_cpus=1, max_retries=1)(run_task)
+        tasks = plan_tasks(specs, num_cpus or 1)
+        refs = {remote.remote([specs[i] for i in task]): task for task in tasks}
         col = _Collector(specs, on_result, progress)
         pending = list(refs)
         try:
             while pending:
                 ready, pending = ray.wait(pending, num_returns=1)
-                i = refs[ready[0]]
+                task = refs[ready[0]]
                 try:
-                    rec = ray.get(ready[0])
+                    recs = ray.get(ready[0])
                 except Exception as exc:  # RayTaskError wraps the worker's exception
-                    col.failed(i, getattr(exc, "cause", None) or exc)
+                    for i in task:
+                        col.failed(i, getattr(exc, "cause", None) or exc)
                 else:
-                    col.ok(i, rec)
+                    for i, rec in zip(task, recs, strict=True):
+                        col.ok(i, rec)
         except BaseException:  # Ctrl-C: cancel what is queued or running, keep what finished
             for ref in pending:
                 ray.cancel(ref, force=True)

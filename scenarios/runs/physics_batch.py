@@ -199,3 +199,75 @@ def _result(ag: BatchAgent, k: int, i: int, logs: _Logs, sc: Scenario, model: Ta
         final_route_length=length,
         optimal_action_fraction=shortest_fraction(agent.state, graded), driven=driven,
         graded=graded, world_extras=extras)
+
+
+# ------------------------------------------------------------------ sweeps
+
+MAX_BATCH = 64  # robots per batch: beyond this a batched step gains little, and a sweep
+#                 split into more tasks saves finished runs sooner and balances workers
+
+
+def batchable(spec: Any) -> bool:
+    """Physics runs without a recording train in batches (a recording taps one env)."""
+    return spec.world == "physics" and spec.record_path is None
+
+
+def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
+    """Spec indices per task: each grid or recorded run alone; physics runs that share a
+    problem, budget and test cadence together, dealt round-robin (by seed, then method)
+    into at least ``jobs`` tasks of at most :data:`MAX_BATCH` runs."""
+    tasks: list[list[int]] = []
+    groups: dict[tuple[Any, ...], list[int]] = {}
+    for i, sp in enumerate(specs):
+        if batchable(sp):
+            groups.setdefault((sp.problem, sp.episodes, sp.test_every), []).append(i)
+        else:
+            tasks.append([i])
+    for idx in groups.values():
+        idx = sorted(idx, key=lambda i: (specs[i].seed, i))
+        n_tasks = max(min(jobs, len(idx)), -(-len(idx) // MAX_BATCH))
+        tasks += [t for t in (idx[k::n_tasks] for k in range(n_tasks)) if t]
+    return tasks
+
+
+def run_physics_batch(specs: Sequence[Any]) -> list[dict[str, Any]]:
+    """Train physics specs (one problem, budget and test cadence) as one batch; their
+    results.json records, in spec order."""
+    from learning.streams import streams
+    from learning.train import epsilon_route_lengths
+    from scenarios.runs.spec import load, make_config, run_record
+
+    first = specs[0]
+    if any((sp.problem, sp.episodes, sp.test_every) != (first.problem, first.episodes,
+                                                       first.test_every) for sp in specs):
+        raise ValueError("a physics batch needs one problem, budget and test cadence")
+    sc, model = load(*first.problem)
+    by_config: dict[tuple[str, Any], list[int]] = {}
+    for i, sp in enumerate(specs):
+        by_config.setdefault((sp.method, sp.overrides), []).append(i)
+    groups, members, cfgs, evaluation = [], [], [], {}
+    for (method, overrides), idx in by_config.items():
+        cfg = make_config(method, overrides)
+        rs = [streams(specs[i].seed) for i in idx]
+        for i, r in zip(idx, rs, strict=True):
+            evaluation[i] = r.evaluation
+        groups.append(RunGroup(cfg, [r.learner for r in rs], [r.starts for r in rs]))
+        members.append(idx)
+        cfgs.append(cfg)
+    results = train_physics_batch(sc, model, groups, first.episodes, first.test_every)
+    records: list[dict[str, Any] | None] = [None] * len(specs)
+    for idx, cfg, group_results in zip(members, cfgs, results, strict=True):
+        for i, res in zip(idx, group_results, strict=True):
+            res.epsilon_route_lengths = epsilon_route_lengths(res.agent.state, res.graded,
+                                                              cfg.eps, evaluation[i])
+            records[i] = run_record(specs[i], cfg, res, model)
+    return [r for r in records if r is not None]
+
+
+def run_task(specs: Sequence[Any]) -> list[dict[str, Any]]:
+    """One task of :func:`plan_tasks`: a single run, or a physics batch."""
+    from scenarios.runs.spec import run_one
+
+    if len(specs) == 1 and not batchable(specs[0]):
+        return [run_one(specs[0])]
+    return run_physics_batch(specs)

@@ -1,0 +1,139 @@
+"""``rnhql/PhysicsRoute-v0`` as a gymnasium vector env: N robots in one Pymunk Space.
+
+``gymnasium.make_vec("rnhql/PhysicsRoute-v0", num_envs=N,
+vectorization_mode="vector_entry_point")`` returns a :class:`PhysicsRouteVectorEnv`:
+one :class:`sim.physics.batch.RouteBatch` whose robot ``i`` is sub-env ``i``. A batched
+step is one compiled call for all robots (Chipmunk only for guards and contact steps),
+where a ``SyncVectorEnv`` would step N Python envs in turn.
+
+Sub-env ``i`` reset with seed ``seed + i`` (or ``seed[i]``) is the single env reset with
+that seed: same observations, rewards, terminations, truncations and ``info`` figures
+for the same actions (tested). Autoreset follows ``metadata["autoreset_mode"]``
+(``NEXT_STEP``, gymnasium's default): the step after a sub-env's episode ended resets it
+(its action is ignored, reward 0, not terminated or truncated), with
+``autoreset_options`` (default: start at S, as a bare ``reset()`` of the single env).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from sim.grid import build_model
+from sim.grid_env import start_state_from_options
+from sim.physics import kernel as K
+from sim.physics.batch import RouteBatch
+from sim.physics.envs import _scenario
+from sim.physics.static import PhysicsConfig
+from sim.scenario import Scenario
+
+
+class PhysicsRouteVectorEnv(VectorEnv):
+    """N independent copies of ``PhysicsRoute-v0`` sharing one ``pymunk.Space``.
+
+    Observations are ``int64[N]`` cells, actions ``int[N]`` in 0..3 (up, down, left,
+    right). ``infos`` holds arrays over sub-envs (gymnasium's ``key`` / ``_key`` form):
+    ``pose`` (N, 3) [m, m, rad], ``time_s`` [s], ``bumped``, ``reached``, ``timeout``,
+    ``steps`` (physics steps of the primitive) and ``contacts`` (how many began).
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}  # noqa: RUF012
+
+    def __init__(self, num_envs: int = 1, scenario: str | Scenario = "paper-50",
+                 config: PhysicsConfig | None = None, max_episode_steps: int | None = 600,
+                 autoreset_options: dict[str, Any] | None = None,
+                 render_mode: str | None = None) -> None:
+        if render_mode is not None:
+            raise ValueError("PhysicsRouteVectorEnv does not render; use the single env")
+        if not (isinstance(num_envs, int) and num_envs >= 1):
+            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+        self.num_envs = num_envs
+        self.scenario = _scenario(scenario)
+        self.model = build_model(self.scenario)
+        self.config = config or PhysicsConfig()
+        self.config.validate()
+        self.max_episode_steps = max_episode_steps
+        self.autoreset_options = autoreset_options
+        self.batch = RouteBatch(self.scenario, num_envs, self.config)
+        self.single_observation_space = spaces.Discrete(self.model.n_states)
+        self.single_action_space = spaces.Discrete(4)
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        rw = self.scenario.rewards
+        self._r_goal, self._r_bump, self._r_step = rw.goal, rw.bump, rw.step
+        self._goal = self.model.goal
+        self._obs = np.zeros(num_envs, dtype=np.int64)
+        self._elapsed = np.zeros(num_envs, dtype=np.int64)
+        self._needs_reset = np.ones(num_envs, dtype=bool)
+        self._rngs: list[np.random.Generator] = [seeding.np_random()[0]
+                                                 for _ in range(num_envs)]
+
+    def _reset_one(self, i: int, options: dict[str, Any] | None) -> None:
+        s = start_state_from_options(options, self.model, self._rngs[i])
+        x, y = self.batch.disc.state_centre(s)
+        self.batch.place(i, x, y, 0.0)
+        self._obs[i] = s
+        self._elapsed[i] = 0
+        self._needs_reset[i] = False
+
+    def reset(self, *, seed: int | list[int | None] | None = None,
+              options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset every sub-env (or those in ``options["reset_mask"]``)."""
+        if seed is None:
+            seeds: list[int | None] = [None] * self.num_envs
+        elif isinstance(seed, int):
+            seeds = [seed + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"{len(seeds)} seeds for {self.num_envs} sub-envs")
+        opts = dict(options or {})
+        mask = np.asarray(opts.pop("reset_mask", np.ones(self.num_envs, bool)), dtype=bool)
+        for i in np.flatnonzero(mask):
+            if seeds[i] is not None:
+                self._rngs[i] = seeding.np_random(seeds[i])[0]
+            self._reset_one(int(i), opts or None)
+        return self._obs.copy(), self._infos(mask, None)
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                          dict[str, Any]]:
+        acts = np.asarray(actions, dtype=np.int64).reshape(self.num_envs)
+        if ((acts < 0) | (acts > 3)).any():
+            raise ValueError(f"actions must be in 0..3, got {acts.tolist()}")
+        resetting = self._needs_reset.copy()
+        for i in np.flatnonzero(resetting):
+            self._reset_one(int(i), self.autoreset_options)
+        moving = ~resetting
+        out = self.batch.step(acts, moving)
+        obs = np.where(moving, out.state, self._obs)
+        terminated = moving & (obs == self._goal)
+        rewards = np.where(out.bumped, self._r_bump,
+                           np.where(terminated, self._r_goal, self._r_step)) * moving
+        self._elapsed += moving
+        truncated = (moving & (self._elapsed >= self.max_episode_steps)
+                     if self.max_episode_steps is not None else np.zeros_like(moving))
+        self._obs[:] = obs
+        self._needs_reset = terminated | truncated
+        return obs.copy(), rewards.astype(np.float64), terminated, truncated, \
+            self._infos(np.ones(self.num_envs, bool), out)
+
+    def _infos(self, mask: np.ndarray, out: Any) -> dict[str, Any]:
+        b = self.batch
+        pose = b.fs[:, K.X:K.TH + 1].copy()
+        pose[:, 2] = (pose[:, 2] + np.pi) % (2.0 * np.pi) - np.pi  # as wrap_angle
+        infos: dict[str, Any] = {
+            "pose": pose, "time_s": b.ist[:, K.STEPS] * self.config.dt_s,
+            "bumped": np.zeros(self.num_envs, bool) if out is None else out.bumped,
+            "reached": np.zeros(self.num_envs, bool) if out is None else out.reached,
+            "timeout": np.zeros(self.num_envs, bool) if out is None else out.timeout,
+            "steps": np.zeros(self.num_envs, np.int64) if out is None else out.steps,
+            "contacts": np.zeros(self.num_envs, np.int64) if out is None else out.contacts,
+        }
+        for k in list(infos):
+            infos[f"_{k}"] = mask.copy()
+        return infos

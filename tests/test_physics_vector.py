@@ -65,7 +65,7 @@ def test_sub_env_equals_the_single_env_with_its_seed_through_autoresets():
 def test_bad_actions_and_sizes_are_errors():
     venv = _make(2)
     venv.reset(seed=0)
-    with pytest.raises(ValueError, match="0..3"):
+    with pytest.raises(ValueError, match=r"0\.\.3"):
         venv.step(np.array([0, 7]))
     with pytest.raises(ValueError, match="num_envs"):
         PhysicsRouteVectorEnv(0, scenario="paper-40")

@@ -31,7 +31,10 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.physics:
         from scenarios.bench import physics as bench_physics
 
+        from scenarios.bench import physics_batch as bench_batch
+
         figures["physics"] = bench_physics.run_bench()
+        figures["physics_batch"] = bench_batch.run_bench()
     if args.json:
         print(json.dumps(figures, indent=1))
     else:

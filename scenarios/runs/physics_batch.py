@@ -84,8 +84,15 @@ class _Logs:
 
 
 def train_physics_batch(sc: Scenario, model: TabularModel, groups: Sequence[RunGroup],
-                        n_episodes: int, test_every: int = 10) -> list[list[PhysicsTrainResult]]:
-    """Train every run of every group in one batch; results per group, per run."""
+                        n_episodes: int, test_every: int = 10,
+                        split: dict[str, float] | None = None) -> list[list[PhysicsTrainResult]]:
+    """Train every run of every group in one batch; results per group, per run.
+
+    ``split``, if given, receives the wall time [s] of the parts of the loop: ``learner``
+    (act and update), ``kernel`` (the world's compiled call), ``chipmunk`` (casts and
+    contact checks), ``episodes`` (ends, greedy tests, starts), ``driver`` (the rest of
+    the loop) and ``final`` (final greedy routes, driven routes), plus ``primitives``.
+    """
     from sim.physics.model import physics_model
 
     graded = physics_model(sc)
@@ -123,13 +130,18 @@ def train_physics_batch(sc: Scenario, model: TabularModel, groups: Sequence[RunG
             x, y = world.disc.state_centre(int(s[i]))
             world.place(int(i), x, y, 0.0)
 
+    clock = time.perf_counter
+    t_learn = t_world = t_ep = 0.0
+    t_start = clock()
     with _Stop() as stop:
         start_episodes(active)
         while active.any():
-            t0 = time.perf_counter()
+            t0 = clock()
             for ag, (b0, b1) in zip(agents, bounds, strict=True):
                 a[b0:b1] = ag.act(active[b0:b1], s[b0:b1])
+            t1 = clock()
             out = world.step(a, active)
+            t2 = clock()
             s2 = out.state
             term = active & (s2 == goal)
             r = np.where(out.bumped, rw.bump, np.where(term, rw.goal, rw.step))
@@ -137,22 +149,33 @@ def train_physics_batch(sc: Scenario, model: TabularModel, groups: Sequence[RunG
             ret += np.where(active, r, 0.0)
             contacts += out.contacts
             trunc = active & (t >= max_steps)  # TimeLimit: also on a step that terminates
+            t3 = clock()
             for ag, (b0, b1) in zip(agents, bounds, strict=True):
                 ag.update(active[b0:b1], s[b0:b1], a[b0:b1], r[b0:b1], s2[b0:b1],
                           term[b0:b1], trunc[b0:b1])
+            t4 = clock()
             np.copyto(s, s2, where=active)
-            wall[active] += (time.perf_counter() - t0) / active.sum()
+            wall[active] += (t4 - t0) / active.sum()
+            t_learn += (t1 - t0) + (t4 - t3)
+            t_world += t2 - t1
             ended = term | trunc
             if ended.any():
                 _end_episodes(ended, agents, bounds, logs, world, graded, done, t, ret, term,
                               wall, contacts, n_episodes, test_every, active)
                 start_episodes(ended & active)
+                t_ep += clock() - t4
             if stop.requested:
                 raise KeyboardInterrupt
+    t_loop = clock() - t_start
     results: list[list[PhysicsTrainResult]] = []
     for ag, (b0, b1) in zip(agents, bounds, strict=True):
         results.append([_result(ag, k, b0 + k, logs, sc, model, graded, n_episodes)
                         for k in range(b1 - b0)])
+    if split is not None:
+        split.update(learner=t_learn, kernel=world.kernel_s, chipmunk=world.chipmunk_s,
+                     episodes=t_ep, driver=t_loop - t_learn - t_world - t_ep,
+                     world_python=t_world - world.kernel_s - world.chipmunk_s,
+                     final=clock() - t_start - t_loop, primitives=float(logs.steps.sum()))
     return results
 
 

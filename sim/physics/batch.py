@@ -28,6 +28,7 @@ in index order, and the guard cache holds answers that do not depend on who aske
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -126,8 +127,10 @@ class RouteBatch:
         self._states = np.zeros(n_robots, dtype=np.int64)
         self.contacts: list[list[Contact]] = [[] for _ in range(n_robots)]
         self.contact_counts = [dict.fromkeys(CollisionType, 0) for _ in range(n_robots)]
-        self.casts = 0  # Chipmunk casts so far (a benchmark figure)
+        self.casts = 0  # Chipmunk casts so far (benchmark figures)
         self.checks = 0  # Chipmunk contact checks so far
+        self.kernel_s = 0.0  # wall time in the compiled kernel so far [s]
+        self.chipmunk_s = 0.0  # wall time in casts and checks so far [s]
         sigint.install(RouteBatch._check)
 
     def _add_robot(self, x: float, y: float) -> None:
@@ -212,11 +215,15 @@ class RouteBatch:
             self._ntraj[act] = 0
         K.begin_all(fs, ist, acts, act, self.cell_m, self.nx, self.ny, _DELTAS, _HEADINGS)
         cfg = self.config
+        clock = time.perf_counter
         while True:
+            t0 = clock()
             K.advance(fs, ist, act, cfg.dt_s, cfg.substeps, self._period, cfg.tolerance_m,
                       cfg.tolerance_rad, self._timeout_steps, cfg.contact_depth_m, self.cell_m,
                       self.nx, self.ny, self.guards, self._turn_caps, self._turn_sums,
                       self._drive_caps, self._drive_sums, self._traj, self._ntraj)
+            t1 = clock()
+            self.kernel_s += t1 - t0
             status = ist[:, K.STATUS]
             waiting = np.flatnonzero(act & (status != K.DONE))
             if waiting.size == 0:
@@ -226,6 +233,7 @@ class RouteBatch:
                     self._cast(int(i))
                 else:
                     self._check(int(i))
+            self.chipmunk_s += clock() - t1
             sigint.raise_if_deferred()
         K.states_of(fs, self.cell_m, self.nx, self.ny, self._states)
         return PrimitiveOutcome(

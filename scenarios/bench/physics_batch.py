@@ -1,0 +1,157 @@
+"""Benchmark of the batched physics world (measured, never asserted).
+
+* ``scaling``: random primitives per second on one core against the batch size (1 to
+  1024 robots in one Space) on paper-50 and on a 512 x 512 arena at paper-50's obstacle
+  density; random walks from random start cells, restarted every 200 primitives, the
+  guard cache warmed first (a learning run fills it in its first episodes);
+* ``learning``: a learning run as ``compare --world physics`` runs it: the ten methods x
+  ``seeds`` seeds, ``episodes`` episodes, all robots of one batch in this process (one
+  core), with the time split between learners, the compiled world kernel, Chipmunk
+  (casts and contact checks), episode bookkeeping and the rest of the loop.
+
+Run: ``python -m scenarios.bench.physics_batch [--quick] [--plot FILE.png]``;
+``rnhql bench --physics`` includes it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sim.grid import build_model
+from sim.physics.batch import RouteBatch
+from sim.scenario import Scenario
+from sim.scenario_io import resolve_scenario
+
+SIZES = (1, 4, 16, 64, 256, 1024)
+TEN_METHODS = ("rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt",
+               "q-lambda", "dyna-q")
+
+
+def arena_512() -> Scenario:
+    """The 512 x 512 arena of ``scenarios.bench.build`` (seeded circles, paper-50 density)."""
+    from scenarios.bench.build import arena_toml
+
+    with tempfile.TemporaryDirectory() as d:
+        return resolve_scenario(str(arena_toml(512, Path(d))))
+
+
+def primitives_per_s(sc: Scenario, n_robots: int, seconds: float, seed: int = 0) -> dict:
+    """Random primitives per second through :meth:`RouteBatch.step` with ``n_robots``."""
+    model = build_model(sc)
+    rng = np.random.default_rng(seed)
+    batch = RouteBatch(sc, n_robots)
+
+    def restart() -> None:
+        for i, s0 in enumerate(rng.choice(model.start_states, n_robots)):
+            x, y = batch.disc.state_centre(int(s0))
+            batch.place(i, x, y, 0.0)
+
+    restart()
+    for _ in range(max(20, 2000 // n_robots)):  # warm the guard cache and the JIT
+        batch.step(rng.integers(0, 4, n_robots))
+    casts0, checks0 = batch.casts, batch.checks
+    k0, c0 = batch.kernel_s, batch.chipmunk_s
+    n = steps = 0
+    t = time.perf_counter()
+    while time.perf_counter() - t < seconds:
+        restart()
+        for _ in range(200):
+            out = batch.step(rng.integers(0, 4, n_robots))
+            steps += int(out.steps.sum())
+        n += 200 * n_robots
+    el = time.perf_counter() - t
+    return {"robots": n_robots, "primitives_per_s": n / el,
+            "physics_steps_per_primitive": steps / n,
+            "casts_per_primitive": (batch.casts - casts0) / n,
+            "checks_per_primitive": (batch.checks - checks0) / n,
+            "kernel_fraction": (batch.kernel_s - k0) / el,
+            "chipmunk_fraction": (batch.chipmunk_s - c0) / el}
+
+
+def scaling(seconds: float = 2.0, sizes: tuple[int, ...] = SIZES) -> dict[str, Any]:
+    maps = {"paper-50": resolve_scenario("paper-50"), "arena-512": arena_512()}
+    return {name: {str(n): primitives_per_s(sc, n, seconds) for n in sizes}
+            for name, sc in maps.items()}
+
+
+def learning(episodes: int = 300, seeds: int = 10, scenario: str = "paper-50",
+             rewards: str = "goal-only", methods: tuple[str, ...] = TEN_METHODS) -> dict:
+    """One batch of ``len(methods) x seeds`` runs, as a physics compare trains them."""
+    from learning.streams import streams
+    from scenarios.runs.physics_batch import RunGroup, train_physics_batch
+    from scenarios.runs.spec import load, make_config
+
+    sc, model = load(scenario, None, None, rewards)
+    groups = []
+    for m in methods:
+        rs = [streams(s) for s in range(seeds)]
+        groups.append(RunGroup(make_config(m), [r.learner for r in rs], [r.starts for r in rs]))
+    split: dict[str, float] = {}
+    t = time.perf_counter()
+    train_physics_batch(sc, model, groups, episodes, 10, split=split)
+    el = time.perf_counter() - t
+    prims = split.pop("primitives")
+    loop = el - split["final"]
+    return {"runs": len(methods) * seeds, "episodes": episodes, "primitives": prims,
+            "seconds": el, "primitives_per_s_training": prims / loop,
+            "primitives_per_s_with_final_routes": prims / el,
+            "split_s": split, "split_fraction_of_training": {
+                k: v / loop for k, v in split.items() if k != "final"}}
+
+
+def run_bench(quick: bool = False) -> dict[str, Any]:
+    return {"scaling": scaling(0.5 if quick else 2.0,
+                               (1, 16, 256) if quick else SIZES),
+            "learning": learning(30 if quick else 300)}
+
+
+def plot(figures: dict[str, Any], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for name, rows in figures["scaling"].items():
+        n = [int(k) for k in rows]
+        ax.plot(n, [rows[k]["primitives_per_s"] for k in rows], "o-", label=name)
+    ax.set_xscale("log", base=2)
+    ax.set_yscale("log")
+    ax.set_xlabel("robots in one Space")
+    ax.set_ylabel("primitives per second (one core)")
+    ax.set_title("Batched physics world: random primitives, exact fidelity")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _round(x: Any) -> Any:
+    if isinstance(x, float):
+        return float(f"{x:.4g}") if math.isfinite(x) else x
+    if isinstance(x, dict):
+        return {k: _round(v) for k, v in x.items()}
+    return x
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="shorter timings, 30 episodes")
+    ap.add_argument("--episodes", type=int, default=None,
+                    help="episodes of the learning run (default 300; 30 with --quick)")
+    ap.add_argument("--plot", type=Path, default=None, help="write the scaling plot here")
+    args = ap.parse_args()
+    figs = {"scaling": scaling(0.5 if args.quick else 2.0, (1, 16, 256) if args.quick else SIZES),
+            "learning": learning(args.episodes or (30 if args.quick else 300))}
+    if args.plot is not None:
+        plot(figs, args.plot)
+    print(json.dumps(_round(figs), indent=1))

@@ -30,7 +30,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
     figures: dict = {"foundation": bench_grid.run_bench(), "learning": bench.run_bench()}
     if args.physics:
         from scenarios.bench import physics as bench_physics
-
         from scenarios.bench import physics_batch as bench_batch
 
         figures["physics"] = bench_physics.run_bench()

@@ -17,6 +17,7 @@ ENV_SPECS = {
 # make_vec(id, num_envs=N, vectorization_mode="vector_entry_point"): N robots in one Space
 VECTOR_ENTRY_POINTS = {
     "rnhql/PhysicsRoute-v0": "sim.physics.vector:PhysicsRouteVectorEnv",
+    "rnhql/DiffDrive-v0": "sim.physics.vector:DiffDriveVectorEnv",
 }
 
 

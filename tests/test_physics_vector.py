@@ -71,3 +71,39 @@ def test_bad_actions_and_sizes_are_errors():
         PhysicsRouteVectorEnv(0, scenario="paper-40")
     with pytest.raises(ValueError, match="seeds"):
         venv.reset(seed=[1, 2, 3])
+
+
+def test_diffdrive_vector_env_sub_env_equals_single_env():
+    n, seed, horizon = 3, 5, 150
+    venv = gym.make_vec("rnhql/DiffDrive-v0", num_envs=n, vectorization_mode="vector_entry_point",
+                        scenario="paper-40", max_episode_steps=horizon)
+    assert venv.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+    assert venv.single_action_space.shape == (2,) and venv.action_space.shape == (n, 2)
+    singles = [gym.make("rnhql/DiffDrive-v0", scenario="paper-40", max_episode_steps=horizon)
+               for _ in range(n)]
+    opts = {"start": "random"}
+    obs, _ = venv.reset(seed=seed, options=opts)
+    for i, e in enumerate(singles):
+        np.testing.assert_array_equal(obs[i], e.reset(seed=seed + i, options=opts)[0])
+    rng = np.random.default_rng(1)
+    vmax = float(venv.single_action_space.high[0])
+    ended = np.zeros(n, bool)
+    contacts = 0
+    for k in range(200):
+        acts = rng.uniform(-vmax, vmax, (n, 2)).astype(np.float32)
+        if k % 10:  # mostly full speed ahead: reach walls and obstacles, push into them
+            acts[:] = vmax
+        obs, rew, term, trunc, info = venv.step(acts)
+        for i, e in enumerate(singles):
+            if ended[i]:
+                o, _ = e.reset()
+                np.testing.assert_array_equal(obs[i], o)
+                continue
+            o, r, te, tr, inf = e.step(acts[i])
+            np.testing.assert_allclose(obs[i], o, atol=1e-6)
+            assert (rew[i], term[i], trunc[i]) == (r, te, tr)
+            assert info["contacts"][i] == len(inf["contacts"])
+            np.testing.assert_allclose(info["pose"][i], inf["pose"], atol=1e-9)
+            contacts += len(inf["contacts"])
+        ended = term | trunc
+    assert contacts > 0  # the robots did touch walls or obstacles

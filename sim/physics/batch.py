@@ -46,7 +46,7 @@ from sim.physics.static import (
     PhysicsConfig,
     static_shapes,
 )
-from sim.physics.world import sweep_alpha
+from sim.physics.world import new_space, sweep_alpha
 from sim.planning import ACTION_DELTAS
 from sim.scenario import Scenario
 
@@ -86,12 +86,7 @@ class RouteBatch:
         self.nx, self.ny = disc.nx, disc.ny
         self.cell_m = sc.cell_size_m
         self.radius_m = sc.robot.radius_m
-        space = pymunk.Space()
-        space.gravity = (0.0, 0.0)
-        space.damping = 1.0
-        space.iterations = cfg.iterations
-        space.collision_slop = cfg.collision_slop_m
-        space.collision_bias = cfg.collision_bias
+        space = new_space(cfg)
         space.add(*static_shapes(sc, space.static_body))
         self.space = space
         self._query_filter = pymunk.ShapeFilter(mask=STATIC_CATEGORY)

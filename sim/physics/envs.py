@@ -23,7 +23,7 @@ from sim.grid import build_model
 from sim.grid_env import start_state_from_options
 from sim.physics.batch import RobotView, RouteBatch
 from sim.physics.controller import DriveLimits, rate_limit, wheels_to_twist, wrap_angle
-from sim.physics.world import PhysicsConfig, PhysicsWorld
+from sim.physics.world import PhysicsConfig, PhysicsWorld, SharedSpace
 from sim.render import AGENT, PATH, MapCanvas
 from sim.scenario import Scenario
 from sim.scenario_io import resolve_scenario
@@ -242,8 +242,9 @@ class DiffDriveEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
 
     def __init__(self, scenario: str | Scenario = "paper-50", render_mode: str | None = None,
-                 config: PhysicsConfig | None = None) -> None:
+                 config: PhysicsConfig | None = None, shared: SharedSpace | None = None) -> None:
         self.scenario = sc = _scenario(scenario)
+        self._shared = shared  # the vector env's Space (None: a Space of its own)
         self.model = build_model(sc)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}")
@@ -261,6 +262,9 @@ class DiffDriveEnv(gym.Env):
         self.goal_xy = self.disc.cell_centre(*sc.goal)
         self.world: PhysicsWorld | None = None
         self._wheels = (0.0, 0.0)
+        self._target = (0.0, 0.0)  # wheel speeds commanded for this period [m/s]
+        self._period_traj: list[tuple[float, float, float]] = []
+        self._contacts_before = 0
         self._cell = self.model.start
         self._trail: _Trail | None = None
 
@@ -282,7 +286,8 @@ class DiffDriveEnv(gym.Env):
             raise ValueError(f"options['heading'] must be finite, got {heading!r}")
         x, y = self.disc.state_centre(s)
         if self.world is None:
-            self.world = PhysicsWorld(self.scenario, self.config, (x, y, heading))
+            self.world = PhysicsWorld(self.scenario, self.config, (x, y, heading),
+                                      shared=self._shared)
         else:
             self.world.respawn((x, y, heading))
         self._wheels = (0.0, 0.0)
@@ -295,26 +300,47 @@ class DiffDriveEnv(gym.Env):
                              "contacts": (), "trajectory": np.array([(x, y, heading)])}
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        self.begin_period(action)
+        world = self.world
+        assert world is not None
+        for _ in range(self.config.substeps):
+            self.command_substep()
+            world._fn[0](world._S, self.config.dt_s)
+            world.after_step(self._period_traj)
+        return self.end_period()
+
+    # One control period in three parts, so the vector env can step many robots' worlds
+    # in one shared Space between the second and the third: begin_period, then per
+    # physics step command_substep / (the Space steps) / world.after_step, then end_period.
+    def begin_period(self, action: np.ndarray) -> None:
         assert self.action_space.contains(action), f"{action!r} ({type(action)}) invalid"
         world = self.world
         if world is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        lim, cfg = self.limits, self.config
-        target_l, target_r = float(action[0]), float(action[1])
-        dv = lim.a_max_m_s2 * cfg.dt_s
+        self._target = (float(action[0]), float(action[1]))
+        self._period_traj = [world.pose]
+        self._contacts_before = len(world.contacts)
+
+    def command_substep(self) -> None:
+        """Move the wheels towards the command, set the control body's twist, clamp the step."""
+        world, lim = self.world, self.limits
+        assert world is not None
+        dv = lim.a_max_m_s2 * self.config.dt_s
         vl, vr = self._wheels
-        traj = [world.pose]
-        before = len(world.contacts)
-        for _ in range(cfg.substeps):
-            vl, vr = rate_limit(vl, target_l, dv), rate_limit(vr, target_r, dv)
-            v, om = wheels_to_twist(vl, vr, lim.wheel_base_m)
-            th = world.pose[2]
-            world.set_twist(v * math.cos(th), v * math.sin(th), om)
-            world.advance(1, traj)
+        vl, vr = rate_limit(vl, self._target[0], dv), rate_limit(vr, self._target[1], dv)
         self._wheels = (vl, vr)
+        v, om = wheels_to_twist(vl, vr, lim.wheel_base_m)
+        th = world.pose[2]
+        world.set_twist(v * math.cos(th), v * math.sin(th), om)
+        world.before_step()
+
+    def end_period(self) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        world = self.world
+        assert world is not None
+        vl, vr = self._wheels
         x, y, th = world.pose
         cell = self.disc.state_of(x, y)
-        contacts = tuple(world.contacts[before:])
+        contacts = tuple(world.contacts[self._contacts_before:])
         terminated = cell == self.model.goal
         rw = self.scenario.rewards
         in_contact = bool(contacts) or world.touching()
@@ -327,7 +353,7 @@ class DiffDriveEnv(gym.Env):
         else:
             reward = 0.0
         self._cell = cell
-        arr = np.array(traj)
+        arr = np.array(self._period_traj)
         if self._trail is not None:
             self._trail.chunks.append(arr)
         info = {"pose": (x, y, wrap_angle(th)), "time_s": world.time_s, "state": cell,

@@ -1,4 +1,5 @@
-"""``rnhql/PhysicsRoute-v0`` as a gymnasium vector env: N robots in one Pymunk Space.
+"""``rnhql/PhysicsRoute-v0`` and ``rnhql/DiffDrive-v0`` as gymnasium vector envs: N robots in
+one Pymunk Space.
 
 ``gymnasium.make_vec("rnhql/PhysicsRoute-v0", num_envs=N,
 vectorization_mode="vector_entry_point")`` returns a :class:`PhysicsRouteVectorEnv`:
@@ -12,6 +13,13 @@ for the same actions (tested). Autoreset follows ``metadata["autoreset_mode"]``
 (``NEXT_STEP``, gymnasium's default): the step after a sub-env's episode ended resets it
 (its action is ignored, reward 0, not terminated or truncated), with
 ``autoreset_options`` (default: start at S, as a bare ``reset()`` of the single env).
+
+``DiffDrive-v0``'s vector form (:class:`DiffDriveVectorEnv`) keeps N single envs whose
+worlds share one :class:`sim.physics.world.SharedSpace`: each control period, every robot
+sets its wheels and clamps its step, then the one Space steps all of them at once
+(contacts are routed to the robot whose shape began them). Robots never touch each
+other and each robot's own constraints are solved in the same order as alone, so
+sub-env ``i`` equals the single env with its seed (tested, poses within 1e-9 m).
 """
 
 from __future__ import annotations
@@ -28,8 +36,9 @@ from sim.grid import build_model
 from sim.grid_env import start_state_from_options
 from sim.physics import kernel as K
 from sim.physics.batch import RouteBatch
-from sim.physics.envs import _scenario
+from sim.physics.envs import DIFFDRIVE_CONFIG, DiffDriveEnv, _scenario
 from sim.physics.static import PhysicsConfig
+from sim.physics.world import SharedSpace
 from sim.scenario import Scenario
 
 
@@ -137,3 +146,104 @@ class PhysicsRouteVectorEnv(VectorEnv):
         for k in list(infos):
             infos[f"_{k}"] = mask.copy()
         return infos
+
+
+class DiffDriveVectorEnv(VectorEnv):
+    """N copies of ``DiffDrive-v0`` (wheel speeds in, pose out) stepping in one Space.
+
+    Observations ``float32[N, 8]``, actions ``float32[N, 2]`` (left, right wheel speed
+    [m/s]); ``infos`` hold ``pose`` (N, 3), ``time_s``, ``state``, ``in_contact`` and
+    ``contacts`` (how many began) with gymnasium's ``_key`` masks.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}  # noqa: RUF012
+
+    def __init__(self, num_envs: int = 1, scenario: str | Scenario = "paper-50",
+                 config: PhysicsConfig | None = None, max_episode_steps: int | None = 2000,
+                 autoreset_options: dict[str, Any] | None = None,
+                 render_mode: str | None = None) -> None:
+        if render_mode is not None:
+            raise ValueError("DiffDriveVectorEnv does not render; use the single env")
+        if not (isinstance(num_envs, int) and num_envs >= 1):
+            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+        self.num_envs = num_envs
+        sc = _scenario(scenario)
+        self.config = config or DIFFDRIVE_CONFIG
+        self.shared = SharedSpace(sc, self.config)
+        self.envs = [DiffDriveEnv(sc, config=self.config, shared=self.shared)
+                     for _ in range(num_envs)]
+        self.max_episode_steps = max_episode_steps
+        self.autoreset_options = autoreset_options
+        self.single_observation_space = self.envs[0].observation_space
+        self.single_action_space = self.envs[0].action_space
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self._obs = np.zeros((num_envs, 8), dtype=np.float32)
+        self._elapsed = np.zeros(num_envs, dtype=np.int64)
+        self._needs_reset = np.ones(num_envs, dtype=bool)
+
+    def reset(self, *, seed: int | list[int | None] | None = None,
+              options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
+        if seed is None:
+            seeds: list[int | None] = [None] * self.num_envs
+        elif isinstance(seed, int):
+            seeds = [seed + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"{len(seeds)} seeds for {self.num_envs} sub-envs")
+        opts = dict(options or {})
+        mask = np.asarray(opts.pop("reset_mask", np.ones(self.num_envs, bool)), dtype=bool)
+        infos = [None] * self.num_envs
+        for i in np.flatnonzero(mask):
+            self._obs[i], infos[i] = self.envs[i].reset(seed=seeds[i], options=opts or None)
+            self._elapsed[i] = 0
+            self._needs_reset[i] = False
+        return self._obs.copy(), self._infos(mask, infos)
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                          dict[str, Any]]:
+        acts = np.asarray(actions, dtype=np.float32).reshape(self.num_envs, 2)
+        resetting = self._needs_reset.copy()
+        infos: list[Any] = [None] * self.num_envs
+        for i in np.flatnonzero(resetting):
+            self._obs[i], infos[i] = self.envs[i].reset(options=self.autoreset_options)
+            self._elapsed[i] = 0
+        moving = [self.envs[i] for i in np.flatnonzero(~resetting)]
+        for i in np.flatnonzero(~resetting):
+            self.envs[i].begin_period(acts[i])
+        dt = self.config.dt_s
+        for _ in range(self.config.substeps):
+            for env in moving:
+                env.command_substep()
+            self.shared.step(dt)
+            for env in moving:
+                assert env.world is not None
+                env.world.after_step(env._period_traj)
+        rewards = np.zeros(self.num_envs)
+        terminated = np.zeros(self.num_envs, bool)
+        for i in np.flatnonzero(~resetting):
+            self._obs[i], rewards[i], terminated[i], _, infos[i] = self.envs[i].end_period()
+        self._elapsed += ~resetting
+        truncated = (~resetting & (self._elapsed >= self.max_episode_steps)
+                     if self.max_episode_steps is not None else np.zeros(self.num_envs, bool))
+        self._needs_reset = terminated | truncated
+        return self._obs.copy(), rewards, terminated, truncated, \
+            self._infos(np.ones(self.num_envs, bool), infos)
+
+    def _infos(self, mask: np.ndarray, per_env: list[Any]) -> dict[str, Any]:
+        n = self.num_envs
+        out: dict[str, Any] = {"pose": np.zeros((n, 3)), "time_s": np.zeros(n),
+                               "state": np.zeros(n, np.int64), "in_contact": np.zeros(n, bool),
+                               "contacts": np.zeros(n, np.int64)}
+        for i, info in enumerate(per_env):
+            if info is None:
+                continue
+            out["pose"][i] = info["pose"]
+            out["time_s"][i] = info["time_s"]
+            out["state"][i] = info["state"]
+            out["in_contact"][i] = info.get("in_contact", False)
+            out["contacts"][i] = len(info["contacts"])
+        for k in list(out):
+            out[f"_{k}"] = mask.copy()
+        return out

@@ -72,7 +72,8 @@ class PhysicsWorld:
 
     def __init__(self, scenario: Scenario, config: PhysicsConfig | None = None,
                  pose: tuple[float, float, float] | None = None,
-                 cast_cache: dict[tuple[float, ...], float | None] | None = None) -> None:
+                 cast_cache: dict[tuple[float, ...], float | None] | None = None,
+                 shared: SharedSpace | None = None) -> None:
         self.scenario = sc = scenario
         self.config = cfg = config or PhysicsConfig()
         cfg.validate()
@@ -80,20 +81,20 @@ class PhysicsWorld:
         self._cast_cache = {} if cast_cache is None else cast_cache
         rb = sc.robot
         self.radius_m = rb.radius_m
-        space = pymunk.Space()
-        space.gravity = (0.0, 0.0)
-        space.damping = 1.0
-        space.iterations = cfg.iterations
-        space.collision_slop = cfg.collision_slop_m
-        space.collision_bias = cfg.collision_bias
+        self._shared = shared
+        if shared is None:
+            space = new_space(cfg)
+            space.add(*static_shapes(sc, space.static_body))
+        else:  # one robot among others in a Space whose static shapes exist already
+            space = shared.space
         self.space = space
         self._query_filter = pymunk.ShapeFilter(mask=STATIC_CATEGORY)
-        space.add(*static_shapes(sc, space.static_body))
 
         x, y, th = pose if pose is not None else (*_centre(sc, sc.start), 0.0)
         self._add_robot(x, y, th)
-        for kind in STATIC_KINDS:
-            space.on_collision(CollisionType.ROBOT, kind, begin=self._on_begin, data=kind)
+        if shared is None:
+            for kind in STATIC_KINDS:
+                space.on_collision(CollisionType.ROBOT, kind, begin=self._on_begin, data=kind)
         sigint.install(PhysicsWorld._on_begin)  # Ctrl-C inside a callback is not lost
 
     def _add_robot(self, x: float, y: float, th: float) -> None:
@@ -107,7 +108,7 @@ class PhysicsWorld:
         shape.collision_type = CollisionType.ROBOT
         shape.friction = cfg.friction
         shape.elasticity = 0.0
-        shape.filter = pymunk.ShapeFilter(categories=ROBOT_CATEGORY)
+        shape.filter = pymunk.ShapeFilter(categories=ROBOT_CATEGORY, mask=STATIC_CATEGORY)
         control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         control.position, control.angle = (x, y), th
         pivot = pymunk.PivotJoint(control, robot, (0.0, 0.0), (0.0, 0.0))
@@ -118,6 +119,8 @@ class PhysicsWorld:
         gear.max_force = (cfg.traction_margin * moment * 2.0 * rb.max_wheel_accel_m_s2
                           / rb.wheel_base_m)
         space.add(robot, shape, control, pivot, gear)
+        if self._shared is not None:
+            self._shared.owners[shape] = self
         self.robot, self.robot_shape, self.control = robot, shape, control
         self.pivot, self.gear = pivot, gear
         self.steps = 0
@@ -136,6 +139,8 @@ class PhysicsWorld:
         bit for bit like one in a fresh space (tested).
         """
         self.space.remove(self.robot, self.robot_shape, self.control, self.pivot, self.gear)
+        if self._shared is not None:
+            self._shared.owners.pop(self.robot_shape, None)
         self._add_robot(*pose)
 
     # ------------------------------------------------------------- internals
@@ -335,23 +340,72 @@ class PhysicsWorld:
         and shortens it as in :meth:`drive`. Contacts do not stop it. Returns
         the number of contacts that began.
         """
-        robot, h, depth = self.robot, self._h, self.config.contact_depth_m
         before = len(self.contacts)
         for _ in range(n_steps):
-            p, v = robot.position, robot.velocity
-            length = h * math.hypot(v.x, v.y)
-            if length > 1e-12:
-                alpha = self.cast_alpha(p.x, p.y, p.x + h * v.x, p.y + h * v.y)
-                if alpha is not None and alpha * length + depth < length:
-                    robot.velocity = v * ((alpha * length + depth) / length)
-            self._fn[0](self._S, h)
-            self.steps += 1
-            if trajectory is not None:
-                q = robot.position
-                trajectory.append((q.x, q.y, robot.angle))
-            if self._pending:
-                self._flush_contacts()
+            self.before_step()
+            self._fn[0](self._S, self._h)
+            self.after_step(trajectory)
         return len(self.contacts) - before
+
+    def before_step(self) -> None:
+        """The time-of-impact clamp of :meth:`advance` for the coming step: casts the disc
+        along the displacement the step will make and shortens it to ``contact_depth_m``
+        into the first surface."""
+        robot, h = self.robot, self._h
+        p, v = robot.position, robot.velocity
+        length = h * math.hypot(v.x, v.y)
+        if length > 1e-12:
+            alpha = self.cast_alpha(p.x, p.y, p.x + h * v.x, p.y + h * v.y)
+            depth = self.config.contact_depth_m
+            if alpha is not None and alpha * length + depth < length:
+                robot.velocity = v * ((alpha * length + depth) / length)
+
+    def after_step(self, trajectory: list[tuple[float, float, float]] | None = None) -> None:
+        """Book the step this robot's Space just took: clock, trajectory, contacts."""
+        self.steps += 1
+        if trajectory is not None:
+            q = self.robot.position
+            trajectory.append((q.x, q.y, self.robot.angle))
+        if self._pending:
+            self._flush_contacts()
+
+
+class SharedSpace:
+    """One ``pymunk.Space`` with a scenario's static shapes, for several robots' worlds.
+
+    Each :class:`PhysicsWorld` built with ``shared=`` adds its robot here (robots are
+    filtered so they never touch each other) and gets the contacts its own shape begins;
+    :meth:`step` advances all of them at once (DiffDrive's vector env).
+    """
+
+    def __init__(self, scenario: Scenario, config: PhysicsConfig) -> None:
+        config.validate()
+        self.space = new_space(config)
+        self.space.add(*static_shapes(scenario, self.space.static_body))
+        self.owners: dict[pymunk.Shape, PhysicsWorld] = {}
+        for kind in STATIC_KINDS:
+            self.space.on_collision(CollisionType.ROBOT, kind, begin=self._on_begin, data=kind)
+        sigint.install(SharedSpace._on_begin)
+
+    def _on_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, kind: Any) -> None:
+        a, b = arbiter.shapes
+        owner = self.owners.get(a) or self.owners.get(b)
+        if owner is not None:
+            owner._on_begin(arbiter, space, kind)
+
+    def step(self, dt_s: float) -> None:
+        self.space.step(dt_s)
+
+
+def new_space(cfg: PhysicsConfig) -> pymunk.Space:
+    """An empty top-down Space with the config's solver and contact settings."""
+    space = pymunk.Space()
+    space.gravity = (0.0, 0.0)
+    space.damping = 1.0
+    space.iterations = cfg.iterations
+    space.collision_slop = cfg.collision_slop_m
+    space.collision_bias = cfg.collision_bias
+    return space
 
 
 def sweep_alpha(space: pymunk.Space, query_filter: pymunk.ShapeFilter, radius_m: float,

@@ -100,3 +100,34 @@ def test_ctrl_c_stops_physics_training(tmp_path):
     assert code == 130, err
     assert took <= 2.0, f"took {took:.2f} s to stop"
     assert "Traceback" not in err
+
+
+def test_ctrl_c_stops_a_batched_physics_sweep_and_resume_completes_it(tmp_path):
+    # warm numba's disk cache for the batched learners and world (not the subject here)
+    from scenarios.cli import main
+
+    warm = ["compare", "paper-40", "--methods", "st-ql,haql", "--seeds", "1", "--episodes",
+            "2", "--world", "physics", "--jobs", "1"]
+    assert main([*warm, "--out", str(tmp_path / "warm")]) == 0
+    sweep = ["compare", "paper-40", "--methods", "st-ql,haql", "--seeds", "2", "--episodes",
+             "300", "--world", "grid,physics", "--jobs", "1", "--rewards", "goal-only"]
+    out = tmp_path / "out"
+    proc = start([*sweep, "--out", str(out)], tmp_path)
+    partial = out / "runs.partial.jsonl"
+    # the grid runs finish first; then the physics runs train as one batch
+    assert wait_for(lambda: partial.exists() and partial.read_text().count("\n") >= 4, 120)
+    time.sleep(0.3)
+    code, took, err = interrupt(proc)
+    assert code == 130, err
+    assert took <= 2.0, f"took {took:.2f} s to stop"
+    assert "Traceback" not in err
+    assert partial.read_text().count("\n") == 4  # the batch was not finished: nothing of it
+    resumed = subprocess.run([*CLI, *sweep, "--out", str(out), "--resume"], cwd=tmp_path,
+                             capture_output=True, text=True, timeout=300)
+    assert resumed.returncode == 0, resumed.stderr
+    whole = subprocess.run([*CLI, *sweep, "--out", str(tmp_path / "whole")], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=300)
+    assert whole.returncode == 0, whole.stderr
+    a = json.loads((out / "results.json").read_text())
+    b = json.loads((tmp_path / "whole" / "results.json").read_text())
+    assert strip_timings(a) == strip_timings(b)

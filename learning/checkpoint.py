@@ -19,8 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from learning import kinds as K
+from learning.geometry import Geometry
 from learning.methods import METHODS, MethodConfig, config_from_fields
-from learning.state import AgentState
+from learning.state import AgentState, init_state
 
 FORMAT = "rnhql-checkpoint-1"
 # (dtype, ndim) of each AgentState slot: a file that disagrees would not type-check in numba
@@ -76,7 +77,8 @@ class Checkpoint:
         """From a :class:`learning.agent.StepAgent` (between episodes)."""
         return cls(agent.cfg, agent.state, agent.rng.bit_generator.state)
 
-    def check_compatible(self, cfg: MethodConfig, n_states: int) -> None:
+    def check_compatible(self, cfg: MethodConfig, n_states: int,
+                         geometry: Geometry | None = None) -> None:
         """Raise CheckpointError unless this checkpoint continues ``cfg`` on ``n_states`` states."""
         if cfg.cli != self.method:
             raise CheckpointError(f"{self.path}: field 'method' is {self.method!r} but this run "
@@ -92,6 +94,28 @@ class Checkpoint:
             raise CheckpointError(f"{self.path}: field 'n_states' is {got} but the scenario "
                                   f"has {n_states}; resume on the scenario the checkpoint was "
                                   "trained on or start without --resume")
+        if geometry is not None:
+            self.check_state(geometry)
+
+    def check_state(self, geometry: Geometry) -> None:
+        """Raise CheckpointError unless every state array has the shape a fresh agent of this
+        method has on ``geometry`` and no float array holds NaN (no method ever stores one;
+        infinities are legitimate, e.g. "never" in a config slot): compiled code indexes the
+        arrays without bounds checks, and NaN values would be trained on or drawn."""
+        fresh = init_state(self.config, geometry, np.random.default_rng(0))
+        for name in AgentState._fields:
+            got, want = getattr(self.state, name), getattr(fresh, name)
+            if name == "ilist" and got.ndim == 1 and got.shape[0] >= want.shape[0]:
+                continue  # lists may have grown
+            if got.shape != want.shape:
+                raise CheckpointError(
+                    f"{self.path}: field 'state_{name}' has shape {got.shape}, but "
+                    f"{self.method} on this scenario needs {want.shape}; the file is corrupt "
+                    "or from another scenario: train again with --save")
+            if got.dtype.kind == "f" and np.isnan(got).any():
+                raise CheckpointError(
+                    f"{self.path}: field 'state_{name}' holds NaN values; the file is "
+                    "corrupt: train again with --save")
 
 
 def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
@@ -174,8 +198,9 @@ def _read(data, path: Path, method: str | None):
 
 
 def load_checkpoint(path: str | os.PathLike, method: str | None = None,
-                    n_states: int | None = None) -> Checkpoint:
-    """Read a checkpoint; check its method and state count when given."""
+                    n_states: int | None = None, geometry: Geometry | None = None) -> Checkpoint:
+    """Read a checkpoint; check its method and state count when given, and with
+    ``geometry`` the shape and finiteness of every state array."""
     path = Path(path)
     try:
         fh = open(path, "rb")  # closed below, also when np.load fails
@@ -202,5 +227,7 @@ def load_checkpoint(path: str | os.PathLike, method: str | None = None,
                               f"{int(state.ivar[K.I_KIND])}, not {cfg.cli}'s; the file is corrupt, "
                               "delete it and train again")
     if n_states is not None:
-        ckpt.check_compatible(cfg, n_states)
+        ckpt.check_compatible(cfg, n_states, geometry)
+    elif geometry is not None:
+        ckpt.check_state(geometry)
     return ckpt

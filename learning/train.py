@@ -117,7 +117,7 @@ def _resume(ck: Checkpoint, cfg: MethodConfig, model: TabularMDP, n_episodes: in
             rng: np.random.Generator, arrays: dict[str, np.ndarray],
             start_rng: np.random.Generator | None = None) -> tuple[AgentState, int, int]:
     """Check ``ck`` fits this run, restore ``rng`` and the metrics so far; a copy of its state."""
-    ck.check_compatible(cfg, model.next_state.shape[0])
+    ck.check_compatible(cfg, model.next_state.shape[0], geometry_of(model))
     done = ck.episodes
     if done > n_episodes:
         raise CheckpointError(f"{ck.path}: field 'episodes' is {done}, more than the "

@@ -140,6 +140,24 @@ def test_wrong_state_count(saved, paper50_model):
         train_tabular(RNHQL(), small, 10, np.random.default_rng(0), resume=load_checkpoint(saved))
 
 
+@pytest.mark.parametrize("q", [np.zeros((10, 4)), np.zeros((2500, 1)),
+                               np.full((2500, 4), np.nan)])
+def test_wrong_q_shape_or_nan_is_refused_before_compiled_code_sees_it(tmp_path, saved,
+                                                                     paper50_model, q):
+    with np.load(saved) as d:
+        payload = {k: d[k] for k in d.files}
+    payload["state_q"] = q
+    p = tmp_path / "q.npz"
+    np.savez(p, **payload)
+    geom = geometry_of(paper50_model)
+    with pytest.raises(CheckpointError, match=r"q\.npz: field 'state_q' (has shape|holds NaN)"):
+        load_checkpoint(p, n_states=2500, geometry=geom)
+    with pytest.raises(CheckpointError, match="field 'state_q'"):
+        train_tabular(RNHQL(), paper50_model, 10, np.random.default_rng(0),
+                      resume=load_checkpoint(p))
+    load_checkpoint(saved, n_states=2500, geometry=geom)  # the intact file passes
+
+
 def test_checkpoint_error_is_value_error():
     assert issubclass(CheckpointError, ValueError)
 

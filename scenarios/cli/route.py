@@ -14,6 +14,7 @@ from scenarios.runs.spec import load
 
 def cmd_route(args: argparse.Namespace) -> int:
     from learning.checkpoint import load_checkpoint
+    from learning.geometry import geometry_of
     from learning.train import greedy_test
     from scenarios.figures.routes import ascii_routes, route_png
     from sim.planning import bfs_route
@@ -21,14 +22,13 @@ def cmd_route(args: argparse.Namespace) -> int:
     name, start, goal = scenario_key(args)
     sc, model = load(name, start, goal, args.rewards)
     check_world(args.world)
-    ckpt = load_checkpoint(args.agent, None, model.n_states)
+    ckpt = load_checkpoint(args.agent, None, model.n_states, geometry_of(model))
     optimum = bfs_route(model.next_state, model.distance_to_goal, model.start)
     length, route = greedy_test(ckpt.state, model)
     trajectory = driven = None
     print(f"{ckpt.config.name} agent {args.agent} ({ckpt.episodes} episodes) on {sc.name}")
     if args.world == "physics":
         from learning.agent import StepAgent
-        from learning.geometry import geometry_of
         from scenarios.runs.physics import drive_greedy
 
         agent = StepAgent(ckpt.config, geometry_of(model), np.random.default_rng(0), ckpt.state)

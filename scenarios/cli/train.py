@@ -22,6 +22,7 @@ from scenarios.runs.spec import ExperimentError, load, make_config
 
 def cmd_train(args: argparse.Namespace) -> int:
     from learning.checkpoint import Checkpoint, load_checkpoint, save_checkpoint
+    from learning.geometry import geometry_of
     from learning.train import train_tabular
     from scenarios.runs.spec import RunSpec, run_record
 
@@ -39,7 +40,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         check_writable(Path(args.save), "--save")
     resume = None
     if args.resume and args.world == "grid":
-        resume = load_checkpoint(args.resume, args.method, model.n_states)
+        resume = load_checkpoint(args.resume, args.method, model.n_states, geometry_of(model))
     print(f"{cfg.name} on {sc.name} ({args.world}), seed {args.seed}, {args.episodes} episodes, "
           f"rewards {sc.rewards.label()}")
     recorder = plan = observer = None

@@ -67,6 +67,18 @@ def test_train_save_route_and_resume(tmp_path, capsys):
     (["train", "paper-40", "--save", "/nonexistent/dir/a.npz", "--episodes", "1"], "cannot write"),
     (["compare", "paper-40", "--methods", "st-ql,nope", "--out", "x"], "unknown method"),
     (["route", "paper-40", "--agent", "missing.npz"], "no such checkpoint"),
+    (["train", "paper-40", "--seed", "-1"], "--seed: must be >= 0"),
+    (["train", "paper-40", "--episodes", "1000000000000"], "more than the limit"),
+    (["train", "paper-40", "--index", "3"], "--index: only applies with --scen"),
+    (["compare", "paper-40", "--seeds", "1000000000", "--out", "x"], "more than the limit"),
+    (["compare", "paper-40", "--seed-base", "-1", "--out", "x"], "--seed-base: must be >= 0"),
+    (["compare", "paper-40", "--jobs", "0", "--out", "x"], "--jobs: must be >= 1"),
+    (["compare", "paper-40", "--jobs", "-3", "--out", "x"], "--jobs: must be >= 1"),
+    (["compare", "paper-40", "--methods", "st-ql,st-ql", "--out", "x"], "names 'st-ql' twice"),
+    (["compare", "paper-40", "--methods", "dyna-q", "--set", "n_planning=2.5", "--out", "x"],
+     "is a whole number"),
+    (["compare", "paper-40", "--address", "auto", "--out", "x"],
+     "--address: only applies with --backend ray"),
 ])
 def test_bad_run_input_exits_2(capsys, argv, words):
     assert main(argv) == 2

@@ -125,11 +125,38 @@ def check_world(world: str) -> str:
     return world
 
 
-def positive(value: int, flag: str) -> int:
+# Limits on counts from the command line: far beyond any study, far below what would
+# exhaust memory before the first run (episode arrays are allocated up front).
+MAX_EPISODES = 10_000_000
+MAX_SEEDS = 10_000
+MAX_SEED = 2**63 - 1
+
+
+def positive(value: int, flag: str, limit: int | None = None) -> int:
     if value < 1:
         raise ExperimentError("command line", flag, f"must be >= 1, got {value}",
                               f"pass e.g. {flag} 10")
+    if limit is not None and value > limit:
+        raise ExperimentError("command line", flag, f"is {value}, more than the limit {limit:,}",
+                              f"pass at most {flag} {limit}")
     return value
+
+
+def seed_value(value: int, flag: str, count: int = 1) -> int:
+    """A seed (or the first of ``count``): numpy seeds are non-negative integers."""
+    if value < 0 or value + count - 1 > MAX_SEED:
+        raise ExperimentError("command line", flag, f"must be >= 0, got {value}",
+                              f"pass e.g. {flag} 0")
+    return value
+
+
+def unique(items: list[str], flag: str) -> list[str]:
+    """The items, refusing repeats (two identical runs would count as two seeds)."""
+    seen = [t for i, t in enumerate(items) if t in items[:i]]
+    if seen:
+        raise ExperimentError("command line", flag, f"names {seen[0]!r} twice",
+                              "list each value once")
+    return items
 
 
 def scenario_key(args: argparse.Namespace) -> tuple[str, tuple | None, tuple | None]:
@@ -142,6 +169,10 @@ def scenario_key(args: argparse.Namespace) -> tuple[str, tuple | None, tuple | N
         print(f"{args.scen}: problem {map_path.name} {problem.start_xy} -> {problem.goal_xy} "
               f"(Moving AI frame; reference length {problem.optimal_length:g}, octile)")
         return str(map_path), problem.start_xy, problem.goal_xy
+    for flag in ("index", "bucket"):
+        if getattr(args, flag, None) is not None:
+            raise CliError("command line", f"--{flag}", "only applies with --scen",
+                           f"add --scen FILE.scen, or drop --{flag}")
     if not args.scenario:
         raise CliError("command line", "scenario", "is missing",
                        "name a built-in (rnhql scenarios), a .toml, a .map, or give --scen")

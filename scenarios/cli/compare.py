@@ -8,12 +8,16 @@ import os
 from pathlib import Path
 
 from scenarios.cli.args import (
+    MAX_EPISODES,
+    MAX_SEEDS,
     check_world,
     parse_list,
     parse_overrides,
     positive,
     record_path,
     scenario_key,
+    seed_value,
+    unique,
 )
 from scenarios.runs.spec import ExperimentError, load, make_config
 from sim.errors import InputError
@@ -24,12 +28,16 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
     name, start, goal = scenario_key(args)
     load(name, start, goal, args.rewards)  # validate the scenario before any work
-    methods = parse_list(args.methods, "--methods") if args.methods else list(ALL_METHODS)
-    worlds = [check_world(w) for w in parse_list(args.world, "--world")]
+    methods = (unique(parse_list(args.methods, "--methods"), "--methods") if args.methods
+               else list(ALL_METHODS))
+    worlds = [check_world(w) for w in unique(parse_list(args.world, "--world"), "--world")]
     overrides = parse_overrides(args.set)
     per_method = overrides_per_method(methods, overrides)
-    seeds = list(range(args.seed_base, args.seed_base + positive(args.seeds, "--seeds")))
-    specs = make_specs(name, methods, seeds, positive(args.episodes, "--episodes"), worlds,
+    n_seeds = positive(args.seeds, "--seeds", MAX_SEEDS)
+    seed_base = seed_value(args.seed_base, "--seed-base", n_seeds)
+    seeds = list(range(seed_base, seed_base + n_seeds))
+    episodes = positive(args.episodes, "--episodes", MAX_EPISODES)
+    specs = make_specs(name, methods, seeds, episodes, worlds,
                        per_method, start, goal, rewards=args.rewards)
     execute, kwargs = _backend(args)
     from scenarios.runs.backends import Progress
@@ -87,7 +95,12 @@ def overrides_per_method(methods: list[str], overrides: tuple[tuple[str, float],
 def _backend(args: argparse.Namespace):
     from scenarios.runs.backends import run_local, run_ray
 
+    if args.jobs is not None:
+        positive(args.jobs, "--jobs", 4096)
     if args.backend == "local":
+        if args.address is not None:
+            raise InputError("command line", "--address", "only applies with --backend ray",
+                             "add --backend ray, or drop --address")
         return run_local, {"jobs": args.jobs or os.cpu_count() or 1}
     if args.backend == "ray":
         return run_ray, {"address": args.address, "num_cpus": args.jobs}

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from learning.streams import streams
 from scenarios.cli.args import (
+    MAX_EPISODES,
     check_world,
     check_writable,
     parse_overrides,
@@ -16,6 +17,7 @@ from scenarios.cli.args import (
     print_run,
     record_path,
     scenario_key,
+    seed_value,
 )
 from scenarios.runs.spec import ExperimentError, load, make_config
 
@@ -29,7 +31,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     name, start, goal = scenario_key(args)
     sc, model = load(name, start, goal, args.rewards)
     check_world(args.world)
-    positive(args.episodes, "--episodes")
+    positive(args.episodes, "--episodes", MAX_EPISODES)
+    seed_value(args.seed, "--seed")
     cfg = make_config(args.method, parse_overrides(args.set))
     spec = RunSpec(name, args.method, args.seed, args.episodes, args.world, start=start,
                    goal=goal, rewards=args.rewards)

@@ -114,7 +114,14 @@ def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
         if k not in names:
             raise ExperimentError("command line", f"--set {k}", f"{method} has no field {k!r}",
                                   f"use one of: {', '.join(names)}")
-        kwargs[k] = int(v) if names[k].type in (int, "int") else v
+        if names[k].type in (int, "int", bool, "bool"):
+            if not float(v).is_integer():
+                raise ExperimentError("command line", f"--set {k}={v:g}",
+                                      f"{method}'s {k} is a whole number",
+                                      f"pass e.g. --set {k}={int(v)}")
+            kwargs[k] = bool(v) if names[k].type in (bool, "bool") else int(v)
+        else:
+            kwargs[k] = v
     try:
         return cls(**kwargs)
     except (TypeError, ValueError) as exc:

@@ -160,3 +160,20 @@ def test_one_quantile_definition_with_never_last():
     assert _stats([100, 200, None]) == {"median": 200.0, "q25": 150.0, "q75": None}
     # the same definition whether or not some seed never got there (positions 1.75 of 0..7)
     assert quantile([1, 2, 3, 4, None, None, None, None], 0.25) == 2.75
+
+
+def test_resume_into_a_sweep_of_other_settings_is_refused(tmp_path, capsys):
+    from scenarios.cli import main
+
+    out = tmp_path / "o"
+    base = ["compare", "paper-40", "--methods", "st-ql", "--seeds", "1", "--out", str(out),
+            "--jobs", "1"]
+    assert main([*base, "--episodes", "4"]) == 0
+    import json
+
+    rec = json.loads((out / "results.json").read_text())["runs"][0]
+    (out / "runs.partial.jsonl").write_text(json.dumps(rec) + "\n")  # a finished run of e4
+    assert main([*base, "--episodes", "6", "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert "another sweep" in err and "Traceback" not in err
+    assert main([*base, "--episodes", "4", "--resume"]) == 0  # the same settings resume

@@ -131,3 +131,33 @@ def test_ctrl_c_stops_a_batched_physics_sweep_and_resume_completes_it(tmp_path):
     a = json.loads((out / "results.json").read_text())
     b = json.loads((tmp_path / "whole" / "results.json").read_text())
     assert strip_timings(a) == strip_timings(b)
+
+
+def _take_lock(out: str, barrier, results) -> None:
+    from scenarios.runs.outdir import OutDirError, sweep_lock
+
+    barrier.wait()
+    try:
+        with sweep_lock(Path(out)):
+            time.sleep(0.5)
+        results.put("held")
+    except OutDirError:
+        results.put("refused")
+
+
+def test_simultaneous_sweeps_into_one_directory_one_wins(tmp_path):
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork")
+    for _ in range(5):
+        out = tmp_path / f"o{_}"
+        out.mkdir()
+        barrier, results = ctx.Barrier(6), ctx.Queue()
+        procs = [ctx.Process(target=_take_lock, args=(str(out), barrier, results))
+                 for _ in range(6)]
+        for p in procs:
+            p.start()
+        for p in procs:
+            p.join(10)
+        got = sorted(results.get(timeout=5) for _ in procs)
+        assert got == ["held"] + ["refused"] * 5

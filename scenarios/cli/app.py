@@ -18,8 +18,15 @@ from scenarios.runs.backends import SweepError
 from sim.errors import InputError
 
 
+class _Parser(argparse.ArgumentParser):
+    """Usage errors in one line (exit 2), like every other input error of the CLI."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message}. Fix: see {self.prog} --help\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="rnhql",
         description="Route searching with RBF-network heuristic Q-learning (RNH-QL) and its "
                     "baselines, on a grid and in a Pymunk physics world.")

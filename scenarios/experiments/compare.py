@@ -170,6 +170,15 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     from scenarios.figures.plots import all_figures
 
     done = read_partial(out_dir) if resume else {}
+    keys = {s.key for s in specs}
+    foreign = [k for k in done if k not in keys]
+    if foreign:
+        from scenarios.runs.outdir import OutDirError
+
+        raise OutDirError(str(out_dir), "--resume",
+                          f"holds {len(foreign)} finished run(s) of another sweep (e.g. "
+                          f"{foreign[0]})", "resume with the same scenario, methods, seeds, "
+                          "episodes and settings, use a new --out, or drop --resume")
     if not resume:
         (out_dir / PARTIAL).unlink(missing_ok=True)
     todo = [s for s in specs if s.key not in done]

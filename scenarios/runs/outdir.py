@@ -52,26 +52,29 @@ def _alive(pid: int) -> bool:
 def sweep_lock(out_dir: Path, flag: str = "--out") -> Iterator[None]:
     """Hold ``out_dir`` for this process; refuse if a live process holds it."""
     lock = out_dir / LOCK_NAME
-    for _ in range(2):
-        try:
-            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-        except FileExistsError:
-            try:
-                owner = int(lock.read_text().strip() or "0")
-            except (OSError, ValueError):
-                owner = 0
-            if owner and owner != os.getpid() and _alive(owner):
-                raise OutDirError(str(out_dir), flag,
-                                  f"is in use by another sweep (pid {owner})",
-                                  "wait for it to finish or pick another directory") from None
-            lock.unlink(missing_ok=True)  # stale: its owner is gone
-            continue
-        with os.fdopen(fd, "w") as f:
-            f.write(f"{os.getpid()}\n")
-        break
-    else:
-        raise OutDirError(str(out_dir), flag, "lock file keeps reappearing",
-                          f"remove {lock} if no sweep is running")
+    mine = out_dir / f"{LOCK_NAME}.{os.getpid()}"
+    mine.write_text(f"{os.getpid()}\n")
+    try:
+        for _ in range(2):
+            try:  # a hard link appears atomically *with* its content: never an empty lock
+                os.link(mine, lock)
+            except FileExistsError:
+                try:
+                    owner = int(lock.read_text().strip() or "0")
+                except (OSError, ValueError):
+                    owner = 0
+                if owner and owner != os.getpid() and _alive(owner):
+                    raise OutDirError(str(out_dir), flag,
+                                      f"is in use by another sweep (pid {owner})",
+                                      "wait for it to finish or pick another directory") from None
+                lock.unlink(missing_ok=True)  # stale: its owner is gone
+                continue
+            break
+        else:
+            raise OutDirError(str(out_dir), flag, "lock file keeps reappearing",
+                              f"remove {lock} if no sweep is running")
+    finally:
+        mine.unlink(missing_ok=True)
     try:
         yield
     finally:

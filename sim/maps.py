@@ -85,6 +85,10 @@ def parse_map(text: str, source: str) -> GridMap:
     if not lines or lines[0].split()[:1] != ["type"]:
         raise MapError(source, "header line 1", "expected 'type octile'",
                        "start the file with the Moving AI header 'type octile'")
+    if lines[0].split()[1:] != ["octile"]:
+        raise MapError(source, "header line 1", f"map type {' '.join(lines[0].split()[1:])!r} "
+                       "is not supported (only square grids: 'type octile')",
+                       "use a Moving AI octile map")
     height = _header_value(lines, 1, "height", source)
     width = _header_value(lines, 2, "width", source)
     if len(lines) < 4 or lines[3].strip() != "map":
@@ -140,6 +144,9 @@ def load_scen(path: str | Path) -> list[ScenProblem]:
     if not lines or not lines[0].startswith("version"):
         raise MapError(str(path), "line 1", "expected 'version 1'",
                        "start the file with the Moving AI line 'version 1'")
+    if lines[0].split()[1:2] not in (["1"], ["1.0"]):
+        raise MapError(str(path), "line 1", f"{lines[0].strip()!r} is not supported",
+                       "use a Moving AI .scen file of 'version 1'")
     problems = []
     for i, line in enumerate(lines[1:], start=2):
         if not line.strip():

@@ -156,6 +156,13 @@ def finite_positive(value: float, source: str, fld: str, fix: str) -> None:
         raise ScenarioError(source, fld, f"must be a finite positive number, got {value!r}", fix)
 
 
+# Limits that keep every array of a run in memory (a 4096 x 4096 grid is 16.8M states;
+# the tool is measured up to 1024 x 1024), and an episode length a run can finish.
+MAX_CELLS_PER_SIDE = 4096
+MAX_STEPS_PER_EPISODE = 10_000_000
+MAX_OBSTACLES = 100_000
+
+
 def validate_shape(sc: Scenario) -> None:
     """Checks that need no rasterising: sizes, radii, cells in range."""
     src = sc.source
@@ -168,6 +175,13 @@ def validate_shape(sc: Scenario) -> None:
             raise ScenarioError(src, fld, f"{dim} m is not a whole number (>= 2) of "
                                 f"{sc.cell_size_m} m cells",
                                 "choose a cell size that divides the arena")
+        if round(ratio) > MAX_CELLS_PER_SIDE:
+            raise ScenarioError(src, fld, f"{dim} m is {round(ratio):,} cells, more than the "
+                                f"limit of {MAX_CELLS_PER_SIDE} a side",
+                                "use a smaller arena or larger cells")
+    if len(sc.obstacles) > MAX_OBSTACLES:
+        raise ScenarioError(src, "obstacles", f"{len(sc.obstacles):,} circles, more than the "
+                            f"limit {MAX_OBSTACLES:,}", "use fewer circles or a .map")
     rb = sc.robot
     for name in ("radius_m", "wheel_base_m", "max_wheel_speed_m_s", "max_wheel_accel_m_s2",
                  "mass_kg"):
@@ -194,9 +208,11 @@ def validate_shape(sc: Scenario) -> None:
                                 "arena", f"use 0 <= x < {sc.nx} and 0 <= y < {sc.ny}")
     if sc.start == sc.goal:
         raise ScenarioError(src, "goal", "goal equals start", "choose a different goal cell")
-    if not (isinstance(sc.steps_per_episode, int) and sc.steps_per_episode > 0):
-        raise ScenarioError(src, "steps_per_episode", f"must be a positive integer, got "
-                            f"{sc.steps_per_episode!r}", "use e.g. 600")
+    if not (isinstance(sc.steps_per_episode, int)
+            and 0 < sc.steps_per_episode <= MAX_STEPS_PER_EPISODE):
+        raise ScenarioError(src, "steps_per_episode", f"must be an integer in 1.."
+                            f"{MAX_STEPS_PER_EPISODE:,}, got {sc.steps_per_episode!r}",
+                            "use e.g. 600")
     for name in ("goal", "bump", "step"):
         if not math.isfinite(getattr(sc.rewards, name)):
             raise ScenarioError(src, f"rewards.{name}", "must be finite", "use a number")

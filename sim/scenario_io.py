@@ -17,7 +17,16 @@ from sim.errors import ScenarioError
 from sim.feasibility import validate
 from sim.layouts import chain, random_circles
 from sim.maps import GridMap, load_map, movingai_to_cell
-from sim.scenario import Cell, Circle, Rewards, Robot, Scenario, finite_positive, validate_shape
+from sim.scenario import (
+    MAX_OBSTACLES,
+    Cell,
+    Circle,
+    Rewards,
+    Robot,
+    Scenario,
+    finite_positive,
+    validate_shape,
+)
 
 
 class _Table:
@@ -163,6 +172,15 @@ def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenari
         rt.finish()
         if count < 0:
             raise ScenarioError(source, "obstacles.random.count", "must be >= 0", "use e.g. 20")
+        if count > MAX_OBSTACLES:
+            raise ScenarioError(source, "obstacles.random.count", f"{count:,} is more than the "
+                                f"limit {MAX_OBSTACLES:,}", "use fewer circles")
+        validate_shape(sc)  # the arena's size first: drawing circles in a huge one takes ages
+        if count > sc.nx * sc.ny:
+            raise ScenarioError(source, "obstacles.random.count", f"{count:,} circles in "
+                                f"{sc.nx * sc.ny:,} cells cannot leave a route",
+                                "use fewer circles")
+        validate(sc)  # S, G and their connection with the fixed obstacles alone, named as such
         finite_positive(rmin, source, "obstacles.random.radius_min_m", "use e.g. 1.0")
         finite_positive(rmax, source, "obstacles.random.radius_max_m", "use e.g. 2.5")
         if rmax < rmin:

@@ -40,3 +40,15 @@ def test_bad_maps_name_line_and_fix(text, field, words):
     assert err.field == field
     assert words in str(err)
     assert str(err).startswith("bad.map: ") and "Fix: " in str(err)
+
+
+def test_unsupported_map_type_and_scen_version_are_refused(tmp_path):
+    from sim.errors import InputError
+    from sim.maps import load_scen, parse_map
+
+    with pytest.raises(InputError, match="'hexagonal' is not supported"):
+        parse_map("type hexagonal\nheight 1\nwidth 1\nmap\n.\n", "h.map")
+    scen = tmp_path / "v.scen"
+    scen.write_text("version 99\n")
+    with pytest.raises(MapError, match="'version 99' is not supported"):
+        load_scen(scen)

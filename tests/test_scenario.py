@@ -76,7 +76,13 @@ BAD = [
     (BASE + "[robot]\nradius_m = 0.6\n", "robot.radius_m", "does not fit"),
     (BASE + "[robot]\nradius_m = -0.3\n", "robot.radius_m", "positive"),
     (BASE.replace('start = [1, 1]', 'start = "a"'), "start", "expected list"),
-    ("steps_per_episode = 0\n" + BASE, "steps_per_episode", "positive"),
+    ("steps_per_episode = 0\n" + BASE, "steps_per_episode", "integer in 1.."),
+    ("steps_per_episode = 100000000000000\n" + BASE, "steps_per_episode", "integer in 1.."),
+    (BASE.replace("width_m = 10.0", "width_m = 1e7"), "arena.width_m", "more than the limit"),
+    (BASE + "[obstacles.random]\ncount = 100000\nradius_min_m = 0.5\nradius_max_m = 1.0\n"
+     "seed = 1\n", "obstacles.random.count", "cannot leave a route"),
+    (BASE + "[obstacles]\ncircles = [[1.5, 1.5, 0.5]]\n[obstacles.random]\ncount = 3\n"
+     "radius_min_m = 0.5\nradius_max_m = 1.0\nseed = 1\n", "start", "blocked"),
     ("name = \n", "TOML", "cannot be parsed"),
 ]
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -79,6 +80,8 @@ def test_train_save_route_and_resume(tmp_path, capsys):
      "is a whole number"),
     (["compare", "paper-40", "--address", "auto", "--out", "x"],
      "--address: only applies with --backend ray"),
+    (["train", "paper-40", "--json", "."], "--json: . is a directory"),
+    (["route", "paper-40", "--agent", "a.npz", "--png", "d"], "does not end in .png"),
 ])
 def test_bad_run_input_exits_2(capsys, argv, words):
     assert main(argv) == 2
@@ -162,3 +165,14 @@ def test_scen_errors_are_one_line(capsys, tmp_path):
         assert words in err and err.count("\n") == 1
     assert main(["train", "paper-40", "--scen", scen, "--index", "0"]) == 2
     assert "drop the scenario argument" in capsys.readouterr().err
+
+
+def test_a_scenario_name_never_sends_the_default_recording_out_of_recordings(tmp_path,
+                                                                             monkeypatch):
+    from scenarios.cli.args import record_path
+
+    monkeypatch.chdir(tmp_path)
+    args = type("A", (), {"record": ""})()
+    for name in ("../../escaped", "/abs/olute", ".hidden"):
+        path = Path(record_path(args, name, "st-ql-grid-s0")).resolve()
+        assert path.parent == (tmp_path / "recordings").resolve(), name

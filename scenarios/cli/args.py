@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 from pathlib import Path
 
 from scenarios.runs.spec import WORLDS, ExperimentError
@@ -199,13 +200,27 @@ def record_path(args: argparse.Namespace, scenario: str, rest: str) -> str | Non
     """``--record`` given: its path, or the default under recordings/; else None."""
     if args.record is None:
         return None
-    path = Path(args.record or f"recordings/{scenario}-{rest}.rrd")
+    # a scenario's name is the user's text: never let it climb out of recordings/
+    safe = re.sub(r"[^A-Za-z0-9._-]+", "_", f"{scenario}-{rest}").lstrip("._") or "run"
+    path = Path(args.record or f"recordings/{safe}.rrd")
     if path.suffix != ".rrd":
         raise ExperimentError("command line", "--record", f"{path} does not end in .rrd",
                               "name the recording e.g. run.rrd")
     path.parent.mkdir(parents=True, exist_ok=True)
     check_writable(path, "--record")
     return str(path)
+
+
+def check_output_file(path: Path, flag: str, suffix: str | None = None) -> Path:
+    """An output file the command will write at the end: checked before any work."""
+    if suffix is not None and path.suffix != suffix:
+        raise ExperimentError("command line", flag, f"{path} does not end in {suffix}",
+                              f"name the file e.g. out{suffix}")
+    if path.is_dir():
+        raise ExperimentError("command line", flag, f"{path} is a directory",
+                              f"name a file, e.g. {path / ('out' + (suffix or '.json'))}")
+    check_writable(path, flag)
+    return path
 
 
 def check_writable(path: Path, flag: str) -> None:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.cli.args import check_world, record_path, scenario_key
+from scenarios.cli.args import check_output_file, check_world, record_path, scenario_key
 from scenarios.runs.spec import load
 
 
@@ -22,6 +22,8 @@ def cmd_route(args: argparse.Namespace) -> int:
     name, start, goal = scenario_key(args)
     sc, model = load(name, start, goal, args.rewards)
     check_world(args.world)
+    if args.png:
+        check_output_file(Path(args.png), "--png", ".png")
     ckpt = load_checkpoint(args.agent, None, model.n_states, geometry_of(model))
     optimum = bfs_route(model.next_state, model.distance_to_goal, model.start)
     length, route = greedy_test(ckpt.state, model)

@@ -10,6 +10,7 @@ from pathlib import Path
 from learning.streams import streams
 from scenarios.cli.args import (
     MAX_EPISODES,
+    check_output_file,
     check_world,
     check_writable,
     parse_overrides,
@@ -33,6 +34,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     check_world(args.world)
     positive(args.episodes, "--episodes", MAX_EPISODES)
     seed_value(args.seed, "--seed")
+    if args.json:
+        check_output_file(Path(args.json), "--json")
     cfg = make_config(args.method, parse_overrides(args.set))
     spec = RunSpec(name, args.method, args.seed, args.episodes, args.world, start=start,
                    goal=goal, rewards=args.rewards)
@@ -89,5 +92,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.json:
         from scenarios.runs.results import atomic_write_text
 
-        atomic_write_text(args.json, json.dumps(rec, indent=1))
+        try:
+            atomic_write_text(args.json, json.dumps(rec, indent=1))
+        except OSError as exc:
+            raise ExperimentError(args.json, "--json", f"cannot be written ({exc.strerror})",
+                                  "free some space or pick another path") from None
     return 0

@@ -161,3 +161,45 @@ def test_simultaneous_sweeps_into_one_directory_one_wins(tmp_path):
             p.join(10)
         got = sorted(results.get(timeout=5) for _ in procs)
         assert got == ["held"] + ["refused"] * 5
+
+
+def test_sigterm_cleans_up_like_ctrl_c_and_exits_143(tmp_path):
+    sweep = ["compare", "paper-40", "--methods", "rn-ql,st-ql", "--seeds", "4", "--episodes",
+             "1500", "--jobs", "2"]
+    out = tmp_path / "out"
+    proc = start([*sweep, "--out", str(out)], tmp_path)
+    partial = out / "runs.partial.jsonl"
+    assert wait_for(lambda: partial.exists() and partial.read_text().count("\n") >= 1, 120)
+    t0 = time.monotonic()
+    os.kill(proc.pid, signal.SIGTERM)  # to the main process only, as `timeout` does
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 143, err
+    assert time.monotonic() - t0 <= 2.0
+    assert "terminated" in err and "Traceback" not in err
+    assert partial.read_text().count("\n") >= 1  # finished runs kept
+    assert not (out / ".rnhql-sweep.lock").exists()
+
+
+def test_workers_end_when_the_parent_is_killed(tmp_path):
+    import re
+
+    sweep = ["compare", "paper-40", "--methods", "rn-ql", "--seeds", "4", "--episodes",
+             "3000", "--jobs", "2", "--out", str(tmp_path / "out")]
+    proc = start(sweep, tmp_path)
+
+    def children() -> list[int]:
+        kids = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
+        return [int(p) for p in re.findall(r"\d+", kids.read_text())] if kids.exists() else []
+
+    assert wait_for(lambda: len(children()) >= 2, 60)
+    workers = children()
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.communicate(timeout=30)
+    def alive(pid: int) -> bool:
+        try:  # a zombie (state Z) has ended; it waits only to be reaped by init
+            return Path(f"/proc/{pid}/stat").read_text().split()[2] != "Z"
+        except (FileNotFoundError, ProcessLookupError, IndexError):
+            return False
+
+    assert wait_for(lambda: not any(alive(w) for w in workers), 10), \
+        "workers outlived their parent"

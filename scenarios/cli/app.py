@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 
 from scenarios.cli import bench, catalog, compare, route, train, view
@@ -94,9 +96,20 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (a batch scheduler, ``timeout``): the same clean-up as Ctrl-C, exit 143."""
+
+
+def _terminate(_sig: int, _frame: object) -> None:
+    raise Terminated
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    if threading.current_thread() is threading.main_thread() and \
+            signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _terminate)
     try:
         return int(args.func(args) or 0)
     except InputError as err:
@@ -115,6 +128,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"rnhql: {err}", file=sys.stderr)
             return 1
         raise
+    except Terminated:
+        print("rnhql: terminated", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print("rnhql: interrupted", file=sys.stderr)
         return 130

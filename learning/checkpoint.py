@@ -52,6 +52,20 @@ class Checkpoint:
     metrics: dict[str, np.ndarray] = field(default_factory=dict)  # METRIC_FIELDS so far
     path: str = "<memory>"  # where it was loaded from, for messages
     start_rng_state: dict | None = None  # the start cells' stream, when it has its own
+    problem: dict | None = None  # what it was trained on: {"scenario": digest, "rewards": label}
+
+    def check_problem(self, problem: dict) -> None:
+        """Raise CheckpointError if this checkpoint was trained on another scenario or reward
+        scheme than ``problem`` (older checkpoints without the record are not checked)."""
+        if self.problem is None:
+            return
+        for key, what, fix in (("rewards", "reward scheme", "the same --rewards"),
+                               ("scenario", "scenario (content digest)", "the same scenario")):
+            if key in problem and self.problem.get(key) != problem[key]:
+                raise CheckpointError(
+                    f"{self.path}: field 'problem.{key}': trained with {what} "
+                    f"{self.problem.get(key)!r}, this run has {problem[key]!r}; resume with "
+                    f"{fix} or start without --resume")
 
     @property
     def method(self) -> str:
@@ -129,6 +143,8 @@ def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
     payload["rng_state"] = np.array(json.dumps(ckpt.rng_state))
     if ckpt.start_rng_state is not None:
         payload["start_rng_state"] = np.array(json.dumps(ckpt.start_rng_state))
+    if ckpt.problem is not None:
+        payload["problem"] = np.array(json.dumps(ckpt.problem))
     payload["env_steps"] = np.array(ckpt.env_steps, dtype=np.int64)
     payload["n_states"] = np.array(ckpt.state.feat.shape[0], dtype=np.int64)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
@@ -187,6 +203,10 @@ def _read(data, path: Path, method: str | None):
         rng_state = json.loads(str(_field(data, "rng_state", path)))
         start_rng_state = (json.loads(str(_field(data, "start_rng_state", path)))
                            if "start_rng_state" in data.files else None)
+        problem = (json.loads(str(_field(data, "problem", path)))
+                   if "problem" in data.files else None)
+        if problem is not None and not isinstance(problem, dict):
+            raise ValueError("problem is not a table")
     except (ValueError, TypeError) as exc:
         raise CheckpointError(f"{path}: field 'config' or 'rng_state' is invalid ({exc}); "
                               "the file is corrupt, delete it and train again") from None
@@ -194,7 +214,7 @@ def _read(data, path: Path, method: str | None):
     metrics = {k: _field(data, f"metric_{k}", path).copy() for k in METRIC_FIELDS
                if f"metric_{k}" in data.files}
     env_steps = int(_field(data, "env_steps", path))
-    return cfg, state, rng_state, env_steps, metrics, start_rng_state
+    return cfg, state, rng_state, env_steps, metrics, start_rng_state, problem
 
 
 def load_checkpoint(path: str | os.PathLike, method: str | None = None,
@@ -220,8 +240,10 @@ def load_checkpoint(path: str | os.PathLike, method: str | None = None,
             raise CheckpointError(f"{path}: holds a single array, not an rnhql checkpoint "
                                   "(.npz); check the path")
         with data:
-            cfg, state, rng_state, env_steps, metrics, start_state = _read(data, path, method)
-    ckpt = Checkpoint(cfg, state, rng_state, env_steps, metrics, str(path), start_state)
+            cfg, state, rng_state, env_steps, metrics, start_state, problem = _read(data, path,
+                                                                                  method)
+    ckpt = Checkpoint(cfg, state, rng_state, env_steps, metrics, str(path), start_state,
+                      problem)
     if int(state.ivar[K.I_KIND]) != cfg.kind:
         raise CheckpointError(f"{path}: field 'state_ivar' says rule family "
                               f"{int(state.ivar[K.I_KIND])}, not {cfg.cli}'s; the file is corrupt, "

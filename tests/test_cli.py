@@ -176,3 +176,14 @@ def test_a_scenario_name_never_sends_the_default_recording_out_of_recordings(tmp
     for name in ("../../escaped", "/abs/olute", ".hidden"):
         path = Path(record_path(args, name, "st-ql-grid-s0")).resolve()
         assert path.parent == (tmp_path / "recordings").resolve(), name
+
+
+def test_resume_with_other_rewards_is_refused(tmp_path, capsys):
+    ck = str(tmp_path / "a.npz")
+    assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "10",
+                 "--save", ck]) == 0
+    assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "20", "--resume", ck,
+                 "--rewards", "goal-only"]) == 2
+    assert "field 'problem.rewards'" in capsys.readouterr().err
+    assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "20",
+                 "--resume", ck]) == 0

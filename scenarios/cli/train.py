@@ -27,7 +27,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from learning.checkpoint import Checkpoint, load_checkpoint, save_checkpoint
     from learning.geometry import geometry_of
     from learning.train import train_tabular
-    from scenarios.runs.spec import RunSpec, run_record
+    from scenarios.runs.spec import RunSpec, run_record, scenario_digest
 
     name, start, goal = scenario_key(args)
     sc, model = load(name, start, goal, args.rewards)
@@ -40,6 +40,8 @@ def cmd_train(args: argparse.Namespace) -> int:
     spec = RunSpec(name, args.method, args.seed, args.episodes, args.world, start=start,
                    goal=goal, rewards=args.rewards)
     record = record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
+    problem = {"scenario": scenario_digest(name, start, goal, args.rewards),
+               "rewards": sc.rewards.label()}
     rs = streams(args.seed)  # the same streams as a run of `rnhql compare`
     rng = rs.learner
     if args.save:
@@ -47,6 +49,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     resume = None
     if args.resume and args.world == "grid":
         resume = load_checkpoint(args.resume, args.method, model.n_states, geometry_of(model))
+        resume.check_problem(problem)
     print(f"{cfg.name} on {sc.name} ({args.world}), seed {args.seed}, {args.episodes} episodes, "
           f"rewards {sc.rewards.label()}")
     recorder = plan = observer = None
@@ -67,7 +70,9 @@ def cmd_train(args: argparse.Namespace) -> int:
             result = train_tabular(cfg, model, args.episodes, rng, resume=resume,
                                    observer=observer, start_rng=rs.starts)
             if args.save:
-                save_checkpoint(args.save, Checkpoint.of_result(result, rng, rs.starts))
+                ck = Checkpoint.of_result(result, rng, rs.starts)
+                ck.problem = problem
+                save_checkpoint(args.save, ck)
         else:
             if args.resume:
                 raise ExperimentError("command line", "--resume", "is only supported for grid "
@@ -77,7 +82,9 @@ def cmd_train(args: argparse.Namespace) -> int:
             result = train_physics(cfg, sc, model, args.episodes, rng, recorder=recorder,
                                    plan=plan, start_rng=rs.starts)
             if args.save:
-                save_checkpoint(args.save, Checkpoint.of_agent(result.agent))
+                ck = Checkpoint.of_agent(result.agent)
+                ck.problem = problem
+                save_checkpoint(args.save, ck)
         if recorder is not None:
             recorder.log_route("final route", result.final_route)
     finally:

@@ -187,3 +187,17 @@ def test_resume_with_other_rewards_is_refused(tmp_path, capsys):
     assert "field 'problem.rewards'" in capsys.readouterr().err
     assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "20",
                  "--resume", ck]) == 0
+
+
+def test_scen_rows_that_do_not_fit_their_map_are_refused(tmp_path, capsys):
+    import shutil
+
+    shutil.copy(Path(__file__).parent.parent / "scenarios/builtin/maps/arena.map", tmp_path)
+    size = tmp_path / "size.scen"
+    size.write_text("version 1\n0\tarena.map\t50\t49\t19\t26\t19\t29\t3.0\n")
+    assert main(["train", "--scen", str(size), "--index", "0", "--episodes", "2"]) == 2
+    assert "50x49 but arena.map is 49x49" in capsys.readouterr().err
+    escape = tmp_path / "pw.scen"
+    escape.write_text("version 1\n0\t../../../../etc/passwd\t49\t49\t19\t26\t19\t29\t3.0\n")
+    assert main(["train", "--scen", str(escape), "--index", "0", "--episodes", "2"]) == 2
+    assert "not a .map file beside the .scen" in capsys.readouterr().err

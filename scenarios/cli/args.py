@@ -90,7 +90,19 @@ def scen_problem(args: argparse.Namespace):  # -> (map path, ScenProblem)
             raise CliError(str(path), "--bucket", f"no problem in bucket {args.bucket}",
                            f"use one of {buckets[0]}..{buckets[-1]}")
         problem = max(in_bucket, key=lambda q: q.optimal_length)
-    return path.parent / problem.map_name, problem
+    map_path = path.parent / problem.map_name
+    if Path(problem.map_name).is_absolute() or ".." in Path(problem.map_name).parts or \
+            map_path.suffix != ".map" or not map_path.is_file():
+        raise CliError(str(path), "map column", f"names {problem.map_name!r}, not a .map file "
+                       f"beside the .scen", "put the .map next to the .scen and name it there")
+    from sim.maps import load_map
+
+    grid = load_map(map_path)
+    if (grid.width, grid.height) != (problem.width, problem.height):
+        raise CliError(str(path), "width/height columns", f"say {problem.width}x"
+                       f"{problem.height} but {map_path.name} is {grid.width}x{grid.height}",
+                       "use the .scen file that belongs to this map")
+    return map_path, problem
 
 
 def parse_overrides(items: list[str] | None) -> tuple[tuple[str, float], ...]:

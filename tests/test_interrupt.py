@@ -203,3 +203,13 @@ def test_workers_end_when_the_parent_is_killed(tmp_path):
 
     assert wait_for(lambda: not any(alive(w) for w in workers), 10), \
         "workers outlived their parent"
+
+
+def test_ctrl_c_while_the_command_starts_is_one_line(tmp_path):
+    for delay in (0.1, 0.3, 0.6):  # during the imports of numpy, numba, pymunk, the CLI
+        proc = start(["train", "paper-40", "--method", "st-ql", "--world", "physics",
+                      "--episodes", "50"], tmp_path)
+        time.sleep(delay)
+        code, _, err = interrupt(proc)
+        assert code == 130, err
+        assert "Traceback" not in err and "Exception ignored" not in err, err

@@ -1,8 +1,30 @@
 """The ``rnhql`` command: the parser (:mod:`~scenarios.cli.app`) and one module per subcommand.
 
 The top of the stack: may import every other part of ``scenarios``, nothing imports it.
+:func:`main` imports the parser lazily so that a Ctrl-C while the heavy modules load
+(numpy, numba, pymunk: about half a second) is one line and exit 130 like any other,
+and a Ctrl-C after the command has finished (interpreter shutdown) is ignored: the
+work is done and its exit status stands.
 """
 
-from scenarios.cli.app import main
+from __future__ import annotations
+
+import signal
+import sys
+from collections.abc import Sequence
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    try:
+        from scenarios.cli.app import main as run
+
+        code = run(argv)
+    except KeyboardInterrupt:
+        print("rnhql: interrupted", file=sys.stderr)
+        code = 130
+    if argv is None:  # the console script: nothing after this may turn into a traceback
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return code
+
 
 __all__ = ["main"]

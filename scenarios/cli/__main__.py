@@ -2,6 +2,6 @@
 
 import sys
 
-from scenarios.cli.app import main
+from scenarios.cli import main
 
 sys.exit(main())

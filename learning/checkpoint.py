@@ -155,6 +155,9 @@ def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
             os.fsync(f.fileno())
         os.chmod(tmp, _FILE_MODE)  # mkstemp makes 0600; give the usual mode
         os.replace(tmp, path)
+    except OSError as exc:  # e.g. a full disk: name the checkpoint, not the temp file
+        Path(tmp).unlink(missing_ok=True)
+        raise OSError(exc.errno, exc.strerror, str(path)) from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

@@ -8,6 +8,7 @@ with status 2; anything else is a bug and keeps its traceback.
 from __future__ import annotations
 
 import argparse
+import errno
 import os
 import signal
 import sys
@@ -96,6 +97,9 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+WRITE_ERRNOS = {errno.ENOSPC, errno.EROFS, errno.EACCES, errno.EDQUOT, errno.EIO, errno.EFBIG}
+
+
 class Terminated(KeyboardInterrupt):
     """SIGTERM (a batch scheduler, ``timeout``): the same clean-up as Ctrl-C, exit 143."""
 
@@ -118,6 +122,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`: not an error
         sys.stdout = open(os.devnull, "w")
         return 0
+    except OSError as err:  # a full disk, a read-only file system, a file that went away
+        if err.errno not in WRITE_ERRNOS:
+            raise
+        where = err.filename or "an output file"
+        if err.strerror and str(where) in str(err.strerror):  # our own one-line messages
+            print(f"rnhql: error: {err.strerror}", file=sys.stderr)
+        else:
+            print(f"rnhql: error: {where}: cannot be written ({err.strerror}). Fix: free "
+                  "some space or write elsewhere", file=sys.stderr)
+        return 1
     except Exception as err:
         from learning.checkpoint import CheckpointError
 

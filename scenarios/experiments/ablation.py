@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from scenarios.experiments.suite import build_suite
+from scenarios.figures.save import save_figure
 
 # label, method, overrides: each row adds one ingredient to the row above it, down to
 # rnh-ql+; the rows after it take one ingredient away again, or are references
@@ -195,7 +196,7 @@ def figure(summary: dict, maps: list[dict], labels: list[str], path: Path, title
     ax.set_yticks(range(len(labels)), [textwrap.fill(lab, 46) for lab in labels], fontsize=7)
     ax.set_title(title, fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
 
 

@@ -8,6 +8,7 @@ when the sweep is complete.
 
 from __future__ import annotations
 
+import contextlib
 import json
 from collections.abc import Callable, Sequence
 from importlib import metadata
@@ -184,8 +185,14 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     todo = [s for s in specs if s.key not in done]
     with open(out_dir / PARTIAL, "a", encoding="utf-8") as partial:
         def save(rec: dict[str, Any]) -> None:
-            partial.write(json.dumps(rec) + "\n")
-            partial.flush()
+            at = partial.tell()
+            try:
+                partial.write(json.dumps(rec) + "\n")
+                partial.flush()
+            except OSError:  # a full disk: never leave half a line for --resume to read
+                with contextlib.suppress(OSError):
+                    partial.truncate(at)
+                raise
 
         new = execute(todo, on_result=save, **execute_kwargs) if todo else []
     results = assemble(specs, [*done.values(), *new])

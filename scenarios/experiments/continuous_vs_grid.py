@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from scenarios.experiments.compare import make_specs, run_sweep
+from scenarios.figures.save import save_figure
 from scenarios.runs.backends import Progress, run_local
 from scenarios.runs.results import atomic_write_text
 from scenarios.runs.spec import load
@@ -115,7 +116,7 @@ def overlay(results: dict[str, Any], scenario: str, method: str, path: Path) -> 
     ax.set_title(f"{sc.name}: {method}, grid vs physics", fontsize=9)
     ax.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
 
 

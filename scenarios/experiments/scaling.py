@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from scenarios.experiments.compare import make_specs, run_sweep
+from scenarios.figures.save import save_figure
 from scenarios.runs.backends import Progress, run_local
 from scenarios.runs.results import atomic_write_text
 
@@ -85,7 +86,7 @@ def figure(rows: dict[str, list[dict[str, Any]]], path: Path, title: str) -> Non
         ax.legend(fontsize=7)
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
 
 

@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Circle as CirclePatch
 
+from scenarios.figures.save import save_figure
 from sim.grid import TabularModel
 from sim.planning import bfs_route
 from sim.scenario import Scenario
@@ -77,7 +78,7 @@ def curve_figure(results: dict[str, Any], key: str, ylabel: str, path: Path,
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
     fig.tight_layout()
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
 
 
@@ -124,7 +125,7 @@ def routes_figure(results: dict[str, Any], sc: Scenario, model: TabularModel,
     for ax in axes.ravel()[n:]:
         ax.axis("off")
     fig.tight_layout()
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)
 
 

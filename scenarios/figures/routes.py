@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from scenarios.figures.save import save_figure
 from sim.grid import TabularModel
 from sim.planning import bfs_route
 from sim.scenario import Scenario
@@ -54,5 +55,5 @@ def route_png(sc: Scenario, model: TabularModel, route: Sequence[int], path: Pat
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    save_figure(fig, path)
     plt.close(fig)

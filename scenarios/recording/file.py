@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import errno
 import os
 import shutil
 import signal
@@ -55,6 +56,20 @@ def _no_sigint() -> Iterator[None]:
         signal.signal(signal.SIGINT, old)
 
 
+FLUSH_TIMEOUT_S = 600.0  # a flush that takes longer has hung (Rerun's writer on a full disk)
+
+
+class RecordingWriteError(OSError):
+    """The recording could not be written (full disk, file removed); its partial file is gone."""
+
+    def __init__(self, path: Path, cause: BaseException) -> None:
+        reason = getattr(cause, "strerror", None) or str(cause)
+        super().__init__(errno.EIO, f"{path}: the recording could not be written ({reason}); "
+                         "its partial file was removed. Fix: free some space or record "
+                         "elsewhere", str(path))
+        self.path = path
+
+
 class RecordingFile:
     """An explicit RecordingStream with a file sink at ``<path>.part``, renamed on close."""
 
@@ -87,9 +102,18 @@ class RecordingFile:
                 except Exception as exc:  # keep going: the file must still be finished
                     warnings.warn(f"recording: could not flush {r.prefix or 'run'}: {exc}",
                                   stacklevel=2)
-            self.stream.flush()
-            self.stream.disconnect()
-            os.replace(self.part, self.path)
+            try:
+                self.stream.flush(timeout_sec=FLUSH_TIMEOUT_S)
+                self.stream.disconnect()
+                if not self.part.exists():
+                    raise OSError(errno.EIO, "the recording's file is gone", str(self.part))
+                os.replace(self.part, self.path)
+            except (OSError, RuntimeError) as exc:  # e.g. a full disk: Rerun's writer stops
+                with contextlib.suppress(Exception):
+                    self.stream.disconnect()
+                self.part.unlink(missing_ok=True)
+                atexit.unregister(self.close)
+                raise RecordingWriteError(self.path, exc) from None
         atexit.unregister(self.close)
 
     def __enter__(self) -> RecordingFile:

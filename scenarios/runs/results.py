@@ -61,6 +61,9 @@ def atomic_write_text(path: str | Path, text: str) -> None:
             f.write(text)
         os.chmod(tmp, _FILE_MODE)  # mkstemp makes 0600; give the usual mode
         os.replace(tmp, path)
+    except OSError as exc:  # name the file the user asked for, not the temp file
+        Path(tmp).unlink(missing_ok=True)
+        raise OSError(exc.errno, exc.strerror, str(path)) from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

@@ -1,0 +1,64 @@
+"""A full disk: one line, exit 1, nothing half-written and no temp files left behind.
+
+Uses a 2 MB tmpfs mounted for the test (needs root and ``mount``; skipped with the reason
+otherwise), filled so that only a few kilobytes remain.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import uuid
+from pathlib import Path
+
+import pytest
+
+CLI = [sys.executable, "-m", "scenarios.cli"]
+REPO = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture
+def full_disk(tmp_path):
+    mnt = Path("/tmp") / f"rnhql-full-{uuid.uuid4().hex[:8]}"
+    mnt.mkdir()
+    if shutil.which("mount") is None or subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(mnt)],
+            capture_output=True).returncode != 0:
+        mnt.rmdir()
+        pytest.skip("cannot mount a small tmpfs here (needs root): full-disk paths untested")
+    try:
+        with open(mnt / "filler", "wb") as f:
+            f.write(b"\0" * (2048 - 40) * 1024)
+        yield mnt
+    finally:
+        subprocess.run(["umount", str(mnt)], capture_output=True)
+        mnt.rmdir()
+
+
+def _run(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([*CLI, *args], cwd=cwd, capture_output=True, text=True, timeout=300,
+                          env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin",
+                               "HOME": str(cwd)})
+
+
+def _leftovers(root: Path) -> list[str]:
+    return [p.name for p in root.rglob("*") if p.name.endswith((".tmp", ".part"))]
+
+
+@pytest.mark.parametrize("args", [
+    ["compare", "paper-40", "--methods", "st-ql", "--seeds", "2", "--episodes", "200",
+     "--jobs", "1", "--out", "{mnt}/out"],
+    ["train", "paper-40", "--method", "st-ql", "--episodes", "200", "--record",
+     "{mnt}/run.rrd"],
+    ["train", "paper-40", "--method", "rnh-ql", "--episodes", "5", "--save", "{mnt}/a.npz"],
+])
+def test_a_full_disk_is_one_line_and_leaves_nothing_half_written(full_disk, tmp_path, args):
+    got = _run([a.replace("{mnt}", str(full_disk)) for a in args], tmp_path)
+    assert got.returncode == 1, got.stderr
+    assert "Traceback" not in got.stderr
+    errors = [line for line in got.stderr.splitlines() if line.startswith("rnhql")]
+    assert len(errors) == 1 and "Fix:" in errors[0], got.stderr
+    assert str(full_disk) in errors[0]  # names the file, not a temp file
+    assert _leftovers(full_disk) == []
+    assert not (full_disk / "run.rrd").exists() and not (full_disk / "a.npz").exists()

@@ -7,16 +7,14 @@ carry ``ShapeFilter(categories=ROBOT, mask=STATIC)``, so robots never touch each
 
 A batched step (:meth:`RouteBatch.step`) runs every active robot's primitive in one
 compiled call (:func:`sim.physics.kernel.advance`: free motion integrated as Chipmunk
-integrates it, see that module for why it is the same physics) and goes back to Chipmunk
-only for what needs it:
-
-- ``CAST``: a drive leg's swept-disc guard (``bb_query`` + ``segment_query``, one per
-  leg); a leg that starts on its cell centre has a fixed answer per (cell, action) on the
-  static geometry, so those are cached in :attr:`RouteBatch.guards` and never cast twice;
-- ``CHECK``: a step that ends at or past the guard's surface: the robot's own shape is
-  put at the new pose and Chipmunk's collision detection (``shape_query``, the narrow
-  phase ``cpSpaceStep`` runs) says whether a contact began and where; if so the robot is
-  placed back at rest on its start cell's centre, as in the single world.
+integrates it, see that module for why it is the same physics). A drive leg's swept-disc
+guard is cast in that call too, with Chipmunk's segment-query formulas over the static
+shapes as arrays (:mod:`sim.physics.sweep`); a leg that starts on its cell centre has a
+fixed answer per (cell, action), cached in :attr:`RouteBatch.guards`. Chipmunk itself is
+asked only at ``CHECK``: a step that ends at or past the guard's surface; the robot's own
+shape is put at the new pose and Chipmunk's collision detection (``shape_query``, the
+narrow phase ``cpSpaceStep`` runs) says whether a contact began and where; if so the robot
+is placed back at rest on its start cell's centre, as in the single world.
 
 A robot in a batch is the single-robot world: the same cells, rewards, contacts and
 step counts for the same actions, poses within 1e-9 m of
@@ -46,7 +44,8 @@ from sim.physics.static import (
     PhysicsConfig,
     static_shapes,
 )
-from sim.physics.world import new_space, sweep_alpha
+from sim.physics.sweep import static_geometry
+from sim.physics.world import new_space
 from sim.planning import ACTION_DELTAS
 from sim.scenario import Scenario
 
@@ -122,10 +121,13 @@ class RouteBatch:
         self._states = np.zeros(n_robots, dtype=np.int64)
         self.contacts: list[list[Contact]] = [[] for _ in range(n_robots)]
         self.contact_counts = [dict.fromkeys(CollisionType, 0) for _ in range(n_robots)]
-        self.casts = 0  # Chipmunk casts so far (benchmark figures)
-        self.checks = 0  # Chipmunk contact checks so far
+        self._casts = np.zeros(1, dtype=np.int64)  # guard casts so far (compiled)
+        self.checks = 0  # Chipmunk contact checks so far (benchmark figures)
         self.kernel_s = 0.0  # wall time in the compiled kernel so far [s]
-        self.chipmunk_s = 0.0  # wall time in casts and checks so far [s]
+        self.chipmunk_s = 0.0  # wall time in Chipmunk contact checks so far [s]
+        self.geometry = g = static_geometry(sc)
+        self._seen = np.zeros(len(g.circles) + len(g.boxes), dtype=np.int64)
+        self._stamp = np.zeros(1, dtype=np.int64)
         sigint.install(RouteBatch._check)
 
     def _add_robot(self, x: float, y: float) -> None:
@@ -211,12 +213,15 @@ class RouteBatch:
         K.begin_all(fs, ist, acts, act, self.cell_m, self.nx, self.ny, _DELTAS, _HEADINGS)
         cfg = self.config
         clock = time.perf_counter
+        g = self.geometry
         while True:
             t0 = clock()
             K.advance(fs, ist, act, cfg.dt_s, cfg.substeps, self._period, cfg.tolerance_m,
                       cfg.tolerance_rad, self._timeout_steps, cfg.contact_depth_m, self.cell_m,
                       self.nx, self.ny, self.guards, self._turn_caps, self._turn_sums,
-                      self._drive_caps, self._drive_sums, self._traj, self._ntraj)
+                      self._drive_caps, self._drive_sums, self._traj, self._ntraj,
+                      self.radius_m, g.circles, g.walls, g.boxes, g.start, g.items, self._seen,
+                      self._stamp, self._casts)
             t1 = clock()
             self.kernel_s += t1 - t0
             status = ist[:, K.STATUS]
@@ -224,10 +229,7 @@ class RouteBatch:
             if waiting.size == 0:
                 break
             for i in waiting:
-                if status[i] == K.CAST:
-                    self._cast(int(i))
-                else:
-                    self._check(int(i))
+                self._check(int(i))
             self.chipmunk_s += clock() - t1
             sigint.raise_if_deferred()
         K.states_of(fs, self.cell_m, self.nx, self.ny, self._states)
@@ -237,24 +239,10 @@ class RouteBatch:
             steps=np.where(act, ist[:, K.STEPS] - ist[:, K.STEPS0], 0),
             contacts=np.where(act, ist[:, K.NCONTACT], 0))
 
-    def _cast(self, i: int) -> None:
-        """The guard of robot ``i``'s drive leg, from its cell centre (cached) or its pose."""
-        fs, ist = self.fs, self.ist
-        cx = (ist[i, K.CELLX] + 0.5) * self.cell_m
-        cy = (ist[i, K.CELLY] + 0.5) * self.cell_m
-        x0, y0 = float(fs[i, K.X]), float(fs[i, K.Y])
-        tx, ty = float(fs[i, K.TX]), float(fs[i, K.TY])
-        on_centre = abs(x0 - cx) <= K.CENTRE_TOL_M and abs(y0 - cy) <= K.CENTRE_TOL_M
-        if on_centre:
-            x0, y0 = cx, cy
-        dist = math.hypot(tx - x0, ty - y0)
-        alpha = sweep_alpha(self.space, self._query_filter, self.radius_m, x0, y0, tx, ty)
-        free = math.inf if alpha is None else alpha * dist
-        self.casts += 1
-        if on_centre:
-            s = int(ist[i, K.CELLY]) * self.nx + int(ist[i, K.CELLX])
-            self.guards[s, int(ist[i, K.ACTION])] = free
-        fs[i, K.FREE] = free
+    @property
+    def casts(self) -> int:
+        """Guard casts so far (legs whose guard was not cached)."""
+        return int(self._casts[0])
 
     def _check(self, i: int) -> None:
         """Did a contact begin in robot ``i``'s last step? Chipmunk's narrow phase decides."""

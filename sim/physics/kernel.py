@@ -19,8 +19,9 @@ every step that ends within :data:`CHECK_MARGIN_M` of that surface, or past it, 
 back with status ``CHECK`` and the caller asks Chipmunk's collision detection
 (``cpSpaceShapeQuery``, the narrow phase ``cpSpaceStep`` runs) whether a contact began.
 Turns in place cannot begin a contact (a disc turning about its centre sweeps nothing).
-A leg that starts off its cell centre, or whose guard is not cached yet, is handed back
-with status ``CAST`` for one Chipmunk cast. The controller (turn in place, stop, drive,
+The guard itself is cast in compiled code with Chipmunk's own segment-query formulas
+(:mod:`sim.physics.sweep`), once per (cell, action) for legs that start on their cell
+centre and once per leg otherwise. The controller (turn in place, stop, drive,
 stop; minimal-time discrete profiles; tolerances; timeout) is
 :class:`sim.physics.controller.PrimitiveController`'s, written over arrays.
 
@@ -38,6 +39,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from sim.physics.sweep import sweep_fraction
 
 # float columns of fs
 X, Y, TH = 0, 1, 2  # pose [m, m, rad] (heading not wrapped)
@@ -63,7 +66,7 @@ NCONTACT = 15  # contacts that began during the primitive
 NI = 16
 
 # STATUS codes
-IDLE, RUNNING, CAST, CHECK, DONE = 0, 1, 2, 3, 4
+IDLE, RUNNING, CHECK, DONE = 0, 1, 3, 4
 
 CHECK_MARGIN_M = 1e-6  # steps ending this close to the guard's surface ask Chipmunk [m]
 CENTRE_TOL_M = 1e-9  # a leg starting this close to its cell centre uses the cached guard [m]
@@ -177,15 +180,17 @@ def _command(fs, ist, i, k, turn_caps, drive_caps):
 
 @njit(cache=True)
 def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps, depth_m,
-            cell_m, nx, ny, guards, turn_caps, turn_sums, drive_caps, drive_sums, traj, ntraj):
+            cell_m, nx, ny, guards, turn_caps, turn_sums, drive_caps, drive_sums, traj, ntraj,
+            radius_m, circles, walls, boxes, grid_start, grid_items, seen, stamp, casts):
     """Run every ``active`` robot's primitive until it is DONE or needs Chipmunk.
 
     ``guards[cell, action]``: free distance of the drive leg from that cell's centre to
-    the neighbour's centre (inf: nothing in the way; nan: not cast yet). ``traj[i]``
+    the neighbour's centre (inf: nothing in the way; nan: not cast yet), filled here by
+    :func:`sim.physics.sweep.sweep_fraction` over the static geometry (``circles`` ...
+    ``grid_items``; ``seen``/``stamp`` dedupe candidates; ``casts[0]`` counts). ``traj[i]``
     receives the pose after every step when ``traj.shape[1] > 0`` (``ntraj[i]`` counts).
-    Robots left with status CAST want ``fs[i, FREE]`` (cast from (X, Y) to (TX, TY));
-    CHECK wants to know whether the disc at (X, Y) touches anything. Resume by calling
-    again with the answer filled in (see :mod:`sim.physics.batch`).
+    Robots left with status CHECK want to know whether the disc at (X, Y) touches
+    anything; resume by calling again with the answer applied (see :mod:`sim.physics.batch`).
     """
     record = traj.shape[1] > 0
     for i in range(fs.shape[0]):
@@ -199,10 +204,6 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
             fs[i, VX], fs[i, VY], fs[i, W] = cvx, cvy, cw
             ist[i, STATUS] = RUNNING
             ist[i, SUB] += 1
-        elif st == CAST:  # the leg's guard is in FREE now
-            _set_guard(fs, i, depth_m)
-            ist[i, LEG] = 2
-            ist[i, STATUS] = RUNNING
         while True:
             if ist[i, LEG] == 0:
                 if not _plan(fs, ist, i, period, tol_m, turn_caps, turn_sums, drive_caps,
@@ -222,10 +223,21 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
                                  and abs(fs[i, Y] - cy) <= CENTRE_TOL_M)
                     if on_centre and not math.isnan(guards[s, a]):
                         fs[i, FREE] = guards[s, a]
-                        _set_guard(fs, i, depth_m)
-                    else:
-                        ist[i, STATUS] = CAST
-                        break
+                    else:  # cast the leg: from the exact centre when on it (cached)
+                        x0 = cx if on_centre else fs[i, X]
+                        y0 = cy if on_centre else fs[i, Y]
+                        tx, ty = fs[i, TX], fs[i, TY]
+                        stamp[0] += 1
+                        alpha = sweep_fraction(circles, walls, boxes, cell_m, nx, ny,
+                                               grid_start, grid_items, seen, stamp[0],
+                                               radius_m, x0, y0, tx, ty)
+                        free = (math.inf if alpha == math.inf
+                                else alpha * math.hypot(tx - x0, ty - y0))
+                        casts[0] += 1
+                        if on_centre:
+                            guards[s, a] = free
+                        fs[i, FREE] = free
+                    _set_guard(fs, i, depth_m)
                 ist[i, LEG] = 2
             # drive the leg's commands
             stop = False

@@ -239,3 +239,39 @@ class Sweeper:
         self.stamp += 1
         return sweep_fraction(g.circles, g.walls, g.boxes, g.cell_m, g.nx, g.ny, g.start,
                               g.items, self.seen, self.stamp, radius, ax, ay, bx, by)
+
+
+@njit(cache=True)
+def overlap_depth(circles, walls, boxes, cell_m, nx, ny, start, items, seen, stamp, radius,
+                  x, y):
+    """Deepest overlap [m] of a disc of ``radius`` at (x, y) with any static shape (0: none);
+    the point-query distances :func:`sweep_fraction` uses."""
+    deepest = 0.0
+    for k in range(walls.shape[0]):
+        d = radius - (_segment_distance(x, y, walls[k, 0], walls[k, 1], walls[k, 2],
+                                        walls[k, 3]) - walls[k, 4])
+        if d > deepest:
+            deepest = d
+    gx0 = min(max(int(math.floor((x - radius) / cell_m)), 0), nx - 1)  # noqa: RUF046 (numba)
+    gy0 = min(max(int(math.floor((y - radius) / cell_m)), 0), ny - 1)  # noqa: RUF046 (numba)
+    gx1 = min(max(int(math.floor((x + radius) / cell_m)), 0), nx - 1)  # noqa: RUF046 (numba)
+    gy1 = min(max(int(math.floor((y + radius) / cell_m)), 0), ny - 1)  # noqa: RUF046 (numba)
+    n_circles = circles.shape[0]
+    for gy in range(gy0, gy1 + 1):
+        for gx in range(gx0, gx1 + 1):
+            cell = gy * nx + gx
+            for p in range(start[cell], start[cell + 1]):
+                k = items[p]
+                if seen[k] == stamp:
+                    continue
+                seen[k] = stamp
+                if k < n_circles:
+                    d = radius - (math.hypot(x - circles[k, 0], y - circles[k, 1])
+                                  - circles[k, 2])
+                else:
+                    m = k - n_circles
+                    d = radius - _box_distance(x, y, boxes[m, 0], boxes[m, 1], boxes[m, 2],
+                                               boxes[m, 3])
+                if d > deepest:
+                    deepest = d
+    return deepest

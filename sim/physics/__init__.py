@@ -14,3 +14,7 @@ Modules, in import order (each imports only those above it):
 - :mod:`sim.physics.model`: the physics world's own tabular model (graded tests);
 - :mod:`sim.physics.envs`, :mod:`sim.physics.vector`: the gymnasium envs.
 """
+
+from sim.physics.jitcache import drop_stale_cache as _drop_stale_cache
+
+_drop_stale_cache()

@@ -36,6 +36,7 @@ from sim.discretiser import Discretiser
 from sim.physics import kernel as K
 from sim.physics import sigint
 from sim.physics.controller import CARDINAL_HEADINGS, DriveLimits, ProfileTable
+from sim.physics.fidelity import Fidelity
 from sim.physics.static import (
     ROBOT_CATEGORY,
     STATIC_CATEGORY,
@@ -49,6 +50,7 @@ from sim.physics.world import new_space
 from sim.planning import ACTION_DELTAS
 from sim.scenario import Scenario
 
+NOISE_BLOCK = 4096  # normals drawn per refill of a robot's wheel-noise buffer
 _DELTAS = np.array(ACTION_DELTAS, dtype=np.int64)
 _HEADINGS = np.array(CARDINAL_HEADINGS, dtype=np.float64)
 
@@ -74,7 +76,8 @@ class RouteBatch:
     """
 
     def __init__(self, scenario: Scenario, n_robots: int, config: PhysicsConfig | None = None,
-                 *, trajectories: bool = False, guards: np.ndarray | None = None) -> None:
+                 *, trajectories: bool = False, guards: np.ndarray | None = None,
+                 fidelity: Fidelity | None = None) -> None:
         if not (isinstance(n_robots, int) and n_robots >= 1):
             raise ValueError(f"n_robots must be an int >= 1, got {n_robots!r}")
         self.scenario = sc = scenario
@@ -125,6 +128,13 @@ class RouteBatch:
         self.checks = 0  # Chipmunk contact checks so far (benchmark figures)
         self.kernel_s = 0.0  # wall time in the compiled kernel so far [s]
         self.chipmunk_s = 0.0  # wall time in Chipmunk contact checks so far [s]
+        self.fidelity = fid = fidelity or Fidelity()
+        fid.validate()
+        # each robot's normals for wheel noise, drawn in blocks from its own generator
+        self._noise = np.zeros((n_robots, NOISE_BLOCK if fid.wheel_noise > 0 else 2))
+        self._npos = np.full(n_robots, self._noise.shape[1], dtype=np.int64)
+        self._noise_rngs: list[np.random.Generator | None] = [None] * n_robots
+        self._half_base_m = 0.5 * sc.robot.wheel_base_m
         self.geometry = g = static_geometry(sc)
         self._seen = np.zeros(len(g.circles) + len(g.boxes), dtype=np.int64)
         self._stamp = np.zeros(1, dtype=np.int64)
@@ -213,7 +223,7 @@ class RouteBatch:
         K.begin_all(fs, ist, acts, act, self.cell_m, self.nx, self.ny, _DELTAS, _HEADINGS)
         cfg = self.config
         clock = time.perf_counter
-        g = self.geometry
+        g, fid = self.geometry, self.fidelity
         while True:
             t0 = clock()
             K.advance(fs, ist, act, cfg.dt_s, cfg.substeps, self._period, cfg.tolerance_m,
@@ -221,7 +231,8 @@ class RouteBatch:
                       self.nx, self.ny, self.guards, self._turn_caps, self._turn_sums,
                       self._drive_caps, self._drive_sums, self._traj, self._ntraj,
                       self.radius_m, g.circles, g.walls, g.boxes, g.start, g.items, self._seen,
-                      self._stamp, self._casts)
+                      self._stamp, self._casts, fid.wheel_noise, fid.carried_pose,
+                      self._half_base_m, self._noise, self._npos)
             t1 = clock()
             self.kernel_s += t1 - t0
             status = ist[:, K.STATUS]
@@ -229,7 +240,10 @@ class RouteBatch:
             if waiting.size == 0:
                 break
             for i in waiting:
-                self._check(int(i))
+                if status[i] == K.NOISE:
+                    self._refill(int(i))
+                else:
+                    self._check(int(i))
             self.chipmunk_s += clock() - t1
             sigint.raise_if_deferred()
         K.states_of(fs, self.cell_m, self.nx, self.ny, self._states)
@@ -244,15 +258,40 @@ class RouteBatch:
         """Guard casts so far (legs whose guard was not cached)."""
         return int(self._casts[0])
 
+    def set_noise_rng(self, i: int, rng: np.random.Generator) -> None:
+        """Robot ``i``'s wheel noise comes from ``rng`` from now on (its buffer is emptied)."""
+        self._noise_rngs[i] = rng
+        self._npos[i] = self._noise.shape[1]
+
+    def _refill(self, i: int) -> None:
+        rng = self._noise_rngs[i]
+        if rng is None:
+            raise RuntimeError(f"robot {i} has wheel noise but no generator: call "
+                               "set_noise_rng(i, rng) first")
+        self._noise[i] = rng.standard_normal(self._noise.shape[1])
+        self._npos[i] = 0
+
     def _check(self, i: int) -> None:
         """Did a contact begin in robot ``i``'s last step? Chipmunk's narrow phase decides."""
         self.checks += 1
+        fs, ist = self.fs, self.ist
         shape = self.shapes[i]
+        forced = ist[i, K.FORCED] == 1
+        if forced:  # it pushed into what it rests against: undo the step, record the contact
+            fs[i, K.X], fs[i, K.Y], fs[i, K.TH] = fs[i, K.PX], fs[i, K.PY], fs[i, K.PTH]
         self.sync_body(i)
         found = self.space.shape_query(shape)
-        if not found:
+        if not forced and ist[i, K.INCONTACT] == 1 and found:
+            # resting contacts are not new ones: only shapes it did not touch before the step
+            body = self.bodies[i]
+            body.position, body.angle = (float(fs[i, K.PX]), float(fs[i, K.PY])), 0.0
+            self.space.reindex_shapes_for_body(body)
+            before = {info.shape for info in self.space.shape_query(shape)}
+            self.sync_body(i)
+            found = [info for info in found if info.shape not in before]
+        if not found and not forced:
             return  # the kernel finishes the step
-        step = int(self.ist[i, K.STEPS])
+        step = int(ist[i, K.STEPS])
         for info in found:
             kind = CollisionType(info.shape.collision_type)
             cps = info.contact_point_set
@@ -260,8 +299,11 @@ class RouteBatch:
             self.contacts[i].append(Contact(step, kind, deepest.point_a.x, deepest.point_a.y,
                                             cps.normal.x, cps.normal.y, -deepest.distance))
             self.contact_counts[i][kind] += 1
-        self.ist[i, K.NCONTACT] += len(found)
-        K.bump_back(self.fs, self.ist, i)
+        ist[i, K.NCONTACT] += max(len(found), 1)
+        if self.fidelity.carried_pose:
+            K.bump_stay(fs, ist, i, False)
+        else:
+            K.bump_back(fs, ist, i)
 
 
 class RobotView:

@@ -40,7 +40,7 @@ import math
 import numpy as np
 from numba import njit
 
-from sim.physics.sweep import sweep_fraction
+from sim.physics.sweep import overlap_depth, sweep_fraction
 
 # float columns of fs
 X, Y, TH = 0, 1, 2  # pose [m, m, rad] (heading not wrapped)
@@ -63,10 +63,13 @@ BUMPED, REACHED, TIMEOUT = 10, 11, 12
 LEG = 13  # 0 = plan a new leg; 1 = leg planned, guard pending; 2 = driving
 CLAMPED = 14  # the step being checked had its velocity shortened by the guard
 NCONTACT = 15  # contacts that began during the primitive
-NI = 16
+CMDSET = 16  # index of the command whose (possibly perturbed) twist is in CVX..CW; -1: none
+INCONTACT = 17  # carried pose: the robot rests against something (it may slide, not push)
+FORCED = 18  # the step being checked pushed deeper into what the robot rests against
+NI = 19
 
 # STATUS codes
-IDLE, RUNNING, CHECK, DONE = 0, 1, 3, 4
+IDLE, RUNNING, NOISE, CHECK, DONE = 0, 1, 2, 3, 4  # NOISE: refill the robot's normals
 
 CHECK_MARGIN_M = 1e-6  # steps ending this close to the guard's surface ask Chipmunk [m]
 CENTRE_TOL_M = 1e-9  # a leg starting this close to its cell centre uses the cached guard [m]
@@ -119,6 +122,8 @@ def begin(fs, ist, i, action, cell_m, nx, ny, deltas, headings):
     ist[i, TIMEOUT] = 0
     ist[i, NCONTACT] = 0
     ist[i, LEG] = 0
+    ist[i, CMDSET] = -1
+    ist[i, FORCED] = 0
     ist[i, STATUS] = RUNNING
 
 
@@ -156,6 +161,7 @@ def _plan(fs, ist, i, period, tol_m, turn_caps, turn_sums, drive_caps, drive_sum
     ist[i, NDRIVE] = ndrive
     ist[i, CMD] = 0
     ist[i, SUB] = 0
+    ist[i, CMDSET] = -1
     return nturn > 0 or ndrive > 0
 
 
@@ -181,7 +187,8 @@ def _command(fs, ist, i, k, turn_caps, drive_caps):
 @njit(cache=True)
 def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps, depth_m,
             cell_m, nx, ny, guards, turn_caps, turn_sums, drive_caps, drive_sums, traj, ntraj,
-            radius_m, circles, walls, boxes, grid_start, grid_items, seen, stamp, casts):
+            radius_m, circles, walls, boxes, grid_start, grid_items, seen, stamp, casts,
+            wheel_noise, carried, half_base_m, noise, npos):
     """Run every ``active`` robot's primitive until it is DONE or needs Chipmunk.
 
     ``guards[cell, action]``: free distance of the drive leg from that cell's centre to
@@ -193,6 +200,7 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
     anything; resume by calling again with the answer applied (see :mod:`sim.physics.batch`).
     """
     record = traj.shape[1] > 0
+    noisy = wheel_noise > 0.0 or carried  # per-step guards; twists follow the heading
     for i in range(fs.shape[0]):
         if not active[i]:
             continue
@@ -204,6 +212,8 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
             fs[i, VX], fs[i, VY], fs[i, W] = cvx, cvy, cw
             ist[i, STATUS] = RUNNING
             ist[i, SUB] += 1
+        elif st == NOISE:  # the caller refilled this robot's normals
+            ist[i, STATUS] = RUNNING
         while True:
             if ist[i, LEG] == 0:
                 if not _plan(fs, ist, i, period, tol_m, turn_caps, turn_sums, drive_caps,
@@ -214,7 +224,7 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
                 ist[i, LEG] = 1
             if ist[i, LEG] == 1:
                 fs[i, LIMIT] = math.inf
-                if ist[i, NDRIVE] > 0:
+                if ist[i, NDRIVE] > 0 and not noisy:
                     cx = (ist[i, CELLX] + 0.5) * cell_m
                     cy = (ist[i, CELLY] + 0.5) * cell_m
                     s = ist[i, CELLY] * nx + ist[i, CELLX]
@@ -243,14 +253,48 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
             stop = False
             while True:
                 k = ist[i, CMD]
-                cvx, cvy, cw = _command(fs, ist, i, k, turn_caps, drive_caps)
-                if math.isnan(cw):
-                    break
-                fs[i, CVX], fs[i, CVY], fs[i, CW] = cvx, cvy, cw
+                if ist[i, CMDSET] == k:  # resumed inside this command: keep its twist
+                    cvx, cvy, cw = fs[i, CVX], fs[i, CVY], fs[i, CW]
+                else:
+                    cvx, cvy, cw = _command(fs, ist, i, k, turn_caps, drive_caps)
+                    if math.isnan(cw):
+                        break
+                    if noisy:
+                        if wheel_noise > 0.0 and npos[i] + 2 > noise.shape[1]:
+                            ist[i, STATUS] = NOISE
+                            stop = True
+                            break
+                        cvx, cvy, cw = _perturbed(fs, i, cvx, cvy, cw, wheel_noise,
+                                                  half_base_m, noise, npos)
+                    fs[i, CVX], fs[i, CVY], fs[i, CW] = cvx, cvy, cw
+                    ist[i, CMDSET] = k
                 while ist[i, SUB] < substeps:
                     vx, vy = fs[i, VX], fs[i, VY]
                     clamped = 0
-                    if fs[i, LIMIT] < math.inf:
+                    candidate = False
+                    depth0 = 0.0
+                    if noisy:  # guard this step: its own sweep, as DiffDrive's advance does
+                        ln = math.hypot(vx, vy) * dt
+                        if ln > 1e-12:
+                            stamp[0] += 1
+                            alpha = sweep_fraction(circles, walls, boxes, cell_m, nx, ny,
+                                                   grid_start, grid_items, seen, stamp[0],
+                                                   radius_m, fs[i, X], fs[i, Y],
+                                                   fs[i, X] + vx * dt, fs[i, Y] + vy * dt)
+                            if alpha < math.inf:
+                                free = alpha * ln
+                                if free + depth_m < ln:
+                                    scale = (free + depth_m) / ln
+                                    vx, vy = vx * scale, vy * scale
+                                    fs[i, VX], fs[i, VY] = vx, vy
+                                    clamped = 1
+                                candidate = math.hypot(vx, vy) * dt > free - CHECK_MARGIN_M
+                        if ist[i, INCONTACT] == 1:
+                            stamp[0] += 1
+                            depth0 = overlap_depth(circles, walls, boxes, cell_m, nx, ny,
+                                                   grid_start, grid_items, seen, stamp[0],
+                                                   radius_m, fs[i, X], fs[i, Y])
+                    elif fs[i, LIMIT] < math.inf:
                         ex, ey = fs[i, EX], fs[i, EY]
                         done = (fs[i, X] - fs[i, GX]) * ex + (fs[i, Y] - fs[i, GY]) * ey
                         if done + dt * (vx * ex + vy * ey) > fs[i, LIMIT]:
@@ -270,7 +314,24 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
                             traj[i, n, 1] = fs[i, Y]
                             traj[i, n, 2] = fs[i, TH]
                             ntraj[i] = n + 1
-                    if fs[i, LIMIT] < math.inf:
+                    if noisy:
+                        if ist[i, INCONTACT] == 1:
+                            stamp[0] += 1
+                            depth1 = overlap_depth(circles, walls, boxes, cell_m, nx, ny,
+                                                   grid_start, grid_items, seen, stamp[0],
+                                                   radius_m, fs[i, X], fs[i, Y])
+                            if depth1 > depth0 + 1e-12:  # pushes into what it rests on
+                                ist[i, FORCED] = 1
+                                candidate = True
+                            elif depth1 <= 0.0:
+                                ist[i, INCONTACT] = 0
+                        if candidate:
+                            fs[i, PX], fs[i, PY], fs[i, PTH] = px, py, pth
+                            ist[i, CLAMPED] = clamped
+                            ist[i, STATUS] = CHECK
+                            stop = True
+                            break
+                    elif fs[i, LIMIT] < math.inf:
                         along = ((fs[i, X] - fs[i, GX]) * fs[i, EX]
                                  + (fs[i, Y] - fs[i, GY]) * fs[i, EY])
                         if along > fs[i, FREE] - CHECK_MARGIN_M:
@@ -303,6 +364,23 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
 
 
 @njit(cache=True, inline="always")
+def _perturbed(fs, i, cvx, cvy, cw, wheel_noise, half_base_m, noise, npos):
+    """The command as the wheels deliver it: each wheel's speed times (1 + sigma * e), e from
+    the robot's normals; the twist then moves along the robot's heading (a diff drive)."""
+    v = math.hypot(cvx, cvy)
+    vl, vr = v - cw * half_base_m, v + cw * half_base_m
+    if wheel_noise > 0.0:
+        k = npos[i]
+        vl *= 1.0 + wheel_noise * noise[i, k]
+        vr *= 1.0 + wheel_noise * noise[i, k + 1]
+        npos[i] = k + 2
+    v2 = 0.5 * (vl + vr)
+    w2 = (vr - vl) / (2.0 * half_base_m)
+    th = fs[i, TH]
+    return v2 * math.cos(th), v2 * math.sin(th), w2
+
+
+@njit(cache=True, inline="always")
 def _set_guard(fs, i, depth_m):
     fs[i, GX] = fs[i, X]
     fs[i, GY] = fs[i, Y]
@@ -329,6 +407,24 @@ def bump_back(fs, ist, i):
     fs[i, CVX] = 0.0
     fs[i, CVY] = 0.0
     fs[i, CW] = 0.0
+    ist[i, BUMPED] = 1
+    ist[i, STATUS] = DONE
+
+
+@njit(cache=True)
+def bump_stay(fs, ist, i, revert):
+    """A contact began with carried pose: the robot stops where it is (or, when the step
+    pushed into what it rested on, where it was before that step), at rest."""
+    if revert:
+        fs[i, X], fs[i, Y], fs[i, TH] = fs[i, PX], fs[i, PY], fs[i, PTH]
+    fs[i, VX] = 0.0
+    fs[i, VY] = 0.0
+    fs[i, W] = 0.0
+    fs[i, CVX] = 0.0
+    fs[i, CVY] = 0.0
+    fs[i, CW] = 0.0
+    ist[i, INCONTACT] = 1
+    ist[i, FORCED] = 0
     ist[i, BUMPED] = 1
     ist[i, STATUS] = DONE
 

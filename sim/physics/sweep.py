@@ -83,6 +83,8 @@ def _circle_alpha(cx, cy, r1, ax, ay, bx, by, r2):
     qa = da_da - 2.0 * da_db + (dbx * dbx + dby * dby)
     qb = da_db - da_da
     det = qb * qb - qa * (da_da - rsum * rsum)
+    if qa <= 0.0:  # a segment too short to resolve against its distance (C gets nan: no hit)
+        return math.inf
     if det >= 0.0:
         t = (-qb - math.sqrt(det)) / qa
         if 0.0 <= t <= 1.0:

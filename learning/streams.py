@@ -10,7 +10,11 @@ seed spawns independent child streams (``numpy.random.SeedSequence.spawn``):
   fused kernel and in the step agent alike);
 - ``learner``: initial weights, exploration, ties, planning;
 - ``evaluation``: the epsilon-greedy rollouts of the paper's test protocol,
-  which must never move the other two.
+  which must never move the other two;
+- ``physics``: the physics world's own noise (wheel noise at the ``noisy``
+  fidelity), so a noisy world never moves the learner's draws.
+
+Children 0-2 are what they were before ``physics`` (child 3) was added.
 """
 
 from __future__ import annotations
@@ -25,10 +29,11 @@ class Streams:
     starts: np.random.Generator
     learner: np.random.Generator
     evaluation: np.random.Generator
+    physics: np.random.Generator
 
 
 def streams(seed: int) -> Streams:
-    """The three independent streams of ``seed`` (children 0, 1, 2 of its SeedSequence)."""
-    starts, learner, evaluation = np.random.SeedSequence(seed).spawn(3)
+    """The independent streams of ``seed`` (children 0..3 of its SeedSequence)."""
+    starts, learner, evaluation, physics = np.random.SeedSequence(seed).spawn(4)
     return Streams(np.random.default_rng(starts), np.random.default_rng(learner),
-                   np.random.default_rng(evaluation))
+                   np.random.default_rng(evaluation), np.random.default_rng(physics))

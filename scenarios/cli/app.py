@@ -16,7 +16,7 @@ import threading
 from collections.abc import Sequence
 
 from scenarios.cli import bench, catalog, compare, route, train, view
-from scenarios.cli.args import add_record_args, add_scenario_args
+from scenarios.cli.args import add_fidelity_arg, add_record_args, add_scenario_args
 from scenarios.runs.backends import SweepError
 from sim.errors import InputError
 
@@ -46,6 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--episodes", type=int, default=3000)
     p.add_argument("--world", default="grid", help="grid (default) or physics")
+    add_fidelity_arg(p)
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="override a config field, e.g. --set alpha=0.2 (repeatable)")
     p.add_argument("--save", metavar="AGENT.npz", help="save the trained agent")
@@ -58,6 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_scenario_args(p)
     p.add_argument("--agent", required=True, metavar="AGENT.npz")
     p.add_argument("--world", default="grid", help="grid (default) or physics (drive it)")
+    add_fidelity_arg(p)
     p.add_argument("--png", metavar="FILE", help="also draw the routes to a PNG")
     p.add_argument("--record", nargs="?", const="", default=None, metavar="PATH.rrd",
                    help="record the route to Rerun (default recordings/<scenario>-route-...)")
@@ -70,6 +72,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed-base", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--episodes", type=int, default=3000)
     p.add_argument("--world", default="grid", help="grid, physics or grid,physics")
+    add_fidelity_arg(p)
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
                    help="override a config field for every method that has it")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")

@@ -47,6 +47,23 @@ def add_scenario_args(p: argparse.ArgumentParser, positional: bool = True) -> No
                         "(default: the scenario's own)")
 
 
+def add_fidelity_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--fidelity", default=None, metavar="NAME|KEY=VALUE,...",
+                   help="physics fidelity: exact (default), noisy, or e.g. "
+                        "noisy,wheel_noise=0.1 (physics runs only)")
+
+
+def fidelity_arg(args: argparse.Namespace) -> str | None:
+    """``--fidelity`` checked now (one line, exit 2 on a bad value); None for exact."""
+    from sim.physics.fidelity import parse_fidelity
+
+    text = getattr(args, "fidelity", None)
+    if text is None:
+        return None
+    fid = parse_fidelity(text)
+    return None if fid.is_exact and fid.name == "exact" else text
+
+
 def add_record_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--record", nargs="?", const="", default=None, metavar="PATH.rrd",
                    help="write a Rerun recording (default: recordings/<scenario>-<method>-"

@@ -11,6 +11,7 @@ from scenarios.cli.args import (
     MAX_EPISODES,
     MAX_SEEDS,
     check_world,
+    fidelity_arg,
     parse_list,
     parse_overrides,
     positive,
@@ -38,7 +39,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     seeds = list(range(seed_base, seed_base + n_seeds))
     episodes = positive(args.episodes, "--episodes", MAX_EPISODES)
     specs = make_specs(name, methods, seeds, episodes, worlds,
-                       per_method, start, goal, rewards=args.rewards)
+                       per_method, start, goal, rewards=args.rewards,
+                       fidelity=fidelity_arg(args))
     execute, kwargs = _backend(args)
     from scenarios.runs.backends import Progress
 

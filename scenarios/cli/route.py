@@ -8,7 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.cli.args import check_output_file, check_world, record_path, scenario_key
+from scenarios.cli.args import (
+    check_output_file,
+    check_world,
+    fidelity_arg,
+    record_path,
+    scenario_key,
+)
 from scenarios.runs.spec import load
 
 
@@ -22,6 +28,7 @@ def cmd_route(args: argparse.Namespace) -> int:
     name, start, goal = scenario_key(args)
     sc, model = load(name, start, goal, args.rewards)
     check_world(args.world)
+    fidelity_arg(args)
     if args.png:
         check_output_file(Path(args.png), "--png", ".png")
     ckpt = load_checkpoint(args.agent, None, model.n_states, geometry_of(model))
@@ -34,7 +41,9 @@ def cmd_route(args: argparse.Namespace) -> int:
         from scenarios.runs.physics import drive_greedy
 
         agent = StepAgent(ckpt.config, geometry_of(model), np.random.default_rng(0), ckpt.state)
-        driven = drive_greedy(agent, sc)
+        from sim.physics.fidelity import parse_fidelity
+
+        driven = drive_greedy(agent, sc, fidelity=parse_fidelity(fidelity_arg(args)))
         route, trajectory = driven.states, driven.trajectory
         length = len(route) - 1 if driven.reached else -1
         print(f"  driven in physics: {'reached G' if driven.reached else 'did not reach G'}, "

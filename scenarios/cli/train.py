@@ -13,6 +13,7 @@ from scenarios.cli.args import (
     check_output_file,
     check_world,
     check_writable,
+    fidelity_arg,
     parse_overrides,
     positive,
     print_run,
@@ -37,8 +38,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.json:
         check_output_file(Path(args.json), "--json")
     cfg = make_config(args.method, parse_overrides(args.set))
+    fidelity = fidelity_arg(args)
     spec = RunSpec(name, args.method, args.seed, args.episodes, args.world, start=start,
-                   goal=goal, rewards=args.rewards)
+                   goal=goal, rewards=args.rewards, fidelity=fidelity)
     record = record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
     problem = {"scenario": scenario_digest(name, start, goal, args.rewards),
                "rewards": sc.rewards.label()}
@@ -80,7 +82,8 @@ def cmd_train(args: argparse.Namespace) -> int:
             from scenarios.runs.physics import train_physics
 
             result = train_physics(cfg, sc, model, args.episodes, rng, recorder=recorder,
-                                   plan=plan, start_rng=rs.starts)
+                                   plan=plan, start_rng=rs.starts,
+                                   fidelity=spec.fidelity_spec, noise_rng=rs.physics)
             if args.save:
                 ck = Checkpoint.of_agent(result.agent)
                 ck.problem = problem

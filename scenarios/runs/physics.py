@@ -84,11 +84,13 @@ class DrivenRoute:
                 "physics_route_sim_time_s": round(self.sim_time_s, 4)}
 
 
-def drive_greedy(agent_or_policy: Any, sc: Scenario, max_steps: int | None = None) -> DrivenRoute:
-    """Drive the greedy policy (a StepAgent or ``policy(s) -> a``) from S in a fresh world."""
+def drive_greedy(agent_or_policy: Any, sc: Scenario, max_steps: int | None = None,
+                 fidelity: Any = None) -> DrivenRoute:
+    """Drive the greedy policy (a StepAgent or ``policy(s) -> a``) from S in a fresh world
+    (at ``fidelity``; its noise from the env's stream seeded 0, the same for every run)."""
     policy = (agent_or_policy.greedy_action if isinstance(agent_or_policy, StepAgent)
               else agent_or_policy)
-    env = gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
+    env = gym.make("rnhql/PhysicsRoute-v0", scenario=sc, fidelity=fidelity,
                    max_episode_steps=max_steps or sc.steps_per_episode)
     s, info = env.reset(seed=0)
     states, traj, poses = [int(s)], [info["trajectory"]], [info["pose"]]
@@ -183,7 +185,8 @@ def _sigint_to(stopper: _StopAtStep) -> Iterator[None]:
 def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
                   rng: np.random.Generator, test_every: int = 10,
                   recorder: Any = None, plan: Any = None,
-                  start_rng: np.random.Generator | None = None) -> PhysicsTrainResult:
+                  start_rng: np.random.Generator | None = None, fidelity: Any = None,
+                  noise_rng: np.random.Generator | None = None) -> PhysicsTrainResult:
     """Train the step agent in PhysicsRoute-v0; optionally record (see recorded_runs).
 
     ``rng`` is the learner's stream, ``start_rng`` the start cells' (default ``rng``):
@@ -192,19 +195,22 @@ def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
     """
     from scenarios.recording.hooks import EpisodeTap
 
-    counter = ContactCounter(gym.make("rnhql/PhysicsRoute-v0", scenario=sc,
-                                      max_episode_steps=sc.steps_per_episode))
+    inner = gym.make("rnhql/PhysicsRoute-v0", scenario=sc, fidelity=fidelity,
+                     max_episode_steps=sc.steps_per_episode)
+    if noise_rng is not None:
+        inner.unwrapped.set_noise_rng(noise_rng)
+    counter = ContactCounter(inner)
     env = EpisodeTap(counter)
     stopper = _StopAtStep(env)
     with _sigint_to(stopper):
         return _train(cfg, sc, model, n_episodes, rng, test_every, recorder, plan, start_rng,
-                      counter, env, stopper)
+                      counter, env, stopper, fidelity)
 
 
 def _train(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
            rng: np.random.Generator, test_every: int, recorder: Any, plan: Any,
            start_rng: np.random.Generator | None, counter: Any, env: Any,
-           stopper: _StopAtStep) -> PhysicsTrainResult:
+           stopper: _StopAtStep, fidelity: Any = None) -> PhysicsTrainResult:
     from scenarios.recording.hooks import ChunkLogger
     from sim.physics.model import physics_model
 
@@ -239,7 +245,7 @@ def _train(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
     counter.flush()
     env.close()
     length, route = greedy_test(agent.state, graded)
-    driven = drive_greedy(agent, sc)
+    driven = drive_greedy(agent, sc, fidelity=fidelity)
     cat = {k: np.concatenate([getattr(lg, k) for lg in logs])
            for k in ("steps", "returns", "success", "shaping_mean", "shaping_std")}
     extras = {"grid_optimal_route_length": model.optimal_route_length,

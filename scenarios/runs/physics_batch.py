@@ -41,6 +41,7 @@ class RunGroup:
     cfg: Any
     learner_rngs: Sequence[np.random.Generator]
     start_rngs: Sequence[np.random.Generator]
+    noise_rngs: Sequence[np.random.Generator] | None = None  # the physics streams (noise)
 
 
 class _Stop:
@@ -85,7 +86,8 @@ class _Logs:
 
 def train_physics_batch(sc: Scenario, model: TabularModel, groups: Sequence[RunGroup],
                         n_episodes: int, test_every: int = 10,
-                        split: dict[str, float] | None = None) -> list[list[PhysicsTrainResult]]:
+                        split: dict[str, float] | None = None,
+                        fidelity: Any = None) -> list[list[PhysicsTrainResult]]:
     """Train every run of every group in one batch; results per group, per run.
 
     ``split``, if given, receives the wall time [s] of the parts of the loop: ``learner``
@@ -106,7 +108,11 @@ def train_physics_batch(sc: Scenario, model: TabularModel, groups: Sequence[RunG
         lo += len(g.learner_rngs)
     n = lo
     start_h = handles([r for g in groups for r in g.start_rngs])
-    world = RouteBatch(sc, n)
+    world = RouteBatch(sc, n, fidelity=fidelity)
+    noise = [r for g in groups for r in (g.noise_rngs or [None] * len(g.learner_rngs))]
+    for i, r in enumerate(noise):
+        if r is not None:
+            world.set_noise_rng(i, r)
     rw = sc.rewards
     goal, max_steps = model.goal, sc.steps_per_episode
     logs = _Logs(n, n_episodes)
@@ -169,7 +175,7 @@ def train_physics_batch(sc: Scenario, model: TabularModel, groups: Sequence[RunG
     t_loop = clock() - t_start
     results: list[list[PhysicsTrainResult]] = []
     for ag, (b0, b1) in zip(agents, bounds, strict=True):
-        results.append([_result(ag, k, b0 + k, logs, sc, model, graded, n_episodes)
+        results.append([_result(ag, k, b0 + k, logs, sc, model, graded, n_episodes, fidelity)
                         for k in range(b1 - b0)])
     if split is not None:
         split.update(learner=t_learn, kernel=world.kernel_s, chipmunk=world.chipmunk_s,
@@ -204,10 +210,10 @@ def _end_episodes(ended, agents, bounds, logs, world, graded, done, t, ret, term
 
 
 def _result(ag: BatchAgent, k: int, i: int, logs: _Logs, sc: Scenario, model: TabularModel,
-            graded: TabularModel, n_episodes: int) -> PhysicsTrainResult:
+            graded: TabularModel, n_episodes: int, fidelity: Any = None) -> PhysicsTrainResult:
     agent = ag.step_agent(k)
     length, route = greedy_test(agent.state, graded)
-    driven = drive_greedy(agent, sc)
+    driven = drive_greedy(agent, sc, fidelity=fidelity)
     extras = {"grid_optimal_route_length": model.optimal_route_length,
               "physics_optimal_route_length": graded.optimal_route_length,
               "contacts_per_episode": logs.contacts[i].tolist(),
@@ -243,7 +249,8 @@ def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
     groups: dict[tuple[Any, ...], list[int]] = {}
     for i, sp in enumerate(specs):
         if batchable(sp):
-            groups.setdefault((sp.problem, sp.episodes, sp.test_every), []).append(i)
+            groups.setdefault((sp.problem, sp.episodes, sp.test_every, sp.fidelity_spec),
+                              []).append(i)
         else:
             tasks.append([i])
     for idx in groups.values():
@@ -261,9 +268,10 @@ def run_physics_batch(specs: Sequence[Any]) -> list[dict[str, Any]]:
     from scenarios.runs.spec import load, make_config, run_record
 
     first = specs[0]
-    if any((sp.problem, sp.episodes, sp.test_every) != (first.problem, first.episodes,
-                                                       first.test_every) for sp in specs):
-        raise ValueError("a physics batch needs one problem, budget and test cadence")
+    if any((sp.problem, sp.episodes, sp.test_every, sp.fidelity_spec) !=
+           (first.problem, first.episodes, first.test_every, first.fidelity_spec)
+           for sp in specs):
+        raise ValueError("a physics batch needs one problem, budget, test cadence, fidelity")
     sc, model = load(*first.problem)
     by_config: dict[tuple[str, Any], list[int]] = {}
     for i, sp in enumerate(specs):
@@ -274,10 +282,12 @@ def run_physics_batch(specs: Sequence[Any]) -> list[dict[str, Any]]:
         rs = [streams(specs[i].seed) for i in idx]
         for i, r in zip(idx, rs, strict=True):
             evaluation[i] = r.evaluation
-        groups.append(RunGroup(cfg, [r.learner for r in rs], [r.starts for r in rs]))
+        groups.append(RunGroup(cfg, [r.learner for r in rs], [r.starts for r in rs],
+                               [r.physics for r in rs]))
         members.append(idx)
         cfgs.append(cfg)
-    results = train_physics_batch(sc, model, groups, first.episodes, first.test_every)
+    results = train_physics_batch(sc, model, groups, first.episodes, first.test_every,
+                                  fidelity=first.fidelity_spec)
     records: list[dict[str, Any] | None] = [None] * len(specs)
     for idx, cfg, group_results in zip(members, cfgs, results, strict=True):
         for i, res in zip(idx, group_results, strict=True):

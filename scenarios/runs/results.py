@@ -5,9 +5,11 @@
     {
       "version": 2, "rnhql_version": str,
       "scenario": {name, source, size_cells, start, goal, rewards: {scheme, goal, bump, step}},
-      "world": "grid" | "physics" | "grid,physics", "episodes": int,
+      "world": "grid" | "physics" | "grid,physics",
+      "fidelity": the physics fidelity's label ("exact", "noisy", ...) or null (grid only),
+      "episodes": int,
       "optimal_route_length": int,            # BFS moves S -> G on the grid model
-      "runs": [ {"key", "method", "method_name", "seed", "world", "config",
+      "runs": [ {"key", "method", "method_name", "seed", "world", "fidelity", "config",
                  "optimal_route_length" (of the world the run was graded in),
                  "episodes_to_stable_optimal" (int | null: first greedy test from which every
                     later one is optimal), "episodes_to_optimal" (int | null: first hit),
@@ -137,8 +139,10 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
     rw = results["scenario"].get("rewards")
     scheme = (f"rewards `{rw['scheme']}` (goal {rw['goal']:g}, bump {rw['bump']:g}, free step "
               f"{rw['step']:g})" if rw else "rewards as in the scenario")
+    fid = results.get("fidelity")
+    world = f"{results['world']}" + (f" (physics fidelity `{fid}`)" if fid else "")
     lines = [f"# {results['scenario']['name']}: {results['episodes']} episodes, "
-             f"world {results['world']}, {scheme}",
+             f"world {world}, {scheme}",
              "",
              f"Optimal route S -> G: {results['optimal_route_length']} moves (BFS). "
              "Figures are median [25th, 75th percentile] over seeds (type-7 quantiles). "

@@ -45,6 +45,7 @@ class RunSpec:
     rewards: str | None = None  # --rewards: a scheme name or goal=..,bump=..,step=.. (None: the
     #                             scenario's own)
     drive_final: bool = False  # grid runs: also drive the final greedy policy in physics
+    fidelity: str | None = None  # --fidelity of the physics world (None: exact)
     # recording (not part of the key: a recorded run equals an unrecorded one)
     record_path: str | None = None  # .rrd to write; None = no recording
     record_every: int = 10  # episodes recorded in full: first, every N-th, last
@@ -70,9 +71,16 @@ class RunSpec:
         extra = "".join(f",{k}={v:g}" for k, v in self.overrides)
         cells = "".join(f"|{n}={c[0]},{c[1]}" for n, c in (("S", self.start), ("G", self.goal))
                         if c is not None)
+        fid = "" if self.fidelity_spec.is_exact else f"|fid={self.fidelity_spec.label}"
         return (f"{self.scenario}#{scenario_digest(*self.problem)}"
-                f"{cells}|{self.world}|{self.method}{extra}|t{self.test_every}"
+                f"{cells}|{self.world}{fid}|{self.method}{extra}|t{self.test_every}"
                 f"|s{self.seed}|e{self.episodes}")
+
+    @property
+    def fidelity_spec(self):  # -> sim.physics.fidelity.Fidelity
+        from sim.physics.fidelity import parse_fidelity
+
+        return parse_fidelity(self.fidelity)
 
 
 @lru_cache(maxsize=8)
@@ -156,6 +164,7 @@ def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dic
         "method_name": type(cfg).name,
         "seed": spec.seed,
         "world": spec.world,
+        "fidelity": spec.fidelity_spec.label if spec.world == "physics" else None,
         "config": cfg.fields(),
         "optimal_route_length": optimal,
         "episodes_to_stable_optimal": episodes_to_stable_optimal(test_e, test_l, optimal),
@@ -228,7 +237,8 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
         from scenarios.runs.physics import train_physics
 
         result = train_physics(cfg, sc, model, spec.episodes, rng, test_every=spec.test_every,
-                               recorder=recorder, plan=plan, start_rng=rs.starts)
+                               recorder=recorder, plan=plan, start_rng=rs.starts,
+                               fidelity=spec.fidelity_spec, noise_rng=rs.physics)
         result.epsilon_route_lengths = epsilon_route_lengths(result.agent.state, result.graded,
                                                              cfg.eps, rs.evaluation)
         return result
@@ -250,5 +260,5 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
         from scenarios.runs.physics import drive_greedy
 
         agent = StepAgent(cfg, geometry_of(model), rng, result.state)
-        result.world_extras = drive_greedy(agent, sc).extras()
+        result.world_extras = drive_greedy(agent, sc, fidelity=spec.fidelity_spec).extras()
     return result

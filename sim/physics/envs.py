@@ -23,6 +23,7 @@ from sim.grid import build_model
 from sim.grid_env import start_state_from_options
 from sim.physics.batch import RobotView, RouteBatch
 from sim.physics.controller import DriveLimits, rate_limit, wheels_to_twist, wrap_angle
+from sim.physics.fidelity import Fidelity, parse_fidelity
 from sim.physics.world import PhysicsConfig, PhysicsWorld, SharedSpace
 from sim.render import AGENT, PATH, MapCanvas
 from sim.scenario import Scenario
@@ -126,8 +127,12 @@ class PhysicsRouteEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
 
     def __init__(self, scenario: str | Scenario = "paper-50", render_mode: str | None = None,
-                 config: PhysicsConfig | None = None) -> None:
+                 config: PhysicsConfig | None = None,
+                 fidelity: Fidelity | str | None = None) -> None:
         self.scenario = _scenario(scenario)
+        self.fidelity = (fidelity if isinstance(fidelity, Fidelity)
+                         else parse_fidelity(fidelity, "fidelity"))
+        self._noise_rng: np.random.Generator | None = None
         self.model = build_model(self.scenario)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}")
@@ -152,8 +157,11 @@ class PhysicsRouteEnv(gym.Env):
         s = start_state_from_options(options, self.model, self.np_random)
         x, y = self.disc.state_centre(s)
         if self._batch is None:  # a batch of one robot: the same world as the vector env's
-            self._batch = RouteBatch(self.scenario, 1, self.config, trajectories=True)
+            self._batch = RouteBatch(self.scenario, 1, self.config, trajectories=True,
+                                     fidelity=self.fidelity)
             self.world = RobotView(self._batch, 0)
+        if self._noise_rng is None and (seed is not None or self._batch._noise_rngs[0] is None):
+            self._batch.set_noise_rng(0, self.np_random)  # the env's own stream
         self._batch.place(0, x, y, 0.0)  # static shapes kept; the robot's state all new
         self._s = s
         pose = (x, y, 0.0)
@@ -192,6 +200,16 @@ class PhysicsRouteEnv(gym.Env):
                 "reached": bool(out.reached[0]), "timeout": bool(out.timeout[0]),
                 "steps": int(out.steps[0]), "trajectory": traj}
         return s, reward, s == self._goal, False, info
+
+    def set_noise_rng(self, rng: np.random.Generator) -> None:
+        """Draw the wheel noise from ``rng`` instead of the env's own stream (a sweep gives
+        each run its own physics stream, see :func:`learning.streams.streams`)."""
+        self._noise_rng = rng
+        if self._batch is None:
+            self._batch = RouteBatch(self.scenario, 1, self.config, trajectories=True,
+                                     fidelity=self.fidelity)
+            self.world = RobotView(self._batch, 0)
+        self._batch.set_noise_rng(0, rng)
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array" or self.world is None or self._trail is None:

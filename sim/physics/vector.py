@@ -37,6 +37,7 @@ from sim.grid_env import start_state_from_options
 from sim.physics import kernel as K
 from sim.physics.batch import RouteBatch
 from sim.physics.envs import DIFFDRIVE_CONFIG, DiffDriveEnv, _scenario
+from sim.physics.fidelity import Fidelity, parse_fidelity
 from sim.physics.static import PhysicsConfig
 from sim.physics.world import SharedSpace
 from sim.scenario import Scenario
@@ -56,7 +57,8 @@ class PhysicsRouteVectorEnv(VectorEnv):
     def __init__(self, num_envs: int = 1, scenario: str | Scenario = "paper-50",
                  config: PhysicsConfig | None = None, max_episode_steps: int | None = 600,
                  autoreset_options: dict[str, Any] | None = None,
-                 render_mode: str | None = None) -> None:
+                 render_mode: str | None = None,
+                 fidelity: Fidelity | str | None = None) -> None:
         if render_mode is not None:
             raise ValueError("PhysicsRouteVectorEnv does not render; use the single env")
         if not (isinstance(num_envs, int) and num_envs >= 1):
@@ -68,7 +70,9 @@ class PhysicsRouteVectorEnv(VectorEnv):
         self.config.validate()
         self.max_episode_steps = max_episode_steps
         self.autoreset_options = autoreset_options
-        self.batch = RouteBatch(self.scenario, num_envs, self.config)
+        self.fidelity = (fidelity if isinstance(fidelity, Fidelity)
+                         else parse_fidelity(fidelity, "fidelity"))
+        self.batch = RouteBatch(self.scenario, num_envs, self.config, fidelity=self.fidelity)
         self.single_observation_space = spaces.Discrete(self.model.n_states)
         self.single_action_space = spaces.Discrete(4)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
@@ -104,8 +108,10 @@ class PhysicsRouteVectorEnv(VectorEnv):
         opts = dict(options or {})
         mask = np.asarray(opts.pop("reset_mask", np.ones(self.num_envs, bool)), dtype=bool)
         for i in np.flatnonzero(mask):
-            if seeds[i] is not None:
-                self._rngs[i] = seeding.np_random(seeds[i])[0]
+            if seeds[i] is not None or self.batch._noise_rngs[i] is None:
+                if seeds[i] is not None:
+                    self._rngs[i] = seeding.np_random(seeds[i])[0]
+                self.batch.set_noise_rng(int(i), self._rngs[i])  # as the single env does
             self._reset_one(int(i), opts or None)
         return self._obs.copy(), self._infos(mask, None)
 

@@ -15,7 +15,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from scenarios.cli import bench, catalog, compare, route, train, view
+from scenarios.cli import aliasing, bench, catalog, compare, route, train, view
 from scenarios.cli.args import add_fidelity_arg, add_record_args, add_scenario_args
 from scenarios.runs.backends import SweepError
 from sim.errors import InputError
@@ -85,6 +85,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="record the first N seeds of each method in full, the others as "
                         "curves only (default 1)")
     p.set_defaults(func=compare.cmd_compare)
+
+    p = sub.add_parser("aliasing", help="next-cell distribution of every (cell, action) at a "
+                                        "physics fidelity: JSON, heat map, recording")
+    add_scenario_args(p)
+    add_fidelity_arg(p)
+    p.add_argument("--repeats", type=int, default=20, help="drives per (cell, action) (20)")
+    p.add_argument("--seed", type=int, default=0, help="noise and start-pose seed (0)")
+    p.add_argument("--out", required=True, metavar="DIR")
+    p.set_defaults(func=aliasing.cmd_aliasing)
 
     p = sub.add_parser("view", help="open a .rrd recording in the Rerun viewer")
     p.add_argument("file", metavar="FILE.rrd")

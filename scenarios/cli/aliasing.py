@@ -1,0 +1,21 @@
+"""``rnhql aliasing``: the next-cell distribution of every (cell, action) at a fidelity."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from scenarios.cli.args import check_output_file, scenario_key
+
+
+def cmd_aliasing(args: argparse.Namespace) -> int:
+    from scenarios.experiments.aliasing import run
+
+    name, start, goal = scenario_key(args)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        check_output_file(out / "aliasing.json", "--out")
+    run(argparse.Namespace(scenario=name, start=start, goal=goal, fidelity=args.fidelity or
+                           "exact", repeats=args.repeats, seed=args.seed, rewards=args.rewards,
+                           out=out))
+    return 0

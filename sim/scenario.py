@@ -132,6 +132,7 @@ class Scenario:
     robot: Robot = field(default_factory=Robot)
     rewards: Rewards = field(default_factory=Rewards)
     steps_per_episode: int = 600  # episode length limit [steps]
+    physics: str | None = None  # [physics] table as a --fidelity text (None: exact)
     description: str = ""
     source: str = "<python>"  # where it was loaded from, for error messages
 

@@ -106,6 +106,20 @@ def _rewards_from_table(tbl: _Table, source: str) -> Rewards:
     return replace(base, **{k: v for k, v in values.items() if v is not None}).named()
 
 
+def _physics_from_table(table: dict | None, source: str) -> str | None:
+    """``[physics]``: ``fidelity = "noisy"`` and/or knobs, as a ``--fidelity`` text (checked
+    now, so a bad value names this file); None when absent."""
+    if table is None:
+        return None
+    from sim.physics.fidelity import fidelity_from_table
+
+    fidelity_from_table(table, source)  # validate
+    items = dict(table)
+    head = [str(items.pop("fidelity"))] if "fidelity" in items else []
+    return ",".join(head + [f"{k}={str(v).lower() if isinstance(v, bool) else v}"
+                            for k, v in items.items()])
+
+
 def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenario:
     """Build and validate a Scenario from parsed TOML (see scenarios/builtin/paper-50.toml)."""
     top = _Table(data, "", source)
@@ -135,6 +149,7 @@ def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenari
 
     robot = _dataclass_from_table(Robot, top.table("robot"))
     rewards = _rewards_from_table(top.table("rewards"), source)
+    physics = _physics_from_table(top.get("physics", dict, None), source)
 
     obs = top.table("obstacles")
     circles: list[Circle] = []
@@ -161,7 +176,7 @@ def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenari
 
     sc = Scenario(name=name, width_m=width, height_m=height, start=start, goal=goal,
                   cell_size_m=cell_size, obstacles=tuple(circles), blocked_cells=blocked_cells,
-                  robot=robot, rewards=rewards, steps_per_episode=steps,
+                  robot=robot, rewards=rewards, steps_per_episode=steps, physics=physics,
                   description=description, source=source)
     if rnd is not None:
         rt = _Table(rnd, "obstacles.random", source)

@@ -96,3 +96,23 @@ def test_batched_noisy_runs_equal_single_runs(method):
         assert rec["fidelity"] == "noisy" and "fid=noisy" in rec["key"]
         assert {k: v for k, v in rec.items() if k not in wall} == \
             {k: v for k, v in one.items() if k not in wall}
+
+
+def test_a_scenario_physics_table_sets_the_fidelity(tmp_path):
+    from scenarios.runs.spec import scenario_digest
+
+    base = ('name = "t"\nstart = [1, 1]\ngoal = [8, 8]\n[arena]\nwidth_m = 10.0\n'
+            'height_m = 10.0\n')
+    plain, noisy, bad = tmp_path / "plain.toml", tmp_path / "noisy.toml", tmp_path / "bad.toml"
+    plain.write_text(base)
+    noisy.write_text(base + '[physics]\nfidelity = "noisy"\nwheel_noise = 0.02\n')
+    bad.write_text(base + "[physics]\nwheel_noise = 7\n")
+    sc = resolve_scenario(str(noisy))
+    assert parse_fidelity(sc.physics).wheel_noise == 0.02
+    assert RunSpec(str(noisy), "st-ql", 0, 5, world="physics").fidelity_spec.carried_pose
+    assert RunSpec(str(plain), "st-ql", 0, 5, world="physics").fidelity_spec.is_exact
+    assert RunSpec(str(noisy), "st-ql", 0, 5, world="physics",
+                   fidelity="exact").fidelity_spec.is_exact  # --fidelity wins
+    assert scenario_digest(str(plain)) != scenario_digest(str(noisy))
+    with pytest.raises(ScenarioError, match=r"bad\.toml.*wheel_noise"):
+        resolve_scenario(str(bad))

@@ -78,9 +78,11 @@ class RunSpec:
 
     @property
     def fidelity_spec(self):  # -> sim.physics.fidelity.Fidelity
+        """--fidelity, else the scenario's ``[physics]`` table, else exact."""
         from sim.physics.fidelity import parse_fidelity
 
-        return parse_fidelity(self.fidelity)
+        text = self.fidelity if self.fidelity is not None else load(*self.problem)[0].physics
+        return parse_fidelity(text)
 
 
 @lru_cache(maxsize=8)
@@ -103,7 +105,8 @@ def scenario_digest(scenario: str, start: Cell | None = None, goal: Cell | None 
 
     sc, _ = load(scenario, start, goal, rewards)
     fields = {k: v for k, v in dataclasses.asdict(sc).items()
-              if k not in ("name", "source", "description")}
+              if k not in ("name", "source", "description")
+              and not (k == "physics" and v is None)}  # (digests from before [physics] hold)
     blob = json.dumps(fields, sort_keys=True, default=repr).encode()
     return hashlib.sha256(blob).hexdigest()[:12]
 

@@ -131,7 +131,8 @@ class PhysicsRouteEnv(gym.Env):
                  fidelity: Fidelity | str | None = None) -> None:
         self.scenario = _scenario(scenario)
         self.fidelity = (fidelity if isinstance(fidelity, Fidelity)
-                         else parse_fidelity(fidelity, "fidelity"))
+                         else parse_fidelity(fidelity if fidelity is not None
+                                             else self.scenario.physics, "fidelity"))
         self._noise_rng: np.random.Generator | None = None
         self.model = build_model(self.scenario)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:

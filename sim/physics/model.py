@@ -49,7 +49,7 @@ def cache_dir() -> Path:
 def digest(sc: Scenario, config: PhysicsConfig) -> str:
     """What the graph depends on: the scenario's content, the physics config, pymunk."""
     fields = {k: v for k, v in dataclasses.asdict(sc).items()
-              if k not in ("name", "source", "description", "rewards")}
+              if k not in ("name", "source", "description", "rewards", "physics")}
     blob = json.dumps([FORMAT, pymunk.version, fields, dataclasses.asdict(config)],
                       sort_keys=True, default=repr)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]

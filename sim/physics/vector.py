@@ -71,7 +71,8 @@ class PhysicsRouteVectorEnv(VectorEnv):
         self.max_episode_steps = max_episode_steps
         self.autoreset_options = autoreset_options
         self.fidelity = (fidelity if isinstance(fidelity, Fidelity)
-                         else parse_fidelity(fidelity, "fidelity"))
+                         else parse_fidelity(fidelity if fidelity is not None
+                                             else self.scenario.physics, "fidelity"))
         self.batch = RouteBatch(self.scenario, num_envs, self.config, fidelity=self.fidelity)
         self.single_observation_space = spaces.Discrete(self.model.n_states)
         self.single_action_space = spaces.Discrete(4)

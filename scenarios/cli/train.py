@@ -65,7 +65,9 @@ def cmd_train(args: argparse.Namespace) -> int:
                           values_every=positive(args.record_values_every,
                                                  "--record-values-every"))
         recorder = Recorder.create(record, sc, model, method=args.method, config=cfg,
-                                   seed=args.seed, world=args.world)
+                                   seed=args.seed, world=args.world,
+                                   fidelity=(spec.fidelity_spec.label
+                                             if args.world == "physics" else None))
         observer = GridRecorder(recorder, plan)
     try:
         if args.world == "grid":

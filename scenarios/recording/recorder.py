@@ -105,7 +105,7 @@ class Recorder:
                application_id: str = "rnhql", recording_name: str | None = None,
                prefix: str = "", file: RecordingFile | None = None,
                recording_id: str | None = None, blueprint: bool | str = True,
-               with_scene: bool = True,
+               with_scene: bool = True, fidelity: str | None = None,
                flush_rows: int = 20_000, flush_interval_s: float = 5.0) -> Recorder:
         """Open (or join ``file``) and log metadata, the static scene and the blueprint.
 
@@ -118,7 +118,8 @@ class Recorder:
         if file is None:
             if path is None:
                 raise ValueError("give a path or a shared RecordingFile")
-            name = recording_name or f"{scenario.name} · {method} · s{seed} · {world}"
+            shown = world if fidelity is None else f"{world} ({fidelity})"
+            name = recording_name or f"{scenario.name} · {method} · s{seed} · {shown}"
             file = RecordingFile(path, application_id=application_id,
                                  recording_id=recording_id, recording_name=name)
         rec = cls(file, prefix, scenario, model, world=world, owns_file=owns,
@@ -128,6 +129,8 @@ class Recorder:
             config = dataclasses.asdict(config)
         meta = scene.run_metadata(scenario, model, method=method, config=config, seed=seed,
                                   world=world)
+        if fidelity is not None:
+            meta["fidelity"] = fidelity
         st.log(rec._p("meta"), rr.TextDocument(scene.meta_markdown(meta, scenario, rec.prefix),
                                                 media_type="text/markdown"), static=True)
         props = {k: (v if isinstance(v, int | float | str) else json.dumps(v, default=str))

@@ -222,7 +222,9 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
                          seed=spec.seed, world=spec.world, prefix=spec.record_prefix,
                          recording_id=spec.recording_id,
                          blueprint=not spec.record_prefix,
-                         with_scene=spec.record_detail) as rec:
+                         with_scene=spec.record_detail,
+                         fidelity=(spec.fidelity_spec.label if spec.world == "physics"
+                                   else None)) as rec:
         result = _train(spec, sc, model, cfg, rec, plan)
         if spec.record_detail:
             rec.log_route("final route", result.final_route)

@@ -168,14 +168,17 @@ def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str
 
     with RecordingFile(out / "aliasing.rrd",
                        recording_name=f"aliasing {sc.name} {result['fidelity']}") as rec:
-        img = np.nan_to_num(np.flipud(grid), nan=-1.0)
-        scaled = np.clip(255 * (img + 1.0) / (max(1.0, float(img.max())) + 1.0), 0, 255)
-        rec.stream.log("aliasing/entropy_map", rr.Image(scaled.astype(np.uint8)))
+        vmax = max(1.0, float(np.nanmax(grid)) if np.isfinite(grid).any() else 1.0)
+        rgba = cmap(np.ma.masked_invalid(np.flipud(grid)) / vmax)  # the PNG's colours
+        rec.stream.log("aliasing/entropy_map",
+                       rr.Image((255 * rgba[..., :3]).astype(np.uint8)))
         rec.stream.log("aliasing/summary", rr.TextDocument(
             f"fidelity {result['fidelity']}: multi_outcome_fraction "
             f"{result['multi_outcome_fraction']:.4f}, mean entropy "
             f"{result['mean_entropy_bits']:.4f} bits, mean bump probability "
-            f"{result['mean_bump_probability']:.4f} ({result['repeats']} drives per pair)"))
+            f"{result['mean_bump_probability']:.4f} ({result['repeats']} drives per pair). "
+            "Map: each cell's largest next-cell entropy over its 4 actions, 0 (black) to "
+            f"{vmax:g} bits (yellow); grey: blocked or not reaching G."))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -128,10 +128,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--episodes", type=int, default=3000)
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     p.add_argument("--out", default="results/continuous-vs-grid")
+    p.add_argument("--fidelity", default=None,
+                   help="physics fidelity: exact (default), noisy, or knobs")
     args = p.parse_args(argv)
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     specs = make_specs(args.scenario, methods, list(range(args.seeds)), args.episodes,
-                       ["grid", "physics"], drive_final=True)
+                       ["grid", "physics"], drive_final=True, fidelity=args.fidelity)
     out = Path(args.out)
     results = run_sweep(specs, out, run_local, jobs=args.jobs, progress=Progress(len(specs)))
     text = (f"# {results['scenario']['name']}: continuous vs gridded\n\n"
@@ -139,7 +141,10 @@ def main(argv: list[str] | None = None) -> int:
             f"{args.scenario} --methods "
             f"{args.methods} --seeds {args.seeds} --episodes {args.episodes}`\n\n"
             f"Optima: grid BFS {results['optimal_route_length']} moves; physics BFS (over the "
-            f"cell-to-cell moves the real disc drives) {_physics_optimum(results)} moves. "
+            f"cell-to-cell moves the real disc drives) {_physics_optimum(results)} moves; "
+            f"continuous (the disc's any-angle path, Theta* with exact line of sight: an "
+            f"upper bound) {_continuous_optimum(results)} m. Physics fidelity: "
+            f"`{results.get('fidelity') or 'exact'}`. "
             "Medians over seeds. Grid runs are graded against the grid optimum, physics runs "
             "against the physics optimum (greedy tests on the physics world's own model); "
             "`driven` columns drive the final greedy policy from S in physics (— when it never "
@@ -149,6 +154,12 @@ def main(argv: list[str] | None = None) -> int:
     overlay(results, args.scenario, overlay_method(results, methods), out / "overlay.png")
     print(text)
     return 0
+
+
+def _continuous_optimum(results: dict) -> str:
+    vals = [r.get("continuous_optimal_route_m") for r in results["runs"]
+            if r.get("continuous_optimal_route_m") is not None]
+    return f"{vals[0]:.2f}" if vals else "—"
 
 
 if __name__ == "__main__":

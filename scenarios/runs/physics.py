@@ -63,6 +63,14 @@ class ContactCounter(gym.Wrapper):
         self._c, self._t, self._active = 0, 0.0, False
 
 
+def continuous_optimum_rounded(sc: Scenario) -> float | None:
+    """The disc's any-angle S-G path length [m] (:mod:`sim.physics.optimum`), for records."""
+    from sim.physics.optimum import continuous_optimum_m
+
+    v = continuous_optimum_m(sc)
+    return None if v is None else round(v, 4)
+
+
 @dataclass
 class DrivenRoute:
     """A greedy policy driven from S in physics."""
@@ -250,6 +258,7 @@ def _train(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
            for k in ("steps", "returns", "success", "shaping_mean", "shaping_std")}
     extras = {"grid_optimal_route_length": model.optimal_route_length,
               "physics_optimal_route_length": graded.optimal_route_length,
+              "continuous_optimal_route_m": continuous_optimum_rounded(sc),
               "contacts_per_episode": counter.contacts[-n_episodes:],
               "sim_time_per_episode_s": np.round(counter.sim_time_s[-n_episodes:], 4).tolist(),
               **driven.extras()}

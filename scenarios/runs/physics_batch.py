@@ -28,7 +28,7 @@ from learning.batch_agent import BatchAgent
 from learning.generator_handle import handles
 from learning.geometry import geometry_of
 from learning.train import greedy_test, shortest_fraction
-from scenarios.runs.physics import PhysicsTrainResult, drive_greedy
+from scenarios.runs.physics import PhysicsTrainResult, continuous_optimum_rounded, drive_greedy
 from sim.grid import TabularModel
 from sim.physics.batch import RouteBatch
 from sim.scenario import Scenario
@@ -216,6 +216,7 @@ def _result(ag: BatchAgent, k: int, i: int, logs: _Logs, sc: Scenario, model: Ta
     driven = drive_greedy(agent, sc, fidelity=fidelity)
     extras = {"grid_optimal_route_length": model.optimal_route_length,
               "physics_optimal_route_length": graded.optimal_route_length,
+              "continuous_optimal_route_m": continuous_optimum_rounded(sc),
               "contacts_per_episode": logs.contacts[i].tolist(),
               "sim_time_per_episode_s": np.round(logs.sim_time[i], 4).tolist(),
               **driven.extras()}

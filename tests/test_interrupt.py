@@ -213,3 +213,18 @@ def test_ctrl_c_while_the_command_starts_is_one_line(tmp_path):
         code, _, err = interrupt(proc)
         assert code == 130, err
         assert "Traceback" not in err and "Exception ignored" not in err, err
+
+
+def test_ctrl_c_after_the_summary_still_leaves_a_whole_recording(tmp_path):
+    sweep = ["compare", "paper-40", "--methods", "st-ql,haql", "--seeds", "2", "--episodes",
+             "300", "--jobs", "1"]
+    for delay in (0.0, 0.8):  # while figures are drawn, while the recording is merged
+        out, rec = tmp_path / f"o{delay}", tmp_path / f"c{delay}.rrd"
+        proc = start([*sweep, "--out", str(out), "--record", str(rec)], tmp_path)
+        assert wait_for(lambda out=out: (out / "summary.md").exists(), 120)
+        time.sleep(delay)
+        code, _, err = interrupt(proc)
+        assert code in (0, 130), err
+        assert "Traceback" not in err
+        assert rec.exists() and verify_recording(rec)[0]
+        assert rec.stat().st_size > 100_000  # the runs are in it, not only a header

@@ -4,7 +4,9 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 from scenarios.cli.args import (
@@ -62,7 +64,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if record is not None:
         from scenarios.experiments.compare import gather_parts
 
-        gather_parts(specs, record, records=results["runs"])
+        with _finishing(record):  # every run is done: the recording must hold them all
+            gather_parts(specs, record, records=results["runs"])
         print(f"recording: {record}  (open: rnhql view {record})")
     print((Path(args.out) / "summary.md").read_text())
     print(f"wrote {args.out}/results.json, summary.md and figures")
@@ -108,6 +111,34 @@ def _backend(args: argparse.Namespace):
         return run_ray, {"address": args.address, "num_cpus": args.jobs}
     raise InputError("command line", "--backend", f"unknown backend {args.backend!r}",
                      "use local or ray")
+
+
+@contextlib.contextmanager
+def _finishing(record: str) -> Iterator[None]:
+    """While the finished runs are merged into the recording (seconds), a first Ctrl-C only
+    says so; a second one abandons the recording (its partial file removed) with 130."""
+    import signal
+    import sys
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pressed = [False]
+
+    def on_sigint(_sig: int, _frame: object) -> None:
+        if pressed[0]:
+            Path(record + ".part").unlink(missing_ok=True)
+            os._exit(130)
+        pressed[0] = True
+        print("\nrnhql: all runs are finished; writing the recording (a few seconds). Ctrl-C "
+              "again abandons it", file=sys.stderr)
+
+    old = signal.signal(signal.SIGINT, on_sigint)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def _interrupted(specs: list, args: argparse.Namespace, record: str | None) -> None:

@@ -62,3 +62,36 @@ def test_a_full_disk_is_one_line_and_leaves_nothing_half_written(full_disk, tmp_
     assert str(full_disk) in errors[0]  # names the file, not a temp file
     assert _leftovers(full_disk) == []
     assert not (full_disk / "run.rrd").exists() and not (full_disk / "a.npz").exists()
+
+
+@pytest.fixture
+def read_only(tmp_path):
+    mnt = Path("/tmp") / f"rnhql-ro-{uuid.uuid4().hex[:8]}"
+    mnt.mkdir()
+    if shutil.which("mount") is None or subprocess.run(
+            ["mount", "-t", "tmpfs", "-o", "size=1m,ro", "tmpfs", str(mnt)],
+            capture_output=True).returncode != 0:
+        mnt.rmdir()
+        pytest.skip("cannot mount a read-only tmpfs here (needs root): read-only paths untested")
+    try:
+        yield mnt
+    finally:
+        subprocess.run(["umount", str(mnt)], capture_output=True)
+        mnt.rmdir()
+
+
+@pytest.mark.parametrize("args", [
+    ["train", "paper-40", "--method", "st-ql", "--episodes", "5", "--json", "{mnt}/r.json"],
+    ["train", "paper-40", "--method", "st-ql", "--episodes", "5", "--save", "{mnt}/a.npz"],
+    ["compare", "paper-40", "--methods", "st-ql", "--seeds", "1", "--episodes", "5",
+     "--out", "{mnt}/out"],
+    ["train", "paper-40", "--method", "st-ql", "--episodes", "5", "--record"],  # cwd: {mnt}
+])
+def test_a_read_only_file_system_is_one_line_before_any_work(read_only, args):
+    cwd = read_only if args[-1] == "--record" else read_only.parent
+    got = _run([a.replace("{mnt}", str(read_only)) for a in args], cwd)
+    assert got.returncode in (1, 2), got.stderr
+    assert "Traceback" not in got.stderr
+    errors = [line for line in got.stderr.splitlines() if line.startswith("rnhql")]
+    assert len(errors) == 1 and "Fix:" in errors[0], got.stderr
+    assert "env steps" not in got.stdout  # refused before training, not after it

@@ -83,24 +83,29 @@ def scaling(seconds: float = 2.0, sizes: tuple[int, ...] = SIZES) -> dict[str, A
 
 
 def learning(episodes: int = 300, seeds: int = 10, scenario: str = "paper-50",
-             rewards: str = "goal-only", methods: tuple[str, ...] = TEN_METHODS) -> dict:
+             rewards: str = "goal-only", methods: tuple[str, ...] = TEN_METHODS,
+             fidelity: str | None = None) -> dict:
     """One batch of ``len(methods) x seeds`` runs, as a physics compare trains them."""
     from learning.streams import streams
     from scenarios.runs.physics_batch import RunGroup, train_physics_batch
     from scenarios.runs.spec import load, make_config
+    from sim.physics.fidelity import parse_fidelity
 
     sc, model = load(scenario, None, None, rewards)
     groups = []
     for m in methods:
         rs = [streams(s) for s in range(seeds)]
-        groups.append(RunGroup(make_config(m), [r.learner for r in rs], [r.starts for r in rs]))
+        groups.append(RunGroup(make_config(m), [r.learner for r in rs], [r.starts for r in rs],
+                               [r.physics for r in rs]))
     split: dict[str, float] = {}
     t = time.perf_counter()
-    train_physics_batch(sc, model, groups, episodes, 10, split=split)
+    train_physics_batch(sc, model, groups, episodes, 10, split=split,
+                        fidelity=parse_fidelity(fidelity))
     el = time.perf_counter() - t
     prims = split.pop("primitives")
     loop = el - split["final"]
     return {"runs": len(methods) * seeds, "episodes": episodes, "primitives": prims,
+            "fidelity": parse_fidelity(fidelity).label,
             "seconds": el, "primitives_per_s_training": prims / loop,
             "primitives_per_s_with_final_routes": prims / el,
             "split_s": split, "split_fraction_of_training": {

@@ -5,7 +5,7 @@ Two doors onto the same per-family functions of :mod:`learning.steps`:
 * ``act``, ``update``, ``begin_episode``, ``end_episode``, ``exploit_action``
   are compiled functions the step agent (:mod:`learning.agent`) calls from
   Python with the family id ``kind`` as a run-time int (a switch);
-* ``act_k``, ``update_k``, ``begin_k``, ``exploit_k`` are for compiled callers:
+* ``act_k``, ``update_k``, ``begin_k`` are for compiled callers:
   given ``kind`` as a compile-time constant (the kernels' per-family wrappers),
   numba types and inlines only that family's function, so a kernel holds no
   switch and compiles only its own rules (cold compile ~3 s per family instead
@@ -158,10 +158,6 @@ def act_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng):
     raise NotImplementedError("compiled code only; from Python call act()")
 
 
-def exploit_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
-    raise NotImplementedError("compiled code only; from Python call exploit_action()")
-
-
 def update_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
              rng):
     raise NotImplementedError("compiled code only; from Python call update()")
@@ -178,15 +174,6 @@ def _act_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng):
         return None
     return lambda kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng: f(
         ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, rng)
-
-
-@overload(exploit_k, inline="always")
-def _exploit_k(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s):
-    f = _family(kind, _EXPLOIT, S.exploit_q)
-    if f is None:
-        return None
-    return lambda kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s: f(
-        ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s)
 
 
 @overload(update_k, inline="always")

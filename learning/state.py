@@ -48,10 +48,6 @@ class AgentState(NamedTuple):
     ilist: np.ndarray  # int32[:]
 
 
-# Slots a checkpoint must store (learned or mutable); the rest is rebuilt from geometry.
-LEARNED_SLOTS = ("ivar", "fvar", "q", "w", "e", "imap", "fmap", "ilist")
-
-
 def _f(*shape: int) -> np.ndarray:
     return np.zeros(shape, dtype=np.float64)
 

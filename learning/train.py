@@ -33,7 +33,6 @@ KERNEL_OUT = ("steps", "returns", "success", "shaping_mean", "shaping_std")  # r
 _DTYPES = {"steps": np.int32, "success": np.bool_}
 
 
-first_optimal_test = episodes_to_first_optimal  # the older name, kept for callers
 
 
 @dataclass(eq=False)

@@ -273,7 +273,8 @@ def main(argv: list[str] | None = None) -> int:
         got = verdict(summary, maps, ours, ref, 9)
         lines += got if not lines else got[1:]
     if lines:
-        md += "\nTargets (issue 10), computed from the table:\n\n" + "\n".join(lines) + "\n"
+        md += ("\nTargets of the rnh-ql+ study, computed from the table:\n\n"
+               + "\n".join(lines) + "\n")
     md += ("\nCompact (optimal seeds · median episodes to stable optimal, — never):\n\n"
            + compact_table(summary, maps, labels, 9) + "\n")
     atomic_write_text(out / "ablation.md", md)

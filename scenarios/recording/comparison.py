@@ -15,15 +15,12 @@ Each run logs under its own subtree ``runs/<method>/s<seed>`` (:func:`run_prefix
 
 from __future__ import annotations
 
-import contextlib
-import os
-import subprocess
 from collections.abc import Sequence
 from pathlib import Path
 
 import rerun as rr
 
-from scenarios.recording.recorder import RecordingFile, rerun_cli, run_prefix, scene
+from scenarios.recording.recorder import RecordingFile, run_prefix, scene
 from sim.scenario import Scenario
 
 
@@ -39,32 +36,6 @@ def _log_header(stream: rr.RecordingStream, scenario: Scenario, runs: Sequence[t
         log_summary(stream, curves)
     stream.send_blueprint(scene.comparison_blueprint(runs, scenario, run_prefix),
                           make_active=True, make_default=True)
-
-
-def write_comparison_header(path: str | Path, scenario: Scenario,
-                            runs: Sequence[tuple[str, int]], *, recording_id: str,
-                            application_id: str = "rnhql", title: str | None = None,
-                            curves: dict | None = None) -> Path:
-    """A small part holding the comparison's name, description, blueprint and the per-method
-    summary curves (:mod:`scenarios.recording.summary`)."""
-    with RecordingFile(path, application_id=application_id, recording_id=recording_id,
-                       recording_name=title or f"{scenario.name} · compare") as f:
-        _log_header(f.stream, scenario, runs, curves)
-    return Path(path)
-
-
-def gather_recordings(parts: Sequence[str | Path], out: str | Path) -> Path:
-    """Merge part files (same recording id) into one verified ``.rrd`` via ``rerun rrd merge``."""
-    out = Path(out)
-    tmp = out.with_name(out.name + ".part")
-    res = subprocess.run([rerun_cli(), "rrd", "merge", *map(str, parts), "-o", str(tmp)],
-                         capture_output=True, text=True, timeout=600)
-    if res.returncode != 0:
-        with contextlib.suppress(FileNotFoundError):
-            tmp.unlink()
-        raise RuntimeError(f"rerun rrd merge failed: {res.stderr.strip()}")
-    os.replace(tmp, out)
-    return out
 
 
 def gather_comparison(out: str | Path, parts: Sequence[str | Path], scenario: Scenario,

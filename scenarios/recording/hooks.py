@@ -12,7 +12,6 @@ time from ``info`` while a recorded episode runs.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -45,10 +44,6 @@ class RecordPlan:
 
     def wants_values(self, episodes_done: int) -> bool:
         return episodes_done % self.values_every == 0 or episodes_done == self.n_episodes
-
-
-def default_path(scenario: str, method: str, world: str, seed: int) -> Path:
-    return Path("recordings") / f"{scenario}-{method}-{world}-s{seed}.rrd"
 
 
 def log_chunk_metrics(rec: Recorder, first: int, n: int, arrays: dict[str, np.ndarray]) -> None:

@@ -31,7 +31,8 @@ import numpy as np
 import sim.envs  # noqa: F401  (registers the ids)
 from learning.agent import StepAgent, make_agent, run_env_episodes
 from learning.geometry import geometry_of
-from learning.train import first_optimal_test, greedy_test, shortest_fraction
+from learning.metrics import episodes_to_first_optimal
+from learning.train import greedy_test, shortest_fraction
 from sim.grid import TabularModel
 from sim.scenario import Scenario
 
@@ -140,7 +141,7 @@ class PhysicsTrainResult:
 
     @property
     def episodes_to_optimal(self) -> int | None:
-        return first_optimal_test(self.test_episodes, self.test_route_length,
+        return episodes_to_first_optimal(self.test_episodes, self.test_route_length,
                                   self.optimal_length)
 
 

@@ -6,6 +6,7 @@ otherwise), filled so that only a few kilobytes remain.
 
 from __future__ import annotations
 
+import contextlib
 import shutil
 import subprocess
 import sys
@@ -18,22 +19,28 @@ CLI = [sys.executable, "-m", "scenarios.cli"]
 REPO = Path(__file__).resolve().parent.parent
 
 
-@pytest.fixture
-def full_disk(tmp_path):
-    mnt = Path("/tmp") / f"rnhql-full-{uuid.uuid4().hex[:8]}"
+@contextlib.contextmanager
+def _tmpfs(options: str, why: str):
+    mnt = Path("/tmp") / f"rnhql-tmpfs-{uuid.uuid4().hex[:8]}"
     mnt.mkdir()
     if shutil.which("mount") is None or subprocess.run(
-            ["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(mnt)],
+            ["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(mnt)],
             capture_output=True).returncode != 0:
         mnt.rmdir()
-        pytest.skip("cannot mount a small tmpfs here (needs root): full-disk paths untested")
+        pytest.skip(f"cannot mount a small tmpfs here (needs root): {why} untested")
     try:
-        with open(mnt / "filler", "wb") as f:
-            f.write(b"\0" * (2048 - 40) * 1024)
         yield mnt
     finally:
         subprocess.run(["umount", str(mnt)], capture_output=True)
         mnt.rmdir()
+
+
+@pytest.fixture
+def full_disk():
+    with _tmpfs("size=2m", "full-disk paths") as mnt:
+        with open(mnt / "filler", "wb") as f:
+            f.write(b"\0" * (2048 - 40) * 1024)
+        yield mnt
 
 
 def _run(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
@@ -65,19 +72,9 @@ def test_a_full_disk_is_one_line_and_leaves_nothing_half_written(full_disk, tmp_
 
 
 @pytest.fixture
-def read_only(tmp_path):
-    mnt = Path("/tmp") / f"rnhql-ro-{uuid.uuid4().hex[:8]}"
-    mnt.mkdir()
-    if shutil.which("mount") is None or subprocess.run(
-            ["mount", "-t", "tmpfs", "-o", "size=1m,ro", "tmpfs", str(mnt)],
-            capture_output=True).returncode != 0:
-        mnt.rmdir()
-        pytest.skip("cannot mount a read-only tmpfs here (needs root): read-only paths untested")
-    try:
+def read_only():
+    with _tmpfs("size=1m,ro", "read-only paths") as mnt:
         yield mnt
-    finally:
-        subprocess.run(["umount", str(mnt)], capture_output=True)
-        mnt.rmdir()
 
 
 @pytest.mark.parametrize("args", [

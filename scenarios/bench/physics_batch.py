@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import tempfile
 import time
 from pathlib import Path
@@ -25,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from scenarios.bench.physics import _round
 from sim.grid import build_model
 from sim.physics.batch import RouteBatch
 from sim.scenario import Scenario
@@ -138,14 +138,6 @@ def plot(figures: dict[str, Any], path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
-
-
-def _round(x: Any) -> Any:
-    if isinstance(x, float):
-        return float(f"{x:.4g}") if math.isfinite(x) else x
-    if isinstance(x, dict):
-        return {k: _round(v) for k, v in x.items()}
-    return x
 
 
 if __name__ == "__main__":

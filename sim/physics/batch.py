@@ -38,7 +38,6 @@ from sim.physics import sigint
 from sim.physics.controller import CARDINAL_HEADINGS, DriveLimits, ProfileTable
 from sim.physics.fidelity import Fidelity
 from sim.physics.static import (
-    ROBOT_CATEGORY,
     STATIC_CATEGORY,
     CollisionType,
     Contact,
@@ -46,7 +45,7 @@ from sim.physics.static import (
     static_shapes,
 )
 from sim.physics.sweep import static_geometry
-from sim.physics.world import new_space
+from sim.physics.world import new_space, robot_bodies
 from sim.planning import ACTION_DELTAS
 from sim.scenario import Scenario
 
@@ -141,25 +140,7 @@ class RouteBatch:
         sigint.install(RouteBatch._check)
 
     def _add_robot(self, x: float, y: float) -> None:
-        sc, cfg = self.scenario, self.config
-        rb = sc.robot
-        moment = pymunk.moment_for_circle(rb.mass_kg, 0.0, rb.radius_m)
-        body = pymunk.Body(rb.mass_kg, moment)
-        body.position = (x, y)
-        shape = pymunk.Circle(body, rb.radius_m)
-        shape.collision_type = CollisionType.ROBOT
-        shape.friction = cfg.friction
-        shape.elasticity = 0.0
-        shape.filter = pymunk.ShapeFilter(categories=ROBOT_CATEGORY, mask=STATIC_CATEGORY)
-        control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-        control.position = (x, y)
-        pivot = pymunk.PivotJoint(control, body, (0.0, 0.0), (0.0, 0.0))
-        pivot.max_bias = 0.0
-        pivot.max_force = cfg.traction_margin * rb.mass_kg * rb.max_wheel_accel_m_s2
-        gear = pymunk.GearJoint(control, body, 0.0, 1.0)
-        gear.max_bias = 0.0
-        gear.max_force = (cfg.traction_margin * moment * 2.0 * rb.max_wheel_accel_m_s2
-                          / rb.wheel_base_m)
+        body, shape, control, pivot, gear = robot_bodies(self.scenario, self.config, x, y, 0.0)
         self.space.add(body, shape, control, pivot, gear)
         self.bodies.append(body)
         self.shapes.append(shape)

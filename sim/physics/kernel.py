@@ -396,19 +396,21 @@ def begin_all(fs, ist, actions, active, cell_m, nx, ny, deltas, headings):
             begin(fs, ist, i, actions[i], cell_m, nx, ny, deltas, headings)
 
 
+@njit(cache=True, inline="always")
+def _at_rest(fs, ist, i):
+    """The primitive ended in a bump: robot and control body at rest."""
+    for k in (VX, VY, W, CVX, CVY, CW):
+        fs[i, k] = 0.0
+    ist[i, BUMPED] = 1
+    ist[i, STATUS] = DONE
+
+
 @njit(cache=True)
 def bump_back(fs, ist, i):
     """A contact began: the primitive ends; the robot is placed at rest on its start centre."""
     fs[i, X] = fs[i, SX]
     fs[i, Y] = fs[i, SY]
-    fs[i, VX] = 0.0
-    fs[i, VY] = 0.0
-    fs[i, W] = 0.0
-    fs[i, CVX] = 0.0
-    fs[i, CVY] = 0.0
-    fs[i, CW] = 0.0
-    ist[i, BUMPED] = 1
-    ist[i, STATUS] = DONE
+    _at_rest(fs, ist, i)
 
 
 @njit(cache=True)
@@ -417,16 +419,9 @@ def bump_stay(fs, ist, i, revert):
     pushed into what it rested on, where it was before that step), at rest."""
     if revert:
         fs[i, X], fs[i, Y], fs[i, TH] = fs[i, PX], fs[i, PY], fs[i, PTH]
-    fs[i, VX] = 0.0
-    fs[i, VY] = 0.0
-    fs[i, W] = 0.0
-    fs[i, CVX] = 0.0
-    fs[i, CVY] = 0.0
-    fs[i, CW] = 0.0
+    _at_rest(fs, ist, i)
     ist[i, INCONTACT] = 1
     ist[i, FORCED] = 0
-    ist[i, BUMPED] = 1
-    ist[i, STATUS] = DONE
 
 
 @njit(cache=True)

@@ -43,6 +43,18 @@ from sim.physics.world import SharedSpace
 from sim.scenario import Scenario
 
 
+def sub_env_seeds(seed: int | list[int | None] | None, n: int) -> list[int | None]:
+    """Gymnasium's rule: an int seeds sub-env i with seed + i; a list gives one per sub-env."""
+    if seed is None:
+        return [None] * n
+    if isinstance(seed, int):
+        return [seed + i for i in range(n)]
+    seeds = list(seed)
+    if len(seeds) != n:
+        raise ValueError(f"{len(seeds)} seeds for {n} sub-envs")
+    return seeds
+
+
 class PhysicsRouteVectorEnv(VectorEnv):
     """N independent copies of ``PhysicsRoute-v0`` sharing one ``pymunk.Space``.
 
@@ -98,14 +110,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
     def reset(self, *, seed: int | list[int | None] | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         """Reset every sub-env (or those in ``options["reset_mask"]``)."""
-        if seed is None:
-            seeds: list[int | None] = [None] * self.num_envs
-        elif isinstance(seed, int):
-            seeds = [seed + i for i in range(self.num_envs)]
-        else:
-            seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"{len(seeds)} seeds for {self.num_envs} sub-envs")
+        seeds = sub_env_seeds(seed, self.num_envs)
         opts = dict(options or {})
         mask = np.asarray(opts.pop("reset_mask", np.ones(self.num_envs, bool)), dtype=bool)
         for i in np.flatnonzero(mask):
@@ -191,14 +196,7 @@ class DiffDriveVectorEnv(VectorEnv):
 
     def reset(self, *, seed: int | list[int | None] | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
-        if seed is None:
-            seeds: list[int | None] = [None] * self.num_envs
-        elif isinstance(seed, int):
-            seeds = [seed + i for i in range(self.num_envs)]
-        else:
-            seeds = list(seed)
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"{len(seeds)} seeds for {self.num_envs} sub-envs")
+        seeds = sub_env_seeds(seed, self.num_envs)
         opts = dict(options or {})
         mask = np.asarray(opts.pop("reset_mask", np.ones(self.num_envs, bool)), dtype=bool)
         infos = [None] * self.num_envs

@@ -99,26 +99,8 @@ class PhysicsWorld:
 
     def _add_robot(self, x: float, y: float, th: float) -> None:
         """A new robot disc and control body at rest at a pose, joined as in tank.py."""
-        sc, cfg, space = self.scenario, self.config, self.space
-        rb = sc.robot
-        moment = pymunk.moment_for_circle(rb.mass_kg, 0.0, rb.radius_m)
-        robot = pymunk.Body(rb.mass_kg, moment)
-        robot.position, robot.angle = (x, y), th
-        shape = pymunk.Circle(robot, rb.radius_m)
-        shape.collision_type = CollisionType.ROBOT
-        shape.friction = cfg.friction
-        shape.elasticity = 0.0
-        shape.filter = pymunk.ShapeFilter(categories=ROBOT_CATEGORY, mask=STATIC_CATEGORY)
-        control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-        control.position, control.angle = (x, y), th
-        pivot = pymunk.PivotJoint(control, robot, (0.0, 0.0), (0.0, 0.0))
-        pivot.max_bias = 0.0  # match velocities only; positions are the controller's job
-        pivot.max_force = cfg.traction_margin * rb.mass_kg * rb.max_wheel_accel_m_s2
-        gear = pymunk.GearJoint(control, robot, 0.0, 1.0)
-        gear.max_bias = 0.0
-        gear.max_force = (cfg.traction_margin * moment * 2.0 * rb.max_wheel_accel_m_s2
-                          / rb.wheel_base_m)
-        space.add(robot, shape, control, pivot, gear)
+        robot, shape, control, pivot, gear = robot_bodies(self.scenario, self.config, x, y, th)
+        self.space.add(robot, shape, control, pivot, gear)
         if self._shared is not None:
             self._shared.owners[shape] = self
         self.robot, self.robot_shape, self.control = robot, shape, control
@@ -406,6 +388,33 @@ def new_space(cfg: PhysicsConfig) -> pymunk.Space:
     space.collision_slop = cfg.collision_slop_m
     space.collision_bias = cfg.collision_bias
     return space
+
+
+def robot_bodies(sc: Scenario, cfg: PhysicsConfig, x: float, y: float, th: float
+                 ) -> tuple[pymunk.Body, pymunk.Circle, pymunk.Body, pymunk.PivotJoint,
+                            pymunk.GearJoint]:
+    """A robot disc and its control body at rest at a pose, joined as in pymunk's tank.py:
+    (body, shape, control body, pivot joint, gear joint), not yet in a Space. The shape is
+    filtered to touch static geometry only (robots in one Space never touch)."""
+    rb = sc.robot
+    moment = pymunk.moment_for_circle(rb.mass_kg, 0.0, rb.radius_m)
+    robot = pymunk.Body(rb.mass_kg, moment)
+    robot.position, robot.angle = (x, y), th
+    shape = pymunk.Circle(robot, rb.radius_m)
+    shape.collision_type = CollisionType.ROBOT
+    shape.friction = cfg.friction
+    shape.elasticity = 0.0
+    shape.filter = pymunk.ShapeFilter(categories=ROBOT_CATEGORY, mask=STATIC_CATEGORY)
+    control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+    control.position, control.angle = (x, y), th
+    pivot = pymunk.PivotJoint(control, robot, (0.0, 0.0), (0.0, 0.0))
+    pivot.max_bias = 0.0  # match velocities only; positions are the controller's job
+    pivot.max_force = cfg.traction_margin * rb.mass_kg * rb.max_wheel_accel_m_s2
+    gear = pymunk.GearJoint(control, robot, 0.0, 1.0)
+    gear.max_bias = 0.0
+    gear.max_force = (cfg.traction_margin * moment * 2.0 * rb.max_wheel_accel_m_s2
+                      / rb.wheel_base_m)
+    return robot, shape, control, pivot, gear
 
 
 def sweep_alpha(space: pymunk.Space, query_filter: pymunk.ShapeFilter, radius_m: float,

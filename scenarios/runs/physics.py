@@ -179,7 +179,8 @@ class _StopAtStep(gym.Wrapper):
 
 
 @contextlib.contextmanager
-def _sigint_to(stopper: _StopAtStep) -> Iterator[None]:
+def sigint_to(stopper: Any) -> Iterator[None]:
+    """SIGINT goes to ``stopper.request`` while the block runs (main thread only)."""
     if threading.current_thread() is not threading.main_thread() or \
             signal.getsignal(signal.SIGINT) is signal.SIG_IGN:  # e.g. a pool worker
         yield
@@ -211,7 +212,7 @@ def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
     counter = ContactCounter(inner)
     env = EpisodeTap(counter)
     stopper = _StopAtStep(env)
-    with _sigint_to(stopper):
+    with sigint_to(stopper):
         return _train(cfg, sc, model, n_episodes, rng, test_every, recorder, plan, start_rng,
                       counter, env, stopper, fidelity)
 

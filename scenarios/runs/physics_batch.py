@@ -15,8 +15,6 @@ Only the wall time differs: a batched step's time is shared among the runs it ad
 
 from __future__ import annotations
 
-import signal
-import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -28,7 +26,12 @@ from learning.batch_agent import BatchAgent
 from learning.generator_handle import handles
 from learning.geometry import geometry_of
 from learning.train import greedy_test, shortest_fraction
-from scenarios.runs.physics import PhysicsTrainResult, continuous_optimum_rounded, drive_greedy
+from scenarios.runs.physics import (
+    PhysicsTrainResult,
+    continuous_optimum_rounded,
+    drive_greedy,
+    sigint_to,
+)
 from sim.grid import TabularModel
 from sim.physics.batch import RouteBatch
 from sim.scenario import Scenario
@@ -46,26 +49,16 @@ class RunGroup:
 
 class _Stop:
     """Ctrl-C sets a flag; the loop raises KeyboardInterrupt between batched steps (a signal
-    inside a compiled call or a Chipmunk query is never acted on there)."""
+    inside a compiled call or a Chipmunk query is never acted on there). Installed by the
+    single driver's :func:`scenarios.runs.physics.sigint_to`."""
 
     def __init__(self) -> None:
         self.requested = False
-        self._old: Any = None
 
-    def _request(self, _sig: int, _frame: Any) -> None:
+    def request(self, _sig: int, _frame: Any) -> None:
         if self.requested:
             raise KeyboardInterrupt  # a second Ctrl-C: now
         self.requested = True
-
-    def __enter__(self) -> _Stop:
-        if threading.current_thread() is threading.main_thread() and \
-                signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
-            self._old = signal.signal(signal.SIGINT, self._request)
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
 
 
 class _Logs:
@@ -139,7 +132,8 @@ def train_physics_batch(sc: Scenario, model: TabularModel, groups: Sequence[RunG
     clock = time.perf_counter
     t_learn = t_world = t_ep = 0.0
     t_start = clock()
-    with _Stop() as stop:
+    stop = _Stop()
+    with sigint_to(stop):
         start_episodes(active)
         while active.any():
             t0 = clock()

@@ -1,0 +1,55 @@
+"""The fixed sweep whose records must not change when code moves (behaviour unchanged).
+
+Every method, grid and physics (exact fidelity), 2 seeds, 100 episodes on
+``paper-40`` with goal-only rewards. Each run's ``results.json`` record, minus
+its wall-clock fields, is hashed; ``tests/data/golden_sweep.json`` holds the
+hashes of the code the figures in the README were measured with.
+
+Regenerate only when a change is *meant* to alter results (and say so in the
+commit): ``python -m tests.golden_sweep --write``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+GOLDEN = Path(__file__).parent / "data" / "golden_sweep.json"
+SEEDS = (0, 1)
+EPISODES = 100
+WALL_KEYS = ("wall_time_s", "wall_time_per_episode_s")
+
+
+def sweep_specs() -> list[Any]:
+    from scenarios.experiments.compare import ALL_METHODS, make_specs
+
+    return make_specs("paper-40", ALL_METHODS, SEEDS, EPISODES, ("grid", "physics"),
+                      rewards="goal-only")
+
+
+def record_digest(rec: dict[str, Any]) -> str:
+    """sha256 of the record's canonical JSON without wall-clock fields."""
+    kept = {k: v for k, v in rec.items() if k not in WALL_KEYS}
+    return hashlib.sha256(json.dumps(kept, sort_keys=True).encode()).hexdigest()
+
+
+def sweep_digests(jobs: int = 1) -> dict[str, str]:
+    from scenarios.runs.backends import run_local
+
+    specs = sweep_specs()
+    recs = run_local(specs, jobs=jobs)
+    return {rec["key"]: record_digest(rec) for rec in recs}
+
+
+if __name__ == "__main__":
+    digests = sweep_digests(jobs=2)
+    if "--write" in sys.argv:
+        GOLDEN.write_text(json.dumps(digests, indent=1, sort_keys=True) + "\n")
+        print(f"wrote {len(digests)} digests to {GOLDEN}")
+    else:
+        old = json.loads(GOLDEN.read_text())
+        bad = sorted(k for k in old if digests.get(k) != old[k])
+        print("unchanged" if not bad else "changed:\n  " + "\n  ".join(bad))

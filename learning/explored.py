@@ -8,13 +8,22 @@ as "heuristics from exploration" do (Bianchi, Ribeiro & Costa 2008): the agent
 knows the arena's cells (its :class:`learning.geometry.Geometry`) but not the
 obstacles, assumes every move it has not seen fail is free (the free-space
 assumption of D* Lite), and takes the move that starts a shortest route to G in
-that optimistic map. Each bump it observes for the first time (the move left it
-in its state) marks that move blocked and re-derives pi_H for every state by
-one BFS from G: O(states) per *new* blocked move, nothing otherwise. The route
+that optimistic map. When a move becomes blocked (below) pi_H is re-derived for
+every state by one BFS from G: O(states) per change, nothing otherwise. The route
 the agent follows therefore changes as it learns where the walls are.
 
+A move is blocked while bumps are its most likely outcome: more bumps than
+arrivals at its neighbour have been seen (the most-likely-outcome
+determinization of a stochastic move, as FF-Replan's). With wheel noise and
+carried pose (the physics world's ``noisy`` fidelity) a free move can fail now
+and then, and a move past an obstacle's edge can get through now and then: one
+unlucky bump does not wall off a route, one lucky pass does not open a wall. In
+a deterministic world a move's outcome never changes, and this is the original
+rule (blocked from its first bump, re-derived once per new blocked move).
+
 Layout (HAQL's slots of :class:`learning.state.AgentState`):
-``imap[s, 0]`` pi_H(s); ``imap[s, 1 + a]`` 1 when move a from s is known to fail;
+``imap[s, 0]`` pi_H(s); ``imap[s, 1 + a]`` bumps minus arrivals seen for move a
+from s (blocked when > 0);
 ``imap[s, 5 + a]`` the neighbour state of move a (-1 outside the arena);
 ``ilist[:nS]`` BFS distances, ``ilist[nS:2nS]`` the BFS queue, ``ilist[2nS]`` G.
 """
@@ -27,6 +36,7 @@ from numba import njit
 from learning.geometry import Geometry
 
 COL_PI, COL_BLOCKED, COL_NEXT = 0, 1, 5
+COUNT_CAP = 1 << 30  # bumps minus arrivals saturate here (int32)
 
 
 def init_explored(geom: Geometry, explored: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -72,7 +82,7 @@ def rederive(imap, ilist):
             u = imap[v, COL_NEXT + a]  # u is v's neighbour; u reaches v by the opposite move
             if u >= 0 and ilist[u] < 0:
                 back = 1 if a == 0 else (0 if a == 1 else (3 if a == 2 else 2))
-                if imap[u, COL_BLOCKED + back] == 0:
+                if imap[u, COL_BLOCKED + back] <= 0:
                     ilist[u] = ilist[v] + 1
                     ilist[tail] = u
                     tail += 1
@@ -80,7 +90,7 @@ def rederive(imap, ilist):
         best, best_d = 0, -1
         for a in range(4):
             t = imap[s, COL_NEXT + a]
-            if t < 0 or imap[s, COL_BLOCKED + a] != 0 or ilist[t] < 0:
+            if t < 0 or imap[s, COL_BLOCKED + a] > 0 or ilist[t] < 0:
                 continue
             if best_d < 0 or ilist[t] < best_d:
                 best, best_d = a, ilist[t]
@@ -89,7 +99,20 @@ def rederive(imap, ilist):
 
 @njit(cache=True, inline="always")
 def observe(imap, ilist, s, a, s2, terminated, explored):
-    """After a move: a first bump (stayed in s) marks the move blocked and re-derives pi_H."""
-    if explored and s2 == s and not terminated and imap[s, COL_BLOCKED + a] == 0:
-        imap[s, COL_BLOCKED + a] = 1
+    """After a move: count a bump (stayed in s) up and a move that reached its neighbour
+    down; when the count's sign flips (the move's most likely outcome changed), re-derive
+    pi_H. (A move that drifted into another cell tells nothing about this one.)"""
+    if not explored:
+        return
+    col = COL_BLOCKED + a
+    was = imap[s, col] > 0
+    if s2 == imap[s, COL_NEXT + a]:
+        if imap[s, col] > -COUNT_CAP:  # int32: a long run must not wrap round
+            imap[s, col] -= 1
+    elif s2 == s and not terminated:
+        if imap[s, col] < COUNT_CAP:
+            imap[s, col] += 1
+    else:
+        return
+    if (imap[s, col] > 0) != was:
         rederive(imap, ilist)

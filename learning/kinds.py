@@ -57,4 +57,5 @@ F_FMEAN, F_FSTD = 5, 6  # shaping mean and std of the last finished episode
 F_STEP_V = 7  # RNHQL: V_NN step size, beta / mean |phi|^2
 F_RGOAL = 8  # RNHQLP: reward seen on entering G (0: not seen yet)
 F_RFREE = 9  # RNHQLP: reward seen on the last free move
-N_FVAR = 10
+F_RFAIL = 10  # DYNA, RNHQLP: reward seen on the last failed move (the model's failure outcome)
+N_FVAR = 11

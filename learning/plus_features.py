@@ -101,7 +101,7 @@ def init_plus(cfg, geom: Geometry) -> dict[str, np.ndarray]:
     imap = np.full((n_s, 3 * n_a + m), -1, dtype=np.int32)
     imap[:, n_a:2 * n_a] = 0
     imap[:, 2 * n_a:2 * n_a + m] = cids
-    ilist = np.zeros(2 * n_s * n_a + n_c + n_s * n_a + 3 * n_s, dtype=np.int32)
+    ilist = np.zeros(2 * n_s * n_a + n_c + 3 * n_s * n_a + 3 * n_s, dtype=np.int32)
     a0 = 2 * n_s * n_a
     ilist[a0:a0 + n_c] = -1
     # the arena's neighbour table (the agent knows the cells, not the obstacles)

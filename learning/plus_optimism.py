@@ -19,12 +19,13 @@ exponential itself) and the untried actions are valued by one step of look-ahead
 on the potential (``lookahead = 1``): Wiewiora's look-ahead advice, with the
 arena's neighbour as the assumed successor. The BFS is re-run only when a move
 is newly known to fail and :func:`distances_change` says some distance moves (or,
-in a physics world, when a move known to fail works after all): O(states) then.
+in a noisy physics world, when a move known to fail works after all): O(states) then.
 
 Slots (appended to :mod:`learning.rules_plus`'s ``ilist``, K centres, nS
 states, nA actions): ``[2 nS nA + K, + nS nA)`` the arena neighbour of each
 move (-1 off the arena), then ``nS`` BFS distances (-1: no route), then an
-``nS`` BFS queue; ``fmap[2 nS]`` is a scratch row for the action values. ``e``
+``nS`` BFS queue, then the move model's ``2 nS nA`` outcome counts; ``fmap[2 nS]``
+is a scratch row for the action values. ``e``
 (after the K traces and nS cached potentials of the rows) holds y of every state and,
 last, the two rewards it was computed with (the first -1 after a new BFS: stale).
 """
@@ -34,6 +35,7 @@ from __future__ import annotations
 from numba import njit
 
 from learning import kinds as K
+from learning.move_model import never_worked
 
 INLINE = dict(cache=True, inline="always")
 
@@ -45,15 +47,24 @@ def neighbour_base(n_s, n_a, n_c):
 
 
 @njit(**INLINE)
+def counts_base(n_s, n_a, n_c):
+    """Offset of the move model's outcome counts in ilist (after the BFS queue;
+    :mod:`learning.move_model`)."""
+    return neighbour_base(n_s, n_a, n_c) + n_s * n_a + 2 * n_s
+
+
+@njit(**INLINE)
 def back_move(a):
     """The move that undoes a (actions: up, down, left, right)."""
     return 1 if a == 0 else (0 if a == 1 else (3 if a == 2 else 2))
 
 
 @njit(**INLINE)
-def known_to_fail(imap, n_a, s, a):
-    """The move s -a-> was seen to leave the agent put (a wall, not G)."""
-    return imap[s, a] == s and imap[s, n_a + a] == 0
+def known_to_fail(imap, ilist, n_s, n_a, n_c, s, a):
+    """The move s -a-> was tried and never seen to reach its neighbour (a wall): the move
+    model (:mod:`learning.move_model`) counts the times it did, so under noise a move that
+    works sometimes is free, and a wall stays a wall."""
+    return never_worked(imap, ilist, counts_base(n_s, n_a, n_c), n_a, s, a)
 
 
 @njit(cache=True)
@@ -75,7 +86,7 @@ def optimistic_bfs(imap, ilist, n_s, n_a, n_c, goal):
             if u < 0 or ilist[d0 + u] >= 0:
                 continue
             b = back_move(a)
-            if known_to_fail(imap, n_a, u, b):
+            if known_to_fail(imap, ilist, n_s, n_a, n_c, u, b):
                 continue
             ilist[d0 + u] = ilist[d0 + v] + 1
             ilist[q0 + tail] = u
@@ -99,7 +110,8 @@ def distances_change(imap, ilist, n_s, n_a, n_c, s, a):
         if b == a:
             continue
         v = ilist[nb0 + s * n_a + b]
-        if v >= 0 and ilist[d0 + v] == ds - 1 and not known_to_fail(imap, n_a, s, b):
+        if v >= 0 and ilist[d0 + v] == ds - 1 and not known_to_fail(imap, ilist, n_s, n_a,
+                                                                     n_c, s, b):
             return False
     return True
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 from numba import njit
 
 from learning import kinds as K
+from learning.move_model import observe_outcome, replay_fails
 
 
 @njit(cache=True, inline="always")
@@ -195,28 +196,34 @@ def q_lambda(q, e, tl, ivar, s, a, r, s2, terminated, alpha, gamma, lam, trace_m
 
 # ---------------------------------------------------------------- Dyna-Q
 @njit(cache=True)
-def dyna_q(q, imap, fmap, seen, ivar, s, a, r, s2, terminated, alpha, gamma, n_plan, rng):
+def dyna_q(q, imap, fmap, ilist, ivar, fvar, s, a, r, s2, terminated, alpha, gamma, n_plan,
+           rng):
     """Q-learning, then record (s,a) -> (r, s', terminated) in the model, then ``n_plan``
-    Q updates on pairs drawn with ``draw_below(rng, n_seen)`` (Sutton & Barto 8.2).
+    Q updates on pairs drawn with ``draw_below(rng, n_seen)`` (Sutton & Barto 8.2), each
+    replaying an outcome drawn from the model (:mod:`learning.move_model`).
 
     Model: ``imap[s, a]`` = s' (-1 unseen), ``imap[s, nA + a]`` = terminated,
-    ``fmap[s, a]`` = r; ``seen[:n_seen]`` lists the seen flat pairs.
+    ``fmap[s, a]`` = r; ``ilist[:n_seen]`` lists the seen flat pairs, ``ilist[nS nA:]``
+    the outcome counts.
     """
     q_learning(q, s, a, r, s2, terminated, alpha, gamma, 0.0)
     n_a = q.shape[1]
+    c0 = q.shape[0] * n_a
     if imap[s, a] < 0:
-        seen[ivar[K.I_NSEEN]] = s * n_a + a
+        ilist[ivar[K.I_NSEEN]] = s * n_a + a
         ivar[K.I_NSEEN] += 1
-    imap[s, a] = s2
-    imap[s, n_a + a] = 1 if terminated else 0
-    fmap[s, a] = r
+    observe_outcome(imap, fmap, ilist, c0, fvar, n_a, s, a, r, s2, terminated,
+                    s2 != s or terminated)
     n_seen = ivar[K.I_NSEEN]
     for _ in range(n_plan):
-        j = seen[draw_below(rng, n_seen)]
+        j = ilist[draw_below(rng, n_seen)]
         ps = j // n_a
         pa = j % n_a
-        q_learning(q, ps, pa, fmap[ps, pa], imap[ps, pa], imap[ps, n_a + pa] != 0,
-                   alpha, gamma, 0.0)
+        if replay_fails(ilist, c0, n_a, ps, pa, rng):
+            q_learning(q, ps, pa, fvar[K.F_RFAIL], ps, False, alpha, gamma, 0.0)
+        else:
+            q_learning(q, ps, pa, fmap[ps, pa], imap[ps, pa], imap[ps, n_a + pa] != 0,
+                       alpha, gamma, 0.0)
 
 
 # ---------------------------------------------------------------- HAQL

@@ -26,8 +26,9 @@ the Q update with F = gamma * Phi(s') - Phi(s), Phi(goal) = 0. What changes
 * ``rebase``: when Phi(s) changes, row s's tried actions are shifted so Q + Phi
   is unchanged (off by default: when the optimistic model learns of a wall,
   Phi falls and so should the values learned through it);
-* a learned deterministic model drives ``n_planning`` shaped Q updates per
-  step (Dyna), and ``lam_q`` adds Watkins Q(lambda) traces to the real step.
+* a learned model (:mod:`learning.move_model`: a move's successor and how often
+  it failed) drives ``n_planning`` shaped Q updates per step (Dyna), and
+  ``lam_q`` adds Watkins Q(lambda) traces to the real step.
 
 State layout (:class:`learning.state.AgentState` slots), nS states, nA actions,
 K centres, M feature slots per state:
@@ -42,9 +43,9 @@ feat        [nS, 2M]: effective feature values [:, :M], Gaussian values [:, M:]
 imap        [nS, 3nA + M]: model s' [:, :nA] (-1 unseen), terminated [:, nA:2nA],
             feature centre ids [:, 2nA:2nA+M], seen predecessors [:, 2nA+M:] (-1)
 fmap        [2nS + 1, nA]: model reward [:nS], Q(lambda) traces [nS:2nS], scratch row
-ilist       [2nS*nA + K + nS*nA + 3nS]: seen pairs, Q-trace list, centre anchors (-1 none),
-            arena neighbours, BFS distances, BFS queue (learning.plus_optimism),
-            flood-fill stack
+ilist       [2nS*nA + K + 3nS*nA + 3nS]: seen pairs, Q-trace list, centre anchors (-1 none),
+            arena neighbours, BFS distances, BFS queue (learning.plus_optimism), the
+            move model's outcome counts (learning.move_model), flood-fill stack
 ==========  ==================================================================
 """
 
@@ -56,8 +57,10 @@ import numpy as np
 from numba import njit
 
 from learning import kinds as K
+from learning.move_model import observe_outcome, replay_fails
 from learning.plus_features import leak_free_edge, leak_free_enter
 from learning.plus_optimism import (
+    counts_base,
     distances_change,
     ensure_values,
     goal_reward,
@@ -286,19 +289,19 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
     vt = par[K.PP_VTARGET]
     stale = observe_rewards(fvar, s, r, s2, terminated)
     # model first: a new move may join s' to supports before Phi(s') is read
-    was_fail = known_to_fail(imap, n_a, s, a)
-    now_fail = s2 == s and not terminated
+    c0 = counts_base(n_s, n_a, n_c)
+    was_fail = known_to_fail(imap, ilist, n_s, n_a, n_c, s, a)
     if imap[s, a] < 0:
         ilist[ivar[K.I_NSEEN]] = s * n_a + a
         ivar[K.I_NSEEN] += 1
         if leak_free and s2 != s:
             leak_free_edge(feat, imap, ilist, n_s, n_a, s, s2, normalise)
-    imap[s, a] = s2
-    imap[s, n_a + a] = 1 if terminated else 0
-    fmap[s, a] = r
+    worked = s2 == ilist[neighbour_base(n_s, n_a, n_c) + s * n_a + a]
+    observe_outcome(imap, fmap, ilist, c0, fvar, n_a, s, a, r, s2, terminated, worked)
+    now_fail = known_to_fail(imap, ilist, n_s, n_a, n_c, s, a)
     # the optimistic model changed: a move now known to fail (BFS only if a distance
-    # changes), or one known to fail that worked after all (physics worlds; on the grid a
-    # move's outcome never changes)
+    # changes), or one known to fail that moved after all (noisy physics worlds; on the
+    # grid and at the exact fidelity a move's outcome never changes)
     if vt >= 3.0 and now_fail != was_fail and (was_fail or distances_change(
             imap, ilist, n_s, n_a, n_c, s, a)):
         optimistic_bfs(imap, ilist, n_s, n_a, n_c, ivar[K.I_GOAL])
@@ -367,6 +370,9 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
             pa = j % n_a
         ps2 = imap[ps, pa]
         pterm = imap[ps, n_a + pa] != 0
+        pr = fmap[ps, pa]
+        if replay_fails(ilist, c0, n_a, ps, pa, rng):
+            ps2, pterm, pr = ps, False, fvar[K.F_RFAIL]
         pf = 0.0
         if based:
             p1 = rebase(fvar, par, q, w, e, feat, imap, ilist, ps)
@@ -378,7 +384,7 @@ def update_plus(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, 
         elif shaping:
             p2 = 0.0 if pterm else potential(fvar, par, w, e, feat, imap, ilist, ps2)
             pf = gamma * p2 - potential(fvar, par, w, e, feat, imap, ilist, ps)
-        q_learning(q, ps, pa, fmap[ps, pa], ps2, pterm, alpha, gamma, pf)
+        q_learning(q, ps, pa, pr, ps2, pterm, alpha, gamma, pf)
     fvar[K.F_PHI] = phi_s2
 
 

@@ -15,7 +15,8 @@ imap        --                  --                     HAQL pi_H, bumps [nS, 9];
 fmap        --                  scratch row [1, nA]    Dyna-Q model reward [nS, nA];
                                                        Q(lambda): Q traces [nS, nA]
 ilist       --                  --                     Q(lambda) touched pairs,
-                                                       Dyna-Q seen pairs [nS*nA]
+                                                       Dyna-Q seen pairs [nS*nA] and
+                                                       outcome counts [2nS*nA]
 ==========  ==================  =====================  ============================
 
 ``ivar``/``fvar``/``par`` hold scalars, named in :mod:`learning.kinds`.
@@ -91,7 +92,7 @@ def init_state(cfg: MethodConfig, geom: Geometry, rng: np.random.Generator) -> A
     elif kind == K.DYNA:
         imap = np.full((n_s, 2 * n_a), -1, dtype=np.int32)
         imap[:, n_a:] = 0
-        fmap, ilist = _f(n_s, n_a), _i(n_s * n_a)
+        fmap, ilist = _f(n_s, n_a), _i(3 * n_s * n_a)  # seen pairs, outcome counts
     elif kind == K.RNHQL:
         feat = rbf.rbf_features(geom.coords, geom.bounds_m,
                                 *rbf.lattice_size(geom.bounds_m, cfg.k, cfg.spacing_m))

@@ -149,8 +149,8 @@ def update_qlambda(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s
 
 @njit(**INLINE)
 def update_dyna(ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated, rng):
-    dyna_q(q, imap, fmap, ilist, ivar, s, a, r, s2, terminated, par[K.P_ALPHA], par[K.P_GAMMA],
-           int(par[K.P_NPLAN]), rng)
+    dyna_q(q, imap, fmap, ilist, ivar, fvar, s, a, r, s2, terminated, par[K.P_ALPHA],
+           par[K.P_GAMMA], int(par[K.P_NPLAN]), rng)
 
 
 @njit(**INLINE)

@@ -6,6 +6,7 @@ The built-in scenarios are data shipped in ``scenarios/builtin``, found by path.
 
 from __future__ import annotations
 
+import os
 import tomllib
 from dataclasses import replace
 from pathlib import Path
@@ -256,8 +257,28 @@ def builtin_dir() -> Path:
     return Path(__file__).resolve().parent.parent / "scenarios" / "builtin"
 
 
+SCENARIO_PATH_ENV = "RNHQL_SCENARIO_PATH"
+
+
+def scenario_dirs() -> list[Path]:
+    """Where a scenario name is looked up, in order: the folders of ``$RNHQL_SCENARIO_PATH``
+    (separated by ``os.pathsep``; a user's own ``NAME.toml`` files), then the built-ins."""
+    extra = [Path(p).expanduser() for p in os.environ.get(SCENARIO_PATH_ENV, "").split(os.pathsep)
+             if p.strip()]
+    return [*extra, builtin_dir()]
+
+
 def builtin_names() -> list[str]:
-    return sorted(p.stem for p in builtin_dir().glob("*.toml"))
+    """Every scenario that can be named: the built-ins and those of ``$RNHQL_SCENARIO_PATH``."""
+    return sorted({p.stem for d in scenario_dirs() for p in d.glob("*.toml")})
+
+
+def named_scenario_path(name: str) -> Path | None:
+    for d in scenario_dirs():
+        path = d / f"{name}.toml"
+        if path.is_file():
+            return path
+    return None
 
 
 def resolve_scenario(spec: str, start: Cell | None = None, goal: Cell | None = None) -> Scenario:
@@ -272,8 +293,9 @@ def resolve_scenario(spec: str, start: Cell | None = None, goal: Cell | None = N
                             "set start and goal inside the scenario TOML instead")
     if spec.endswith(".toml") or "/" in spec:
         return load_scenario(spec)
-    path = builtin_dir() / f"{spec}.toml"
-    if not path.is_file():
-        raise ScenarioError(spec, "scenario", "is not a built-in scenario, .toml or .map",
-                            f"use one of: {', '.join(builtin_names())}")
+    path = named_scenario_path(spec)
+    if path is None:
+        raise ScenarioError(spec, "scenario", "is not a named scenario, .toml or .map",
+                            f"use one of: {', '.join(builtin_names())} (`rnhql scenarios` "
+                            f"lists them; ${SCENARIO_PATH_ENV} adds folders of your own)")
     return load_scenario(path)

@@ -223,6 +223,35 @@ def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True,
     return entries
 
 
+def shipped_suite_tomls() -> dict[str, tuple[str, np.ndarray | None]]:
+    """The suite's maps as named scenarios, as shipped in ``scenarios/builtin`` (so
+    ``rnhql train maze-1`` works): name -> (TOML text, generated map or None for a
+    Moving AI map already shipped). The scenario's own rewards are the built-ins'
+    default (pick a scheme with ``--rewards``); map paths are relative to the TOML."""
+    out: dict[str, tuple[str, np.ndarray | None]] = {}
+
+    def toml(name: str, desc: str, free: np.ndarray) -> str:
+        s, g, d = far_pair(free)
+        h = free.shape[0]
+        steps = max(600, 4 * int(d))
+        return (f"# {desc}; written by scenarios.experiments.suite.shipped_suite_tomls.\n"
+                f"# Cells in rnhql's frame (y up): S is Moving AI {s[::-1]}, G {g[::-1]}.\n"
+                f'name = "{name}"\ndescription = "{desc}, start and goal far apart"\n'
+                f"start = [{s[1]}, {h - 1 - s[0]}]\ngoal = [{g[1]}, {h - 1 - g[0]}]\n"
+                f"steps_per_episode = {steps}\n\n[arena]\n"
+                f'map = "maps/{name}.map"\ncell_size_m = 1.0\n')
+
+    for seed in (*TUNE_SEEDS, *HELD_OUT_SEEDS):
+        for prefix, gen in (("maze", maze), ("rooms", rooms)):
+            free = gen(seed)
+            out[f"{prefix}-{seed}"] = (toml(f"{prefix}-{seed}",
+                                            f"generated {prefix} map, seed {seed}", free), free)
+    for name in MOVINGAI:
+        out[name] = (toml(name, f"Moving AI map '{name}'", read_map(MAPS_DIR / f"{name}.map")),
+                     None)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="results/suite", help="directory for maps and TOMLs")

@@ -17,11 +17,10 @@ import numpy as np
 from matplotlib.patches import Circle as CirclePatch
 
 from scenarios.figures.save import save_figure
+from scenarios.palette import method_colour_mpl
 from sim.grid import TabularModel
 from sim.planning import bfs_route
 from sim.scenario import Scenario
-
-COLOURS = plt.get_cmap("tab10").colors
 
 
 def _smooth(y: np.ndarray, window: int) -> np.ndarray:
@@ -58,12 +57,12 @@ def curve_figure(results: dict[str, Any], key: str, ylabel: str, path: Path,
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
     n_episodes = len(results["runs"][0]["steps_per_episode"])
     window = min(window, n_episodes)
-    for i, ((method, world), runs) in enumerate(_groups(results).items()):
+    for (method, world), runs in _groups(results).items():
         y = np.array([_series(r, key, window) for r in runs])
         x = np.arange(y.shape[1]) + (window // 2 if y.shape[1] < n_episodes else 0)
         q25, med, q75 = np.percentile(y, [25, 50, 75], axis=0)
         label = method if len({w for _, w in _groups(results)}) == 1 else f"{method} ({world})"
-        colour = COLOURS[i % len(COLOURS)]
+        colour = method_colour_mpl(method)
         ax.plot(x, med, color=colour, lw=1.4, label=label,
                 ls="-" if world == "grid" else "--")
         ax.fill_between(x, q25, q75, color=colour, alpha=0.15, lw=0)
@@ -118,10 +117,12 @@ def routes_figure(results: dict[str, Any], sc: Scenario, model: TabularModel,
         run = min(runs, key=lambda r: r["seed"])
         route = model.coords[np.asarray(run["final_route"], dtype=int)]
         length = run["final_route_length"]
-        ax.plot(route[:, 0], route[:, 1], color="#d9342b", lw=1.6,
+        ax.plot(route[:, 0], route[:, 1], color=method_colour_mpl(method), lw=1.6,
                 label=f"greedy route ({'G not reached' if length < 0 else length})")
         ax.set_title(f"{method} ({world}), seed {run['seed']}", fontsize=9)
-        ax.legend(fontsize=7, loc="lower right")
+        # below the map, never over its obstacles
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.01), ncol=2,
+                  frameon=False)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
     fig.tight_layout()

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 import subprocess
-import zlib
 from collections.abc import Sequence
 from datetime import UTC, datetime
 from importlib import metadata
@@ -22,6 +21,7 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
+from scenarios.palette import method_colour  # noqa: F401  (one colour per method, PNGs too)
 from sim.grid import TabularModel
 from sim.planning import bfs_route
 from sim.scenario import Scenario
@@ -44,21 +44,6 @@ CONTACT = (255, 0, 160)
 POLICY_OK = (20, 140, 60)  # greedy action follows a shortest route
 POLICY_BAD = (220, 40, 40)
 ROUTE_PALETTE = ((0, 160, 160), (200, 40, 140), (90, 90, 90), (120, 80, 20))
-METHOD_PALETTE = ((228, 26, 28), (55, 126, 184), (77, 175, 74), (152, 78, 163),
-                  (255, 127, 0), (166, 86, 40), (247, 129, 191), (60, 60, 60),
-                  (23, 190, 207), (188, 189, 34))
-
-KNOWN_METHODS = ("rnh-ql", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt", "q-lambda",
-                 "dyna-q")
-
-
-def method_colour(method: str) -> tuple[int, int, int]:
-    """A colour per method, the same in every process (no salted hash)."""
-    i = (KNOWN_METHODS.index(method) if method in KNOWN_METHODS
-         else zlib.crc32(method.encode()) % len(METHOD_PALETTE))
-    return METHOD_PALETTE[i]
-
-
 # ---- draw order (higher is on top)
 Z_HEAT, Z_OCC, Z_GRID, Z_VISITED, Z_ROUTE, Z_TRAJ = -30.0, -20.0, -15.0, -10.0, 5.0, 10.0
 Z_OBST, Z_SG, Z_POLICY, Z_CONTACT, Z_ROBOT, Z_HEADING = 20.0, 25.0, 28.0, 30.0, 40.0, 45.0

@@ -49,7 +49,7 @@ def add_scenario_args(p: argparse.ArgumentParser, positional: bool = True) -> No
 
 def add_fidelity_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fidelity", default=None, metavar="NAME|KEY=VALUE,...",
-                   help="physics fidelity: exact (default), noisy, or e.g. "
+                   help="physics fidelity: exact (default), noisy, rough, or e.g. "
                         "noisy,wheel_noise=0.1 (physics runs only)")
 
 

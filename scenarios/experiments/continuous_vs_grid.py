@@ -1,14 +1,15 @@
-"""The same methods and seeds in the grid and in physics, side by side.
+"""Continuous vs gridded along the fidelity ladder: where the grid abstraction holds.
 
-    python -m scenarios.experiments.continuous_vs_grid paper-50 --methods rnh-ql,st-ql --seeds 3 \\
-        --episodes 3000 --out results/cvg
+    python -m scenarios.experiments.continuous_vs_grid --out results/continuous-vs-grid
 
-Writes the usual ``results.json`` / ``summary.md`` / figures of a two-world
-comparison, plus ``continuous_vs_grid.md`` (one row per method and world:
-success, episodes to optimal, final route in cells and in metres driven,
-contacts per episode, sim time to goal, wall time) and ``overlay.png`` (the
-grid route and the physics trajectory on the map). Grid runs also *drive*
-their final greedy policy in physics, so both worlds have driven figures.
+Maps (default: paper-50 open, arena rooms, maze-1 maze) x rungs (exact, noisy,
+rough) x methods x 10 seeds. At each rung every method is trained in the grid
+(its final greedy policy then *driven* at the rung: transfer) and in physics at
+the rung. Each (map, rung) is one ordinary comparison in ``OUT/MAP/RUNG/``
+(``results.json``, ``summary.md``, figures, ``overlay.png``); ``OUT/ladder.md``
+is the one table (reached G, optimal routes, driven metres against the best
+method and against the disc's continuous optimum, sim time, contacts, aliasing)
+and ``OUT/ladder.png`` the one figure.
 """
 
 from __future__ import annotations
@@ -21,53 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from scenarios.experiments.compare import make_specs, run_sweep
+from scenarios.experiments.compare import run_sweep
 from scenarios.figures.save import save_figure
 from scenarios.runs.backends import Progress, run_local
 from scenarios.runs.results import atomic_write_text
 from scenarios.runs.spec import load
-
-
-def _median(values: list[float | None], digits: int = 1, missing: str = "never") -> str:
-    """Median by the one definition of :func:`scenarios.runs.results.quantile` (None sorts
-    last, as never / not reached)."""
-    from scenarios.runs.results import quantile
-
-    if not values:
-        return "—"
-    v = quantile(values, 0.5)
-    return missing if not np.isfinite(v) else f"{v:.{digits}f}"
-
-
-def table(results: dict[str, Any]) -> str:
-    rows = ["| method | world | seeds | optimum graded against | success rate | stable optimal "
-            "after | final route (cells) | driven (m) | contacts on final drive | sim time to G "
-            "(s) | contacts per training episode | wall time (s) |",
-            "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
-    for r in results["runs"]:
-        groups.setdefault((r["method"], r["world"]), []).append(r)
-    for (method, world), runs in groups.items():
-        reached = [r for r in runs if r.get("physics_route_length", -1) >= 0]
-        contacts = ("—" if world == "grid" else
-                    f"{np.mean([np.mean(r['contacts_per_episode']) for r in runs]):.2f}")
-        rows.append(
-            f"| {method} | {world} | {len(runs)} | "
-            f"{'physics' if world == 'physics' else 'grid'} "
-            f"{runs[0].get('optimal_route_length', results['optimal_route_length'])} | "
-            f"{_median([r['success_rate'] for r in runs], 3)} | "
-            f"{_median([r['episodes_to_stable_optimal'] for r in runs], 0)} | "
-            f"{_median([r['final_route_length'] if r['final_route_length'] >= 0 else None for r in runs], missing='no G')} | "  # noqa: E501
-            f"{_median([r['physics_route_metres'] for r in reached])} | "
-            f"{_median([r['physics_route_contacts'] for r in runs])} | "
-            f"{_median([r['physics_route_sim_time_s'] for r in reached])} | {contacts} | "
-            f"{_median([r['wall_time_s'] for r in runs], 2)} |")
-    return "\n".join(rows)
-
-
-def _physics_optimum(results: dict[str, Any]) -> str:
-    vals = {r.get("physics_optimal_route_length") for r in results["runs"]} - {None}
-    return "/".join(str(v) for v in sorted(vals)) if vals else "not computed"
 
 
 def overlay_method(results: dict[str, Any], methods: list[str]) -> str:
@@ -120,46 +79,210 @@ def overlay(results: dict[str, Any], scenario: str, method: str, path: Path) -> 
     plt.close(fig)
 
 
+STUDY_MAPS = ("paper-50", "arena", "maze-1")  # open, rooms, maze
+STUDY_METHODS = ("rnh-ql+", "haql", "dyna-q", "rnh-ql")
+STUDY_RUNGS = ("exact", "noisy", "rough")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("scenario", nargs="?", default="paper-50")
-    p.add_argument("--methods", default="rnh-ql,st-ql")
-    p.add_argument("--seeds", type=int, default=3)
-    p.add_argument("--episodes", type=int, default=3000)
-    p.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
-    p.add_argument("--out", default="results/continuous-vs-grid")
-    p.add_argument("--fidelity", default=None,
-                   help="physics fidelity: exact (default), noisy, or knobs")
+    p = argparse.ArgumentParser(
+        description="Methods x fidelity rungs x seeds on several maps, trained in the grid "
+                    "(and driven at every rung: transfer) and in physics at each rung; one "
+                    "table (ladder.md) and one figure (ladder.png). With --maps of one map and "
+                    "--rungs of one rung it is the old two-world comparison of that map.",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--maps", default=",".join(STUDY_MAPS),
+                   help="scenarios (named, or .toml paths), comma-separated")
+    p.add_argument("--methods", default=",".join(STUDY_METHODS), help="comma-separated")
+    p.add_argument("--rungs", default=",".join(STUDY_RUNGS),
+                   help="physics fidelities, comma-separated (presets; knobs need their own "
+                        "run of `rnhql compare --fidelity`)")
+    p.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per method and rung")
+    p.add_argument("--episodes", type=int, default=1000, help="training episodes per run")
+    p.add_argument("--rewards", default="goal-only", help="reward scheme")
+    p.add_argument("--repeats", type=int, default=10,
+                   help="drives per (cell, action) for the aliasing column")
+    p.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="worker processes")
+    p.add_argument("--resume", action="store_true", help="keep the runs of an earlier call")
+    p.add_argument("--out", default="results/continuous-vs-grid", help="output folder")
     args = p.parse_args(argv)
-    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
-    specs = make_specs(args.scenario, methods, list(range(args.seeds)), args.episodes,
-                       ["grid", "physics"], drive_final=True, fidelity=args.fidelity)
+    split = [m.strip() for m in args.methods.split(",") if m.strip()]
+    maps = [m.strip() for m in args.maps.split(",") if m.strip()]
+    rungs = [r.strip() for r in args.rungs.split(",") if r.strip()]
     out = Path(args.out)
-    results = run_sweep(specs, out, run_local, jobs=args.jobs, progress=Progress(len(specs)))
-    text = (f"# {results['scenario']['name']}: continuous vs gridded\n\n"
-            "Command: `python -m scenarios.experiments.continuous_vs_grid "
-            f"{args.scenario} --methods "
-            f"{args.methods} --seeds {args.seeds} --episodes {args.episodes}`\n\n"
-            f"Optima: grid BFS {results['optimal_route_length']} moves; physics BFS (over the "
-            f"cell-to-cell moves the real disc drives) {_physics_optimum(results)} moves; "
-            f"continuous (the disc's any-angle path, Theta* with exact line of sight: an "
-            f"upper bound) {_continuous_optimum(results)} m. Physics fidelity: "
-            f"`{results.get('fidelity') or 'exact'}`. "
-            "Medians over seeds. Grid runs are graded against the grid optimum, physics runs "
-            "against the physics optimum (greedy tests on the physics world's own model); "
-            "`driven` columns drive the final greedy policy from S in physics (— when it never "
-            "reached G).\n\n"
-            + table(results) + "\n")
-    atomic_write_text(out / "continuous_vs_grid.md", text)
-    overlay(results, args.scenario, overlay_method(results, methods), out / "overlay.png")
+    cells: list[dict[str, Any]] = []
+    for name in maps:
+        sc, model = load(name, rewards=args.rewards)
+        for rung in rungs:
+            specs = [spec for world in ("grid", "physics")
+                     for spec in _rung_specs(name, split, args, world, rung)]
+            sub = out / _slug(name) / rung
+            print(f"{name} at {rung}: {len(specs)} runs -> {sub}", flush=True)
+            results = run_sweep(specs, sub, run_local, resume=args.resume, jobs=args.jobs,
+                                progress=Progress(len(specs)))
+            cells.append(dict(map=name, rung=rung, results=results,
+                              aliasing=_aliasing(sc, model, rung, args.repeats)))
+            overlay(results, name, overlay_method(results, split), sub / "overlay.png")
+    text = ladder_report(cells, args)
+    atomic_write_text(out / "ladder.md", text)
+    ladder_figure(cells, split, out / "ladder.png")
     print(text)
     return 0
 
 
-def _continuous_optimum(results: dict) -> str:
-    vals = [r.get("continuous_optimal_route_m") for r in results["runs"]
-            if r.get("continuous_optimal_route_m") is not None]
-    return f"{vals[0]:.2f}" if vals else "—"
+def _slug(name: str) -> str:
+    return Path(name).stem if name.endswith(".toml") else name
+
+
+def _rung_specs(name: str, methods: list[str], args: argparse.Namespace, world: str,
+                rung: str) -> list[Any]:
+    """Grid runs drive their final greedy policy at the rung (transfer); physics runs
+    train and drive there."""
+    from scenarios.runs.spec import RunSpec
+
+    return [RunSpec(scenario=name, method=m, seed=s, episodes=args.episodes, world=world,
+                    rewards=args.rewards, drive_final=world == "grid",
+                    fidelity=None if rung == "exact" else rung)
+            for m in methods for s in range(args.seeds)]
+
+
+def _aliasing(sc: Any, model: Any, rung: str, repeats: int) -> dict[str, float]:
+    from scenarios.experiments.aliasing import measure_aliasing
+    from sim.physics.fidelity import parse_fidelity
+
+    r = measure_aliasing(sc, model, parse_fidelity(rung), repeats=repeats)
+    return {"multi_outcome_fraction": r["multi_outcome_fraction"],
+            "mean_entropy_bits": r["mean_entropy_bits"]}
+
+
+def _q(values: list[float], digits: int = 1) -> str:
+    """median [q25, q75] of the values (— if none)."""
+    from scenarios.runs.results import quantile
+
+    if not values:
+        return "—"
+    m, lo, hi = (quantile(values, q) for q in (0.5, 0.25, 0.75))
+    return f"{m:.{digits}f} [{lo:.{digits}f}, {hi:.{digits}f}]"
+
+
+def ladder_rows(cells: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One row per map x rung x method x where it was trained (grid / the rung itself)."""
+    from sim.physics.optimum import continuous_optimum_m
+
+    rows = []
+    optima: dict[str, float | None] = {}
+    for cell in cells:
+        res = cell["results"]
+        if cell["map"] not in optima:
+            sc, _ = load(cell["map"])
+            optima[cell["map"]] = continuous_optimum_m(sc)
+        cont = optima[cell["map"]]
+        groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+        for r in res["runs"]:
+            groups.setdefault((r["method"], r["world"]), []).append(r)
+        for (method, world), runs in groups.items():
+            reached = [r for r in runs if r.get("physics_route_length", -1) >= 0]
+            metres = [r["physics_route_metres"] for r in reached]
+            rows.append(dict(
+                map=cell["map"], rung=cell["rung"], method=method,
+                trained="grid" if world == "grid" else cell["rung"], seeds=len(runs),
+                reached=len(reached), metres=metres,
+                ratio=[m / cont for m in metres] if cont else [],
+                grid_optimal=sum(r["final_route_optimal"] for r in runs),
+                sim_time=[r["physics_route_sim_time_s"] for r in reached],
+                contacts=[r["physics_route_contacts"] for r in runs],
+                train_contacts=[float(np.mean(r["contacts_per_episode"])) for r in runs
+                                if r.get("contacts_per_episode")],
+                grid_opt=res["optimal_route_length"], cont=cont,
+                aliasing=cell["aliasing"]["multi_outcome_fraction"]))
+    return rows
+
+
+def ladder_report(cells: list[dict[str, Any]], args: argparse.Namespace) -> str:
+    rows = ladder_rows(cells)
+    best: dict[tuple[str, str], float] = {}
+    for r in rows:
+        if r["metres"]:
+            k = (r["map"], r["rung"])
+            best[k] = min(best.get(k, np.inf), float(np.median(r["metres"])))
+    lines = [
+        "# Continuous vs gridded, along the fidelity ladder", "",
+        f"Command: `python -m scenarios.experiments.continuous_vs_grid --maps {args.maps} "
+        f"--methods {args.methods} --rungs {args.rungs} --seeds {args.seeds} "
+        f"--episodes {args.episodes} --rewards {args.rewards}`", "",
+        "Each row: a method trained in the grid (its final greedy policy then *driven* at "
+        "the rung: transfer) or in physics at the rung (trained and driven there). "
+        "*reached G*: seeds whose driven route from S reaches G; *optimal (graded)*: seeds "
+        "whose final greedy route is optimal on the world's exact cell model (grid runs: the "
+        "grid's; physics runs: the physics world's); *driven*: route length in metres, median "
+        "[q25, q75] over the seeds that reached G; *vs best*: that median over the best median "
+        "of any row at this map and rung; */ continuous*: over the disc's any-angle optimum "
+        "(Theta*, an upper bound on the true shortest path); *aliasing*: share of (cell, "
+        f"action) pairs with more than one next cell ({args.repeats} drives each).", "",
+        "| map | rung | aliasing | method | trained in | reached G | optimal (graded) | "
+        "driven (m) | vs best | / continuous | sim time to G (s) | contacts on the drive | "
+        "contacts per training episode |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        med = float(np.median(r["metres"])) if r["metres"] else None
+        vs = f"{med / best[(r['map'], r['rung'])]:.3f}" if med is not None else "—"
+        ratio = f"{np.median(r['ratio']):.3f}" if r["ratio"] else "—"
+        train_c = _q(r["train_contacts"], 2) if r["train_contacts"] else "—"
+        lines.append(
+            f"| {r['map']} | {r['rung']} | {r['aliasing']:.3f} | {r['method']} | "
+            f"{r['trained']} | {r['reached']}/{r['seeds']} | "
+            f"{r['grid_optimal']}/{r['seeds']} | {_q(r['metres'])} | {vs} | {ratio} | "
+            f"{_q(r['sim_time'])} | {_q(r['contacts'], 0)} | {train_c} |")
+    conts = {r["map"]: r["cont"] for r in rows}
+    lines += ["", "Optima per map: " + "; ".join(
+        f"{m}: grid {next(r['grid_opt'] for r in rows if r['map'] == m)} moves, continuous "
+        f"{'—' if c is None else f'{c:.2f} m'}" for m, c in conts.items()) + "."]
+    return "\n".join(lines) + "\n"
+
+
+def ladder_figure(cells: list[dict[str, Any]], methods: list[str], path: Path) -> None:
+    """Per map: seeds reaching G (top) and driven route over the continuous optimum (bottom)
+    against the rung, a line per method and where it was trained (solid: at the rung,
+    dashed: in the grid)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from scenarios.palette import method_colour_mpl
+
+    rows = ladder_rows(cells)
+    maps = list(dict.fromkeys(r["map"] for r in rows))
+    rungs = list(dict.fromkeys(r["rung"] for r in rows))
+    fig, axes = plt.subplots(2, len(maps), figsize=(4.2 * len(maps), 6.4), dpi=110,
+                             squeeze=False, sharex=True)
+    for j, m in enumerate(maps):
+        for method in methods:
+            for physics in (False, True):
+                pts = [(i, r) for i, rung in enumerate(rungs) for r in rows
+                       if r["map"] == m and r["rung"] == rung and r["method"] == method
+                       and (r["trained"] != "grid") == physics]
+                if not pts:
+                    continue
+                x = [i for i, _ in pts]
+                style = dict(color=method_colour_mpl(method), ls="-" if physics else "--",
+                             marker="o" if physics else "s", ms=4, lw=1.3)
+                label = f"{method} ({'physics' if physics else 'grid'}-trained)"
+                axes[0, j].plot(x, [r["reached"] / r["seeds"] for _, r in pts], label=label,
+                                **style)
+                y = [np.median(r["ratio"]) if r["ratio"] else np.nan for _, r in pts]
+                axes[1, j].plot(x, y, **style)
+        axes[0, j].set_title(m, fontsize=10)
+        axes[0, j].set_ylim(-0.05, 1.05)
+        axes[1, j].set_xticks(range(len(rungs)), rungs)
+        axes[1, j].set_xlabel("physics fidelity")
+    axes[0, 0].set_ylabel("share of seeds whose driven route reaches G")
+    axes[1, 0].set_ylabel("driven route / continuous optimum (median)")
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    save_figure(fig, path)
+    plt.close(fig)
 
 
 if __name__ == "__main__":

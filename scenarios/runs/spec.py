@@ -167,7 +167,9 @@ def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dic
         "method_name": type(cfg).name,
         "seed": spec.seed,
         "world": spec.world,
-        "fidelity": spec.fidelity_spec.label if spec.world == "physics" else None,
+        # physics runs: the world trained in; grid runs: the world their policy was driven in
+        "fidelity": (spec.fidelity_spec.label
+                     if spec.world == "physics" or spec.drive_final else None),
         "config": cfg.fields(),
         "optimal_route_length": optimal,
         "episodes_to_stable_optimal": episodes_to_stable_optimal(test_e, test_l, optimal),

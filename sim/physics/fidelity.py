@@ -66,6 +66,9 @@ class Fidelity:
 PRESETS = {
     "exact": Fidelity(),
     "noisy": Fidelity(name="noisy", wheel_noise=0.05, carried_pose=True),
+    # a cheap robot on a poor floor: open-loop PWM motors without encoders, a slippery or
+    # uneven surface (15 % per wheel per control period), bumper stops as at noisy
+    "rough": Fidelity(name="rough", wheel_noise=0.15, carried_pose=True),
 }
 
 

@@ -16,7 +16,7 @@ def test_ladder_study_writes_table_figure_and_one_comparison_per_rung(tmp_path, 
     text = (out / "ladder.md").read_text()
     for rung in ("exact", "noisy"):
         assert f"| paper-40 | {rung} |" in text
-        assert f"| st-ql | grid | " in text and f"| st-ql | {rung} | " in text
+        assert "| st-ql | grid | " in text and f"| st-ql | {rung} | " in text
         data = json.loads((out / "paper-40" / rung / "results.json").read_text())
         assert {r["world"] for r in data["runs"]} == {"grid", "physics"}
         for run in data["runs"]:  # both places of training drive at the rung

@@ -114,6 +114,25 @@ def test_physics_poses_sim_time_and_contacts(tmp_path, paper50, paper50_model):
     assert any("contact at (1.00, 2.00) m, step 1" in t for t in texts)
 
 
+def test_physics_substeps_put_the_continuous_drive_on_sim_time(tmp_path, paper50,
+                                                               paper50_model):
+    """Between the states, every physics step's pose is on `sim_time` (same clock)."""
+    m = paper50_model
+    path = tmp_path / "sub.rrd"
+    states = np.array([m.start, m.next_state[m.start, 3]])
+    poses = np.column_stack([m.coords[states], [0.0, 0.0]])
+    sub = np.column_stack([np.linspace(poses[0, 0], poses[1, 0], 5)[1:],
+                           np.full(4, poses[0, 1]), np.zeros(4)])
+    with Recorder.create(path, paper50, m, method="rnh-ql", config={}, seed=0,
+                         world="physics") as rec:
+        rec.log_episode_trajectory(0, states, poses=poses, sim_time_s=[0.0, 0.4],
+                                   substeps=sub, substep_times_s=[0.1, 0.2, 0.3, 0.4])
+    table = read_table(path, ["/world/robot"], "sim_time")
+    t = np.array(table.column("sim_time").to_pylist(), dtype="timedelta64[ns]")
+    np.testing.assert_allclose(t.astype(np.int64) / 1e9, [0.0, 0.1, 0.2, 0.3, 0.4])
+    np.testing.assert_allclose(positions(table, "/world/robot")[1:, 0], sub[:, 0], atol=1e-5)
+
+
 def test_grid_heading_follows_last_move(paper50_model):
     m = paper50_model
     s0 = m.start

@@ -31,6 +31,8 @@ class EpisodeRecord:
     sim_time: np.ndarray | None  # float64[n] [s] or None
     step0: int  # value of the `step` timeline at states[0]
     sim0: float  # value of `sim_time` at states[0] [s]
+    substeps: tuple[np.ndarray, np.ndarray] | None = None  # physics: (poses [m, m, rad],
+    #                                                      `sim_time` values [s]) of every step
 
 
 @dataclass(frozen=True)
@@ -127,6 +129,15 @@ def _send_group(stream: rr.RecordingStream, prefix: str, model: TabularModel, wo
     stream.send_columns(p(prefix, "world/robot"), indexes=_timecols(tl),
                         columns=[*rr.Points2D.columns(positions=xy),
                                  *rr.Arrows2D.columns(origins=xy, vectors=vec)])
+    subs = [r.substeps for r in rs if r.substeps is not None]
+    if subs:  # the continuous drive between the states, on `sim_time` only
+        sp = np.concatenate([s[0] for s in subs])
+        sxy = sp[:, :2].astype(np.float32)
+        svec = (c * np.stack([np.cos(sp[:, 2]), np.sin(sp[:, 2])], axis=1)).astype(np.float32)
+        stream.send_columns(p(prefix, "world/robot"),
+                            indexes=_timecols({"sim_time": np.concatenate([s[1] for s in subs])}),
+                            columns=[*rr.Points2D.columns(positions=sxy),
+                                     *rr.Arrows2D.columns(origins=sxy, vectors=svec)])
 
     k = f"world/{scene.kind_part(kind)}"
     first = {name: v[starts] for name, v in tl.items()}

@@ -115,6 +115,8 @@ class EpisodeTap(gym.Wrapper):
         self.times: list[float] = []
         self.contacts: list[tuple[float, float]] = []
         self.contact_steps: list[int] = []
+        self.substeps: list[np.ndarray] = []  # every physics step's pose, per primitive
+        self.substep_times: list[np.ndarray] = []
 
     def reset(self, **kwargs: Any):
         obs, info = self.env.reset(**kwargs)
@@ -128,6 +130,11 @@ class EpisodeTap(gym.Wrapper):
     def step(self, action: int):
         obs, r, term, trunc, info = self.env.step(action)
         if self.armed:
+            traj = np.asarray(info["trajectory"], dtype=np.float64).reshape(-1, 3)
+            if len(traj):  # the continuous drive, its times spread over the primitive
+                t0 = self.times[-1] if self.times else 0.0
+                self.substeps.append(traj)
+                self.substep_times.append(np.linspace(t0, info["time_s"], len(traj) + 1)[1:])
             self.states.append(int(obs))
             self.poses.append(info["pose"])
             self.times.append(info["time_s"])
@@ -143,4 +150,6 @@ class EpisodeTap(gym.Wrapper):
             episode, np.asarray(self.states), poses=np.asarray(self.poses),
             contacts=np.asarray(self.contacts).reshape(-1, 2),
             sim_time_s=np.asarray(self.times), kind="train",
-            contact_steps=np.asarray(self.contact_steps, dtype=np.int64))
+            contact_steps=np.asarray(self.contact_steps, dtype=np.int64),
+            substeps=(np.concatenate(self.substeps) if self.substeps else None),
+            substep_times_s=(np.concatenate(self.substep_times) if self.substeps else None))

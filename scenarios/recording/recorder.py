@@ -148,7 +148,8 @@ class Recorder:
             scene.log_series_styles(st, rec.prefix)
         if blueprint:  # True: a training run's; "route": a saved agent's route, no curves
             bp = (scene.route_blueprint if blueprint == "route" else scene.run_blueprint)
-            st.send_blueprint(bp(rec.prefix, scenario), make_active=True, make_default=True)
+            st.send_blueprint(bp(rec.prefix, scenario, method, world, fidelity),
+                              make_active=True, make_default=True)
         return rec
 
     def _p(self, rest: str) -> str:
@@ -214,12 +215,17 @@ class Recorder:
                                poses: np.ndarray | None = None,
                                contacts: np.ndarray | None = None,
                                sim_time_s: np.ndarray | None = None, kind: str = "train",
-                               contact_steps: np.ndarray | None = None) -> None:
+                               contact_steps: np.ndarray | None = None,
+                               substeps: np.ndarray | None = None,
+                               substep_times_s: np.ndarray | None = None) -> None:
         """One episode: robot per step, trajectory, visited cells, contacts, events.
 
         Only copies the arrays; the columns are built for many episodes at once
         when the buffer is flushed. ``contact_steps`` (one per contact, moves
         into the episode) places each contact's event on the ``step`` timeline.
+        ``substeps`` (physics: every physics step's pose [m, m, rad]) with their
+        ``substep_times_s`` (same clock as ``sim_time_s``) put the continuous drive
+        on the ``sim_time`` timeline, playable at real speed.
         """
         states = np.array(states, dtype=np.int64)
         n = len(states)
@@ -242,8 +248,15 @@ class Recorder:
                 contact_steps = np.array(contact_steps, dtype=np.int64).reshape(-1)
                 if len(contact_steps) != len(contacts):
                     raise ValueError("contact_steps needs one step per contact")
+        sub = None
+        if substeps is not None and t is not None and substep_times_s is not None:
+            sp = np.array(substeps, dtype=np.float64).reshape(-1, 3)
+            st = np.array(substep_times_s, dtype=np.float64).reshape(-1)
+            if len(sp) != len(st):
+                raise ValueError(f"substeps has {len(sp)} rows, substep_times_s {len(st)}")
+            sub = (sp, sim0 + (st - t[0]))
         self._episodes.append(EpisodeRecord(int(episode), kind, states, poses, contacts,
-                                            contact_steps, t, self._step, sim0))
+                                            contact_steps, t, self._step, sim0, sub))
         self._step += n
         self._rows += n
         self._maybe_flush()

@@ -310,23 +310,41 @@ def _panels(timeline: str = "episode") -> list[Any]:
             rrb.TimePanel(state="collapsed", timeline=timeline)]
 
 
-def route_blueprint(prefix: str, sc: Scenario) -> rrb.Blueprint:
+def map_title(world: str = "grid", fidelity: str | None = None) -> str:
+    """The map panel's title: what it shows, and in a physics run the fidelity in force and
+    the timeline that replays the drive at real speed."""
+    if world != "physics":
+        return "Map: robot, trajectory, obstacles"
+    return (f"Map · physics ({fidelity or 'exact'}): robot disc, trajectory, contacts · "
+            "timeline sim_time plays at real speed")
+
+
+def value_title(method: str | None) -> str:
+    """The upper-layer panel's title: what the method's potential is."""
+    if method == "rnh-ql+":
+        return "Phi: the optimistic model's value"
+    return "V_NN (RBF upper layer)"
+
+
+def route_blueprint(prefix: str, sc: Scenario, method: str | None = None,
+                    world: str = "grid", fidelity: str | None = None) -> rrb.Blueprint:
     """A saved agent's route (``rnhql route --record``): only panels that have data (the map,
     the value maps and the run card; no training curves exist)."""
     right = rrb.Vertical(
-        rrb.Horizontal(value_view(prefix, sc, "v_nn", "V_NN (RBF upper layer)"),
+        rrb.Horizontal(value_view(prefix, sc, "v_nn", value_title(method)),
                        value_view(prefix, sc, "max_q", "max_a Q + greedy policy")),
         rrb.TextDocumentView(origin=path(prefix, "meta") or "/meta", name="Run info"),
         row_shares=[3, 2])
-    return rrb.Blueprint(rrb.Horizontal(map_view(prefix, sc), right, column_shares=[5, 4]),
-                         *_panels())
+    return rrb.Blueprint(rrb.Horizontal(map_view(prefix, sc, map_title(world, fidelity)),
+                                        right, column_shares=[5, 4]), *_panels())
 
 
-def run_blueprint(prefix: str, sc: Scenario) -> rrb.Blueprint:
+def run_blueprint(prefix: str, sc: Scenario, method: str | None = None, world: str = "grid",
+                  fidelity: str | None = None) -> rrb.Blueprint:
     """One run: the map on the left; values, curves and the run card on the right."""
     p = path(prefix, "")
     right = rrb.Vertical(
-        rrb.Horizontal(value_view(prefix, sc, "v_nn", "V_NN (RBF upper layer)"),
+        rrb.Horizontal(value_view(prefix, sc, "v_nn", value_title(method)),
                        value_view(prefix, sc, "max_q", "max_a Q + greedy policy")),
         plot(prefix, "steps", "Steps per episode vs BFS optimum"),
         rrb.Horizontal(plot(prefix, "success", "Success"),
@@ -336,8 +354,8 @@ def run_blueprint(prefix: str, sc: Scenario) -> rrb.Blueprint:
                  rrb.TextDocumentView(origin=path(prefix, "meta") or "/meta", name="Run info"),
                  rrb.TextLogView(origin=p or "/", name="Events")),
         row_shares=[3, 2, 2, 2])
-    return rrb.Blueprint(rrb.Horizontal(map_view(prefix, sc), right, column_shares=[5, 4]),
-                         *_panels())
+    return rrb.Blueprint(rrb.Horizontal(map_view(prefix, sc, map_title(world, fidelity)),
+                                        right, column_shares=[5, 4]), *_panels())
 
 
 def comparison_blueprint(runs: Sequence[tuple[str, int]], sc: Scenario,

@@ -49,3 +49,12 @@ def drop_stale_cache(package: Path = PACKAGE) -> bool:
     except OSError:  # read-only install: numba falls back to its own cache locations
         return False
     return True
+
+
+def kernels_cached(package: Path = PACKAGE) -> bool:
+    """Whether numba has compiled kernels of this package on disk (False on a first run,
+    or after the sources changed): the CLI then says compilation is under way."""
+    root = os.environ.get("NUMBA_CACHE_DIR")
+    if root:
+        return any(Path(root).glob(f"**/{package.name}/kernels.*.nbi"))
+    return any((package / "__pycache__").glob("kernels.*.nbi"))

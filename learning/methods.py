@@ -257,7 +257,7 @@ class RNHQL(MethodConfig):
 @dataclass(frozen=True)
 class RNHQLPlus(MethodConfig):
     """RNH-QL+: RNH-QL's two layers (Q-table below, a potential shaping it above), fixed
-    where the measurements of issue 10 show it breaking. Rules in :mod:`learning.rules_plus`.
+    where the ablation's measurements show it breaking. Rules in :mod:`learning.rules_plus`.
 
     Every ingredient is a field, so an ablation is ``--set field=value``; with
     ``spacing=0, cutoff=0, v_target=0, warmup_episodes=300, shaping_scale=1, rebase=0,

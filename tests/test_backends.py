@@ -48,3 +48,28 @@ def test_missing_ray_says_how_to_install(monkeypatch):
     monkeypatch.setattr(builtins, "__import__", no_ray)
     with pytest.raises(BackendError, match=r"pip install 'rnhql\[ray\]'"):
         run_ray(make_specs("paper-40", ["st-ql"], [0], 5, ["grid"]))
+
+
+def test_progress_off_a_terminal_prints_a_line_every_interval_and_at_the_end():
+    import io
+    import time
+
+    from scenarios.runs.backends import Progress
+
+    out = io.StringIO()  # not a TTY
+    p = Progress(3, interval_s=0.05, stream=out)
+    time.sleep(0.2)  # no run has finished: the heartbeat still speaks
+    beats = out.getvalue().count("progress: 0/3 runs done")
+    assert beats >= 2
+    for _ in range(3):
+        p.update("x")
+    lines = out.getvalue().splitlines()
+    assert lines[-1].startswith("progress: 3/3 runs done")
+    n = len(lines)
+    time.sleep(0.15)
+    assert len(out.getvalue().splitlines()) == n  # stopped after the last run
+    quiet = io.StringIO()
+    q = Progress(2, enabled=False, interval_s=0.01, stream=quiet)
+    time.sleep(0.05)
+    q.close()
+    assert quiet.getvalue() == ""

@@ -201,3 +201,27 @@ def test_scen_rows_that_do_not_fit_their_map_are_refused(tmp_path, capsys):
     escape.write_text("version 1\n0\t../../../../etc/passwd\t49\t49\t19\t26\t19\t29\t3.0\n")
     assert main(["train", "--scen", str(escape), "--index", "0", "--episodes", "2"]) == 2
     assert "not a .map file beside the .scen" in capsys.readouterr().err
+
+
+def test_view_without_a_display_suggests_the_web_viewer(tmp_path, monkeypatch, capsys):
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        pytest.skip("display detection is for Linux")
+    rrd = tmp_path / "x.rrd"
+    rrd.write_bytes(b"not opened")
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["view", str(rrd)]) == 2
+    err = capsys.readouterr().err
+    assert "no display" in err and f"rnhql view {rrd} --web" in err
+
+
+def test_single_run_output_says_never_without_a_unit(capsys):
+    from scenarios.cli.args import print_run
+
+    print_run({"episodes_to_stable_optimal": None, "episodes_to_optimal": None,
+               "final_route_length": -1, "success_rate": 0.0, "optimal_action_fraction": 0.5,
+               "env_steps": 10, "wall_time_s": 0.1}, 80)
+    out = capsys.readouterr().out
+    assert "never episodes" not in out and "stable optimal after  never" in out

@@ -14,7 +14,7 @@ Run: ``python -m scenarios.bench.learners`` (prints JSON). Measures, on paper-50
   gymnasium (the driver the physics world uses);
 * seconds per seed of the paper protocol (rnh-ql, 3000 episodes, greedy test
   every 10 episodes) through :func:`learning.train.train_tabular`;
-* env steps/s of rnh-ql+ and dyna-q at several planning budgets (issue 10);
+* env steps/s of rnh-ql+ and dyna-q at several planning budgets;
 * JIT cold start: a fresh process with an empty ``NUMBA_CACHE_DIR`` trains one
   episode of rnh-ql (compile), then a second fresh process does the same with
   the cache the first one filled.
@@ -187,7 +187,7 @@ def train_steps_per_s(method: str, model, episodes: int = EPISODES, seeds: int =
 
 
 def planning_steps_per_s(scenario: str = "paper-50", rewards: str = "goal-only") -> dict:
-    """Env steps/s of rnh-ql+ (issue 10's target: >= 2M on paper-50) at 10 (its default),
+    """Env steps/s of rnh-ql+ (target: >= 2M on paper-50) at 10 (its default),
     3 and 0 shaped planning updates per step, and of dyna-q at 5 (its default) and 10,
     under the rewards the route-learning targets use: the kernel alone (seed 0, best of
     3) and through train_tabular (median of seeds 0-2), which differ with the seeds'

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import sys
 from pathlib import Path
 
 from scenarios.runs.spec import WORLDS, ExperimentError
@@ -216,8 +217,8 @@ def print_run(rec_like: dict, optimal: int) -> None:
     first = rec_like["episodes_to_optimal"]
     length = rec_like["final_route_length"]
     print(f"  success rate          {rec_like['success_rate']:.3f}")
-    print(f"  stable optimal after  {'never' if stable is None else stable} episodes "
-          f"(first optimal test: {'never' if first is None else first})")
+    print(f"  stable optimal after  {'never' if stable is None else f'{stable} episodes'} "
+          f"(first optimal test: {'never' if first is None else f'episode {first}'})")
     print(f"  final greedy route    {'G not reached' if length < 0 else length} "
           f"(optimal {optimal})")
     print(f"  greedy moves on a shortest route  {rec_like['optimal_action_fraction']:.3f}")
@@ -257,3 +258,14 @@ def check_writable(path: Path, flag: str) -> None:
     if not parent.is_dir() or not os.access(parent, os.W_OK):
         raise ExperimentError("command line", flag, f"cannot write to {parent}/",
                               "create the directory or pick another path")
+
+
+def compile_notice(n_methods: int) -> None:
+    """Say so when the numba kernels are not on disk yet: the first run compiles them
+    (a minute or more on 2 cores) before any progress can show."""
+    from learning.jitcache import kernels_cached
+
+    if not kernels_cached():
+        print(f"compiling the numba kernels of {n_methods} method"
+              f"{'' if n_methods == 1 else 's'} (first run only; cached on disk afterwards)",
+              file=sys.stderr, flush=True)

@@ -13,6 +13,7 @@ from scenarios.cli.args import (
     MAX_EPISODES,
     MAX_SEEDS,
     check_world,
+    compile_notice,
     fidelity_arg,
     parse_list,
     parse_overrides,
@@ -55,6 +56,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                          "--record-every"),
                                positive(args.record_values_every, "--record-values-every"),
                                positive(args.record_seeds, "--record-seeds"))
+    compile_notice(len(methods))
     try:
         results = run_sweep(specs, Path(args.out), execute, resume=args.resume,
                             progress=Progress(len(specs)), **kwargs)
@@ -68,7 +70,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
             gather_parts(specs, record, records=results["runs"])
         print(f"recording: {record}  (open: rnhql view {record})")
     print((Path(args.out) / "summary.md").read_text())
-    print(f"wrote {args.out}/results.json, summary.md and figures")
+    out = Path(args.out)
+    print(f"wrote {out / 'results.json'}, summary.md and figures")
     return 0
 
 

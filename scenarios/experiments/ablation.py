@@ -1,4 +1,4 @@
-"""The RNH-QL+ ablation (issue 10): rnh-ql, then each ingredient added in turn up to rnh-ql+,
+"""The RNH-QL+ ablation: rnh-ql, then each ingredient added in turn up to rnh-ql+,
 with dyna-q and q-lambda for reference, on every map of the suite (goal-only rewards).
 
 ``python -m scenarios.experiments.ablation --out results/ablation --seeds 10 --episodes 3000

@@ -106,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
             lines.append(f"| {scheme} | {name} | {err:.3g} | {v_star[model.start]:.3g} | "
                          f"{sum(r[0] for r in runs)}/{args.seeds} · {f(med)} [{f(q25)}, "
                          f"{f(q75)}] |")
-            print(lines[-1], file=sys.stderr)
+            print(f"done: {scheme}, {name}", file=sys.stderr, flush=True)  # progress only
     text = "\n".join(lines) + "\n"
     atomic_write_text(Path(args.out) / "ORACLE.md", text)
     print(text)

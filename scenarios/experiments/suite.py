@@ -1,4 +1,4 @@
-"""The route-learning map suite of issue 10: seeded maze and rooms maps, Moving AI maps and the
+"""The route-learning map suite: seeded maze and rooms maps, Moving AI maps and the
 built-ins, as scenario TOMLs with a chosen reward scheme, start and goal far apart.
 
 ``python -m scenarios.experiments.suite --out DIR`` writes ``DIR/maps/*.map`` (the generated

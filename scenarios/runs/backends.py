@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import signal
 import sys
+import threading
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -41,24 +42,64 @@ class BackendError(InputError):
 
 
 class Progress:
-    """A one-line progress bar on stderr (no dependency; silent when not a TTY)."""
+    """Progress of a sweep on stderr (no dependency).
 
-    def __init__(self, total: int, enabled: bool | None = None) -> None:
+    On a terminal: a one-line bar, redrawn as runs finish. Off a terminal (logs, CI,
+    a notebook): a plain line every ``interval_s`` seconds while the sweep runs, even
+    when no run finishes in between (a long batch, or the first run's compilation),
+    and one when it ends. ``enabled=False`` silences both.
+    """
+
+    def __init__(self, total: int, enabled: bool | None = None, interval_s: float = 5.0,
+                 stream: Any = None) -> None:
         self.total, self.done, self.t0 = total, 0, time.perf_counter()
-        self.enabled = sys.stderr.isatty() if enabled is None else enabled
+        self.stream = sys.stderr if stream is None else stream
+        tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.enabled = True if enabled is None else enabled
+        self.bar = self.enabled and tty
+        self.interval_s = interval_s
+        self._stop = threading.Event()
+        self._lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+        if self.enabled and not tty and total > 0:
+            self._thread = threading.Thread(target=self._heartbeat, daemon=True,
+                                            name="rnhql-progress")
+            self._thread.start()
+
+    def _line(self) -> str:
+        elapsed = time.perf_counter() - self.t0
+        eta = (f", ~{elapsed / self.done * (self.total - self.done):.0f} s left"
+               if 0 < self.done < self.total else "")
+        return f"progress: {self.done}/{self.total} runs done, {elapsed:.0f} s elapsed{eta}"
+
+    def _heartbeat(self) -> None:
+        while not self._stop.wait(self.interval_s):
+            with self._lock:
+                self.stream.write(self._line() + "\n")
+                self.stream.flush()
 
     def update(self, label: str) -> None:
-        self.done += 1
-        if not self.enabled:
-            return
-        elapsed = time.perf_counter() - self.t0
-        eta = elapsed / self.done * (self.total - self.done)
-        bar = "#" * int(30 * self.done / self.total)
-        sys.stderr.write(f"\r[{bar:<30}] {self.done}/{self.total} {label:<30} "
-                         f"{elapsed:6.1f}s, ~{eta:5.1f}s left")
-        if self.done == self.total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
+        with self._lock:
+            self.done += 1
+            if self.bar:
+                elapsed = time.perf_counter() - self.t0
+                eta = elapsed / self.done * (self.total - self.done)
+                bar = "#" * int(30 * self.done / self.total)
+                self.stream.write(f"\r[{bar:<30}] {self.done}/{self.total} {label:<30} "
+                                  f"{elapsed:6.1f}s, ~{eta:5.1f}s left")
+                if self.done == self.total:
+                    self.stream.write("\n")
+                self.stream.flush()
+        if self.done >= self.total:
+            self.close()
+
+    def close(self) -> None:
+        """Stop the heartbeat (its last line says where the sweep ended)."""
+        if self._thread is not None and not self._stop.is_set():
+            self._stop.set()
+            with self._lock:
+                self.stream.write(self._line() + "\n")
+                self.stream.flush()
 
 
 class _Collector:
@@ -130,7 +171,14 @@ def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = Non
     Ctrl-C (``KeyboardInterrupt`` in this process) ends the workers at once and
     propagates; every run finished before it has already gone to ``on_result``.
     """
-    col = _Collector(specs, on_result, progress)
+    try:
+        return _run_local(specs, jobs, _Collector(specs, on_result, progress))
+    finally:
+        if progress is not None:
+            progress.close()
+
+
+def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector) -> list[dict[str, Any]]:
     tasks = plan_tasks(specs, max(jobs, 1))
     if jobs <= 1 or len(tasks) <= 1:
         for task in tasks:
@@ -205,5 +253,7 @@ def run_ray(specs: Sequence[RunSpec], address: str | None = None, num_cpus: int 
             raise
         return col.result()
     finally:
+        if progress is not None:
+            progress.close()
         if started_here:
             ray.shutdown()

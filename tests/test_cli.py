@@ -225,3 +225,22 @@ def test_single_run_output_says_never_without_a_unit(capsys):
                "env_steps": 10, "wall_time_s": 0.1}, 80)
     out = capsys.readouterr().out
     assert "never episodes" not in out and "stable optimal after  never" in out
+
+
+def test_every_flag_of_every_command_has_a_help_line_and_its_default():
+    import argparse
+
+    from scenarios.cli.app import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for name, p in sub.choices.items():
+        text = p.format_help()
+        for act in p._actions:
+            if isinstance(act, argparse._HelpAction):
+                continue
+            assert act.help, f"rnhql {name} {act.dest}: no help line"
+            d = act.default
+            if act.option_strings and d not in (None, False, argparse.SUPPRESS):
+                assert "default" in p._get_formatter()._get_help_string(act), (name, act.dest)
+        assert "--help" in text

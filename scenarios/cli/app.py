@@ -28,12 +28,26 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}. Fix: see {self.prog} --help\n")
 
 
+class _Help(argparse.HelpFormatter):
+    """Every flag's line ends with its default, unless the help already names it."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        d = action.default
+        if ("default" in text or d is None or d is False or d == argparse.SUPPRESS
+                or (action.option_strings == [] and action.nargs is None)):
+            return text
+        return f"{text} (default: {d})"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
-        prog="rnhql",
+        prog="rnhql", formatter_class=_Help,
         description="Route searching with RBF-network heuristic Q-learning (RNH-QL) and its "
                     "baselines, on a grid and in a Pymunk physics world.")
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    _add = sub.add_parser
+    sub.add_parser = lambda *a, **k: _add(*a, formatter_class=_Help, **k)  # type: ignore
 
     p = sub.add_parser("scenarios", help="list built-in scenarios or validate one")
     p.add_argument("--check", metavar="FILE", help="validate a .toml or .map and print its facts")
@@ -43,8 +57,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("train", help="train one method on one scenario")
     add_scenario_args(p)
     p.add_argument("--method", default="rnh-ql", help="method (default rnh-ql)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--episodes", type=int, default=3000)
+    p.add_argument("--seed", type=int, default=0, help="the run's seed")
+    p.add_argument("--episodes", type=int, default=3000, help="training episodes")
     p.add_argument("--world", default="grid", help="grid (default) or physics")
     add_fidelity_arg(p)
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
@@ -57,7 +71,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("route", help="print and draw a saved agent's greedy route from S")
     add_scenario_args(p)
-    p.add_argument("--agent", required=True, metavar="AGENT.npz")
+    p.add_argument("--agent", required=True, metavar="AGENT.npz",
+                   help="an agent saved with rnhql train --save")
     p.add_argument("--world", default="grid", help="grid (default) or physics (drive it)")
     add_fidelity_arg(p)
     p.add_argument("--png", metavar="FILE", help="also draw the routes to a PNG")
@@ -70,7 +85,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--methods", help="comma-separated (default: all ten)")
     p.add_argument("--seeds", type=int, default=10, help="number of seeds (default 10)")
     p.add_argument("--seed-base", type=int, default=0, help="first seed (default 0)")
-    p.add_argument("--episodes", type=int, default=3000)
+    p.add_argument("--episodes", type=int, default=3000, help="training episodes per run")
     p.add_argument("--world", default="grid", help="grid, physics or grid,physics")
     add_fidelity_arg(p)
     p.add_argument("--set", action="append", metavar="FIELD=VALUE",
@@ -78,7 +93,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--backend", default="local", help="local (process pool) or ray")
     p.add_argument("--address", default=None, help="Ray cluster: auto or ray://host:port")
-    p.add_argument("--out", required=True, metavar="DIR")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder: results.json, summary.md, figures")
     p.add_argument("--resume", action="store_true", help="skip runs already finished in DIR")
     add_record_args(p)
     p.add_argument("--record-seeds", type=int, default=1, metavar="N",
@@ -92,18 +108,19 @@ def build_parser() -> argparse.ArgumentParser:
     add_fidelity_arg(p)
     p.add_argument("--repeats", type=int, default=20, help="drives per (cell, action) (20)")
     p.add_argument("--seed", type=int, default=0, help="noise and start-pose seed (0)")
-    p.add_argument("--out", required=True, metavar="DIR")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder: aliasing.json, heat map PNG, recording")
     p.set_defaults(func=aliasing.cmd_aliasing)
 
     p = sub.add_parser("view", help="open a .rrd recording in the Rerun viewer")
-    p.add_argument("file", metavar="FILE.rrd")
+    p.add_argument("file", metavar="FILE.rrd", help="a recording written by --record")
     p.add_argument("--web", action="store_true",
                    help="serve the web viewer on 127.0.0.1 instead of the native viewer")
     p.add_argument("--port", type=int, default=9090, help="web viewer port (with --web)")
     p.set_defaults(func=view.cmd_view)
 
     p = sub.add_parser("bench", help="measure throughput")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--json", action="store_true", help="print the figures as JSON")
     p.add_argument("--physics", action="store_true", help="include the physics benchmark")
     p.set_defaults(func=bench.cmd_bench)
     return parser

@@ -201,7 +201,8 @@ def figure(summary: dict, maps: list[dict], labels: list[str], path: Path, title
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     ap.add_argument("--out", default="results/ablation")
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--episodes", type=int, default=3000)

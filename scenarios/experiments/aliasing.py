@@ -182,7 +182,8 @@ def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     ap.add_argument("scenario", help="a built-in name, a .toml or a .map (with --start/--goal)")
     ap.add_argument("--fidelity", default="exact", help="exact (default), noisy, rough, or knobs")
     ap.add_argument("--repeats", type=int, default=20, help="drives per (cell, action) (20)")

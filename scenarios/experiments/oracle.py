@@ -64,7 +64,8 @@ def train_with_potential(model, potential: np.ndarray, seed: int, episodes: int,
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--out", default="results/oracle")
     p.add_argument("--scenario", default="paper-50")
     p.add_argument("--seeds", type=int, default=10)

@@ -168,7 +168,8 @@ def _value_notes(args: argparse.Namespace) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--out", default="results/paper")
     p.add_argument("--seeds", type=int, default=10)
     p.add_argument("--episodes", type=int, default=3000)

@@ -84,7 +84,8 @@ def report(args: argparse.Namespace, methods: list[str], facts: list[RewardFacts
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--out", default="results/reward-design")
     p.add_argument("--scenario", default="paper-50")
     p.add_argument("--methods", default=",".join(ALL_METHODS))

@@ -91,7 +91,8 @@ def figure(rows: dict[str, list[dict[str, Any]]], path: Path, title: str) -> Non
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--out", default="results/scaling")
     p.add_argument("--sizes", default="25,50,100,200")
     p.add_argument("--methods", default=",".join(METHODS))

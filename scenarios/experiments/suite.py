@@ -253,7 +253,8 @@ def shipped_suite_tomls() -> dict[str, tuple[str, np.ndarray | None]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     ap.add_argument("--out", default="results/suite", help="directory for maps and TOMLs")
     ap.add_argument("--rewards", default="goal-only", choices=sorted(SCHEMES))
     ap.add_argument("--no-moving-ai", action="store_true", help="skip the Moving AI maps")

@@ -59,7 +59,7 @@ def test_goal_blocked(env_cls):
 
 
 def test_unknown_scenario_name_and_bad_render_mode():
-    with pytest.raises(ScenarioError, match="not a built-in"):
+    with pytest.raises(ScenarioError, match="not a named scenario"):
         gym.make("rnhql/PhysicsRoute-v0", scenario="no-such-scenario")
     with pytest.raises(ValueError, match="render_mode"):
         PhysicsRouteEnv(OPEN, render_mode="human")

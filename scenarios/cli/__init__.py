@@ -9,6 +9,7 @@ work is done and its exit status stands.
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 from collections.abc import Sequence
@@ -22,6 +23,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("rnhql: interrupted", file=sys.stderr)
         code = 130
+    if argv is None and code == 130:
+        # the console script, interrupted (its handlers have kept what finished): exit now
+        # with 130. Left to the interpreter's shutdown, an interrupt that once hit the
+        # import machinery or compiled code can still end the process as killed by SIGINT.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
     if argv is None:  # the console script: nothing after this may turn into a traceback
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     return code

@@ -197,6 +197,9 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
                 raise
 
         new = execute(todo, on_result=save, **execute_kwargs) if todo else []
+    progress = execute_kwargs.get("progress")
+    if progress is not None:  # nothing left to run: its heartbeat must not outlive the sweep
+        progress.close()
     results = assemble(specs, [*done.values(), *new])
     write_results(out_dir, results, list(dict.fromkeys(s.method for s in specs)))
     if figures:

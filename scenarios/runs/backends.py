@@ -75,8 +75,11 @@ class Progress:
     def _heartbeat(self) -> None:
         while not self._stop.wait(self.interval_s):
             with self._lock:
-                self.stream.write(self._line() + "\n")
-                self.stream.flush()
+                try:
+                    self.stream.write(self._line() + "\n")
+                    self.stream.flush()
+                except (OSError, ValueError):  # the stream was closed under us: stop
+                    return
 
     def update(self, label: str) -> None:
         with self._lock:
@@ -98,8 +101,11 @@ class Progress:
         if self._thread is not None and not self._stop.is_set():
             self._stop.set()
             with self._lock:
-                self.stream.write(self._line() + "\n")
-                self.stream.flush()
+                try:
+                    self.stream.write(self._line() + "\n")
+                    self.stream.flush()
+                except (OSError, ValueError):
+                    pass
 
 
 class _Collector:

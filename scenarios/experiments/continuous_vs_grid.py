@@ -106,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--resume", action="store_true", help="keep the runs of an earlier call")
     p.add_argument("--out", default="results/continuous-vs-grid", help="output folder")
     args = p.parse_args(argv)
-    split = [m.strip() for m in args.methods.split(",") if m.strip()]
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     maps = [m.strip() for m in args.maps.split(",") if m.strip()]
     rungs = [r.strip() for r in args.rungs.split(",") if r.strip()]
     out = Path(args.out)
@@ -115,17 +115,17 @@ def main(argv: list[str] | None = None) -> int:
         sc, model = load(name, rewards=args.rewards)
         for rung in rungs:
             specs = [spec for world in ("grid", "physics")
-                     for spec in _rung_specs(name, split, args, world, rung)]
+                     for spec in _rung_specs(name, methods, args, world, rung)]
             sub = out / _slug(name) / rung
             print(f"{name} at {rung}: {len(specs)} runs -> {sub}", flush=True)
             results = run_sweep(specs, sub, run_local, resume=args.resume, jobs=args.jobs,
                                 progress=Progress(len(specs)))
             cells.append(dict(map=name, rung=rung, results=results,
                               aliasing=_aliasing(sc, model, rung, args.repeats)))
-            overlay(results, name, overlay_method(results, split), sub / "overlay.png")
+            overlay(results, name, overlay_method(results, methods), sub / "overlay.png")
     text = ladder_report(cells, args)
     atomic_write_text(out / "ladder.md", text)
-    ladder_figure(cells, split, out / "ladder.png")
+    ladder_figure(cells, methods, out / "ladder.png")
     print(text)
     return 0
 

@@ -1,37 +1,37 @@
 """The learners: RNH-QL and its baselines over grid states. numpy + numba only.
 
-Never imports sim, scenarios, pymunk or rerun: worlds reach the learners as a
+One module per method (``q_learning``, ``q_lambda``, ``dyna_q``, ``pfh_rl``,
+``sarsa_rs``, ``haql``, ``rn_ql``, ``rnh_ql``, ``rnh_ql_plus``), each with its
+config, named state and hooks; :mod:`learning.registry` lists them. Never
+imports sim, scenarios, pymunk or rerun: worlds reach the learners as a
 duck-typed :class:`TabularMDP` (fused kernels) or a gymnasium env plus a
 :class:`Geometry` (step-by-step agent).
 """
 
 from learning.agent import EpisodeLog, StepAgent, make_agent, run_env_episodes
 from learning.checkpoint import Checkpoint, CheckpointError, load_checkpoint, save_checkpoint
+from learning.config import MethodConfig
+from learning.dyna_q import DynaQ
 from learning.geometry import Geometry, TabularMDP, geometry_of
+from learning.haql import HAQL
 from learning.jitcache import drop_stale_cache
-from learning.methods import (
-    HAQL,
-    METHODS,
-    PFHRL,
-    RNHQL,
-    RNQL,
-    STQL,
-    DynaQ,
-    MethodConfig,
-    QLambda,
-    QOpt,
-    SarsaRS,
-    config_from_fields,
-)
-from learning.state import AgentState, init_state
+from learning.pfh_rl import PFHRL
+from learning.q_lambda import QLambda
+from learning.q_learning import STQL, QOpt
+from learning.registry import METHODS, config_from_fields
+from learning.rn_ql import RNQL
+from learning.rnh_ql import RNHQL
+from learning.rnh_ql_plus import RNHQLPlus
+from learning.sarsa_rs import SarsaRS
+from learning.state import copy_state, init_state
 from learning.train import TrainResult, greedy_test, train_tabular
 
 drop_stale_cache()  # numba reads its cache at a function's first call, which is later
 
 __all__ = [
-    "HAQL", "METHODS", "PFHRL", "RNHQL", "RNQL", "STQL", "AgentState", "Checkpoint",
-    "CheckpointError", "DynaQ", "EpisodeLog", "Geometry", "MethodConfig", "QLambda", "QOpt",
-    "SarsaRS", "StepAgent", "TabularMDP", "TrainResult", "config_from_fields", "geometry_of",
-    "greedy_test", "init_state", "load_checkpoint", "make_agent", "run_env_episodes",
-    "save_checkpoint", "train_tabular",
+    "HAQL", "METHODS", "PFHRL", "RNHQL", "RNQL", "STQL", "Checkpoint", "CheckpointError",
+    "DynaQ", "EpisodeLog", "Geometry", "MethodConfig", "QLambda", "QOpt", "RNHQLPlus",
+    "SarsaRS", "StepAgent", "TabularMDP", "TrainResult", "config_from_fields", "copy_state",
+    "geometry_of", "greedy_test", "init_state", "load_checkpoint", "make_agent",
+    "run_env_episodes", "save_checkpoint", "train_tabular",
 ]

@@ -1,8 +1,8 @@
 """The step-by-step driver: an agent for any gymnasium ``Discrete`` env, and its episode loop.
 
-The agent holds the same :class:`learning.state.AgentState` the fused kernels
-train, and each event calls the same compiled function the kernels inline
-(:mod:`learning.dispatch`), with the same generator, so a run through an env
+The agent holds the same named state the fused kernels train, and each event
+calls the same compiled hook the kernels inline (:mod:`learning.hooks`), with
+the same generator, so a run through an env
 and a kernel run with the same seed end with identical tables and weights.
 Use this driver where there is no tabular model (the physics env); use
 :func:`learning.train.train_tabular` where there is (100x+ faster).
@@ -16,25 +16,38 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from learning import dispatch
-from learning import kinds as K
-from learning.generator_handle import generator_from, handle
+from learning import hooks
+from learning.config import MethodConfig
+from learning.generator_handle import handle
 from learning.geometry import Geometry
-from learning.methods import MethodConfig
-from learning.state import AgentState, init_state
+from learning.hooks import draw_start
+from learning.named_state import episodes_done
+from learning.state import init_state
 
 
 @njit(cache=True)
-def _act(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, h):
-    return dispatch.act(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s,
-                        generator_from(h))
+def _act(st, s, h):
+    return hooks.act_h(st, s, h)
 
 
 @njit(cache=True)
-def _update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2, terminated,
-            truncated, h):
-    dispatch.update(kind, ivar, fvar, par, q, w, e, feat, imap, fmap, ilist, s, a, r, s2,
-                    terminated, truncated, generator_from(h))
+def _update(st, s, a, r, s2, terminated, h):
+    hooks.update_h(st, s, a, r, s2, terminated, h)
+
+
+@njit(cache=True)
+def _begin(st, s0):
+    hooks.begin(st, s0)
+
+
+@njit(cache=True)
+def _end(st):
+    hooks.end(st)
+
+
+@njit(cache=True)
+def _exploit(st, s):
+    return hooks.exploit(st, s)
 
 
 class StepAgent:
@@ -47,42 +60,42 @@ class StepAgent:
     """
 
     def __init__(self, cfg: MethodConfig, geometry: Geometry, rng: np.random.Generator,
-                 state: AgentState | None = None) -> None:
+                 state=None) -> None:
         self.cfg = cfg
         self.geometry = geometry
         self.rng = rng
         self.state = init_state(cfg, geometry, rng) if state is None else state
-        self.kind = int(cfg.kind)
         self._h = handle(rng)  # the generator, passed to compiled code without unboxing
 
     @property
     def episodes_done(self) -> int:
-        return int(self.state.ivar[K.I_EPISODE])
+        return episodes_done(self.state)
 
     @property
     def last_shaping(self) -> tuple[float, float]:
         """(mean, std) of the shaping terms of the last finished episode."""
-        return float(self.state.fvar[K.F_FMEAN]), float(self.state.fvar[K.F_FSTD])
+        tally = self.state.tally
+        return float(tally.f_mean[0]), float(tally.f_std[0])
 
     def begin_episode(self, s0: int) -> None:
         """Start an episode in state ``s0`` (RNH-QL caches Phi(s0) here)."""
-        dispatch.begin_episode(self.kind, *self.state, int(s0))
+        _begin(self.state, int(s0))
 
     def act(self, s: int) -> int:
         """The behaviour (exploring) action at ``s``; draws from the agent's generator."""
-        return int(_act(self.kind, *self.state, int(s), self._h))
+        return int(_act(self.state, int(s), self._h))
 
     def update(self, s: int, a: int, r: float, s2: int, terminated: bool,
                truncated: bool) -> None:
-        """Learn from one transition; bootstraps from ``s2`` unless ``terminated``."""
-        _update(self.kind, *self.state, int(s), int(a), float(r), int(s2), bool(terminated),
-                bool(truncated), self._h)
+        """Learn from one transition; bootstraps from ``s2`` unless ``terminated`` (a
+        truncated step bootstraps like any other, so ``truncated`` changes nothing)."""
+        _update(self.state, int(s), int(a), float(r), int(s2), bool(terminated), self._h)
 
     def end_episode(self) -> None:
-        dispatch.end_episode(self.state.ivar, self.state.fvar)
+        _end(self.state)
 
     def greedy_action(self, s: int) -> int:
-        return int(dispatch.exploit_action(self.kind, *self.state, int(s)))
+        return int(_exploit(self.state, int(s)))
 
 
 def make_agent(cfg: MethodConfig, geometry: Geometry, rng: np.random.Generator) -> StepAgent:
@@ -118,7 +131,7 @@ def run_env_episodes(agent: StepAgent, env: Any, n_episodes: int,
                      np.zeros(n_episodes, bool), np.zeros(n_episodes), np.zeros(n_episodes))
     for i in range(n_episodes):
         if starts is not None:
-            s, _ = env.reset(options={"start": int(dispatch.draw_start(rng, starts))})
+            s, _ = env.reset(options={"start": int(draw_start(rng, starts))})
         else:
             s, _ = env.reset()
         s = int(s)

@@ -1,5 +1,9 @@
 """Save and restore a learner to ``.npz``: state arrays, config, generator state, metrics so far.
 
+The state is stored by name (``state_tally.episode``, ``state_q``, ...), without
+the arrays a method derives from its config and the scenario (its ``DERIVED``,
+e.g. RNH-QL's dense feature matrix): loading rebuilds those from the geometry.
+
 Files are written atomically (a temporary file in the same directory, then
 ``os.replace``), so a crash mid-write leaves the old checkpoint intact. Loading
 checks everything a resumed run relies on and raises :class:`CheckpointError`
@@ -18,17 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
-from learning import kinds as K
+from learning.config import MethodConfig
 from learning.geometry import Geometry
-from learning.methods import METHODS, MethodConfig, config_from_fields
-from learning.state import AgentState, init_state
+from learning.named_state import arrays, episodes_done, rebuild
+from learning.registry import METHODS, config_from_fields, family_of, n_states_of
+from learning.state import init_state
 
-FORMAT = "rnhql-checkpoint-1"
-# (dtype, ndim) of each AgentState slot: a file that disagrees would not type-check in numba
-SLOT_TYPES = {"ivar": (np.int64, 1), "fvar": (np.float64, 1), "par": (np.float64, 1),
-              "q": (np.float64, 2), "w": (np.float64, 1), "e": (np.float64, 1),
-              "feat": (np.float64, 2), "imap": (np.int32, 2), "fmap": (np.float64, 2),
-              "ilist": (np.int32, 1)}
+FORMAT = "rnhql-checkpoint-2"
 METRIC_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std",
                  "test_episodes", "test_route_length")
 
@@ -46,7 +46,7 @@ class Checkpoint:
     """A learner at an episode boundary, enough to continue it exactly."""
 
     config: MethodConfig
-    state: AgentState
+    state: object  # the method's named state
     rng_state: dict  # numpy bit_generator.state after the last episode (the learner's stream)
     env_steps: int = 0
     metrics: dict[str, np.ndarray] = field(default_factory=dict)  # METRIC_FIELDS so far
@@ -73,7 +73,7 @@ class Checkpoint:
 
     @property
     def episodes(self) -> int:
-        return int(self.state.ivar[K.I_EPISODE])
+        return episodes_done(self.state)
 
     @classmethod
     def of_result(cls, result, rng: np.random.Generator,
@@ -103,7 +103,7 @@ class Checkpoint:
             raise CheckpointError(f"{self.path}: field 'config' differs in {', '.join(diff)} "
                                   f"(checkpoint {self.config}); use the checkpoint's settings "
                                   "or start without --resume")
-        got = self.state.feat.shape[0]
+        got = n_states_of(self.state)
         if got != n_states:
             raise CheckpointError(f"{self.path}: field 'n_states' is {got} but the scenario "
                                   f"has {n_states}; resume on the scenario the checkpoint was "
@@ -116,11 +116,9 @@ class Checkpoint:
         method has on ``geometry`` and no float array holds NaN (no method ever stores one;
         infinities are legitimate, e.g. "never" in a config slot): compiled code indexes the
         arrays without bounds checks, and NaN values would be trained on or drawn."""
-        fresh = init_state(self.config, geometry, np.random.default_rng(0))
-        for name in AgentState._fields:
-            got, want = getattr(self.state, name), getattr(fresh, name)
-            if name == "ilist" and got.ndim == 1 and got.shape[0] >= want.shape[0]:
-                continue  # lists may have grown
+        fresh = dict(arrays(init_state(self.config, geometry, np.random.default_rng(0))))
+        for name, got in arrays(self.state):
+            want = fresh[name]
             if got.shape != want.shape:
                 raise CheckpointError(
                     f"{self.path}: field 'state_{name}' has shape {got.shape}, but "
@@ -135,7 +133,8 @@ class Checkpoint:
 def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
     """Write ``ckpt`` to ``path`` atomically; returns the path."""
     path = Path(path)
-    payload = {f"state_{k}": v for k, v in ckpt.state._asdict().items()}
+    derived = set(getattr(family_of(ckpt.config), "DERIVED", ()))
+    payload = {f"state_{k}": v for k, v in arrays(ckpt.state) if k not in derived}
     payload.update({f"metric_{k}": np.asarray(v) for k, v in ckpt.metrics.items()})
     payload["format"] = np.array(FORMAT)
     payload["method"] = np.array(ckpt.method)
@@ -146,7 +145,7 @@ def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
     if ckpt.problem is not None:
         payload["problem"] = np.array(json.dumps(ckpt.problem))
     payload["env_steps"] = np.array(ckpt.env_steps, dtype=np.int64)
-    payload["n_states"] = np.array(ckpt.state.feat.shape[0], dtype=np.int64)
+    payload["n_states"] = np.array(n_states_of(ckpt.state), dtype=np.int64)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
     try:
         with os.fdopen(fd, "wb") as f:
@@ -177,17 +176,38 @@ def _field(data, name: str, path: Path) -> np.ndarray:
                               "--save") from None
 
 
-def _slot(data, name: str, path: Path) -> np.ndarray:
-    arr = _field(data, f"state_{name}", path)
-    dtype, ndim = SLOT_TYPES[name]
-    if arr.dtype != dtype or arr.ndim != ndim:
-        raise CheckpointError(f"{path}: field 'state_{name}' is {arr.dtype}[{arr.ndim}d], "
-                              f"expected {np.dtype(dtype)}[{ndim}d]; the file is corrupt, "
-                              "delete it and train again")
-    return np.ascontiguousarray(arr).copy()
+def _tiny_geometry() -> Geometry:
+    """A 3 x 3 open arena: a template state on it has every array's dtype and rank."""
+    ix, iy = np.meshgrid(np.arange(3), np.arange(3))
+    coords = np.column_stack([ix.ravel(), iy.ravel()]) + 0.5
+    return Geometry(coords=coords.astype(np.float64), goal=8, bounds_m=(0.0, 0.0, 3.0, 3.0),
+                    n_states=9, n_actions=4)
 
 
-def _read(data, path: Path, method: str | None):
+def _state(data, cfg: MethodConfig, path: Path, geometry: Geometry | None):
+    """The state stored in ``data``, checked field by field against a fresh one's dtypes and
+    ranks; the derived arrays from ``geometry``."""
+    derived = set(getattr(family_of(cfg), "DERIVED", ()))
+    if derived and geometry is None:
+        raise CheckpointError(f"{path}: field 'state_{sorted(derived)[0]}' is rebuilt from the "
+                              f"scenario for {cfg.cli}; load it with the scenario's geometry")
+    fresh = init_state(cfg, geometry if geometry is not None else _tiny_geometry(),
+                       np.random.default_rng(0))
+
+    def stored(name: str, want: np.ndarray) -> np.ndarray:
+        if name in derived:
+            return want
+        arr = _field(data, f"state_{name}", path)
+        if arr.dtype != want.dtype or arr.ndim != want.ndim:
+            raise CheckpointError(f"{path}: field 'state_{name}' is {arr.dtype}[{arr.ndim}d], "
+                                  f"expected {want.dtype}[{want.ndim}d]; the file is corrupt, "
+                                  "delete it and train again")
+        return np.ascontiguousarray(arr).copy()
+
+    return rebuild(fresh, stored)
+
+
+def _read(data, path: Path, method: str | None, geometry: Geometry | None):
     """Every field of an open npz, checked; raises CheckpointError naming the field."""
     fmt = str(_field(data, "format", path))
     if fmt != FORMAT:
@@ -213,7 +233,7 @@ def _read(data, path: Path, method: str | None):
     except (ValueError, TypeError) as exc:
         raise CheckpointError(f"{path}: field 'config' or 'rng_state' is invalid ({exc}); "
                               "the file is corrupt, delete it and train again") from None
-    state = AgentState(**{k: _slot(data, k, path) for k in AgentState._fields})
+    state = _state(data, cfg, path, geometry)
     metrics = {k: _field(data, f"metric_{k}", path).copy() for k in METRIC_FIELDS
                if f"metric_{k}" in data.files}
     env_steps = int(_field(data, "env_steps", path))
@@ -243,14 +263,10 @@ def load_checkpoint(path: str | os.PathLike, method: str | None = None,
             raise CheckpointError(f"{path}: holds a single array, not an rnhql checkpoint "
                                   "(.npz); check the path")
         with data:
-            cfg, state, rng_state, env_steps, metrics, start_state, problem = _read(data, path,
-                                                                                  method)
+            cfg, state, rng_state, env_steps, metrics, start_state, problem = _read(
+                data, path, method, geometry)
     ckpt = Checkpoint(cfg, state, rng_state, env_steps, metrics, str(path), start_state,
                       problem)
-    if int(state.ivar[K.I_KIND]) != cfg.kind:
-        raise CheckpointError(f"{path}: field 'state_ivar' says rule family "
-                              f"{int(state.ivar[K.I_KIND])}, not {cfg.cli}'s; the file is corrupt, "
-                              "delete it and train again")
     if n_states is not None:
         ckpt.check_compatible(cfg, n_states, geometry)
     elif geometry is not None:

@@ -3,9 +3,9 @@
 numba keys a cached function on its own file's timestamp only. The kernels
 inline rules from other modules, so after an edit of, say, ``rules.py`` the
 cached kernels in ``kernels.py`` would silently run the old rule. On import,
-:func:`drop_stale_cache` hashes every ``learning/*.py`` and, if the hash differs
-from the one stamped in ``__pycache__``, deletes the package's ``.nbi``/``.nbc``
-files there (numba recompiles on demand). With ``NUMBA_CACHE_DIR`` set the cache
+:func:`drop_stale_cache` hashes every ``.py`` file of the package (subpackages
+included) and, if the hash differs from the one stamped in ``__pycache__``, deletes
+the package's ``.nbi``/``.nbc`` files (numba recompiles on demand). With ``NUMBA_CACHE_DIR`` set the cache
 lives elsewhere and is left alone (use a fresh directory per source version).
 """
 
@@ -21,8 +21,8 @@ STAMP = "learning-sources.sha256"
 
 def sources_digest(package: Path = PACKAGE) -> str:
     h = hashlib.sha256()
-    for p in sorted(package.glob("*.py")):
-        h.update(p.name.encode())
+    for p in sorted(package.rglob("*.py")):
+        h.update(str(p.relative_to(package)).encode())
         h.update(p.read_bytes())
     return h.hexdigest()
 
@@ -41,7 +41,7 @@ def drop_stale_cache(package: Path = PACKAGE) -> bool:
         pass
     try:
         cache.mkdir(exist_ok=True)
-        for f in [*cache.glob("*.nbi"), *cache.glob("*.nbc")]:
+        for f in [*package.rglob("__pycache__/*.nbi"), *package.rglob("__pycache__/*.nbc")]:
             f.unlink(missing_ok=True)
         tmp = cache / f".{STAMP}.{os.getpid()}"
         tmp.write_text(digest)

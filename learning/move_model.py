@@ -29,56 +29,102 @@ world). When only one outcome was ever seen, which is every pair of a
 deterministic world, no number is drawn and the model is exactly the
 last-outcome model: runs at ``exact`` are bit-for-bit those of before.
 
-Storage (offsets per method; ``n_a`` actions): ``imap[s, a]`` the successor (-1
-unseen), ``imap[s, n_a + a]`` 1 if it is G's entry, ``fmap[s, a]``
-its reward; ``counts[c0 + 2 (s n_a + a)]`` works seen, ``+ 1`` failures seen;
-``fvar[F_RFAIL]`` the reward of the last failure.
+The model's arrays are named in :class:`MoveModel`; it also lists the pairs seen,
+which planning draws from uniformly (Sutton & Barto 8.2).
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
+import numpy as np
 from numba import njit
 
-from learning import kinds as K
+from learning.tabular import draw_below
 
 INLINE = dict(cache=True, inline="always")
 COUNT_CAP = 1 << 30  # a pair's two counts are halved when their sum reaches this (int32)
 
 
+class MoveModel(NamedTuple):
+    successor: np.ndarray  # int32[nS, nA]; where the move was last seen to work to (-1: unseen)
+    to_goal: np.ndarray  # bool[nS, nA]; that successor is G's entry (the episode ended)
+    reward: np.ndarray  # float64[nS, nA]; the reward of that outcome
+    works: np.ndarray  # int32[nS, nA]; times the move was seen to work
+    fails: np.ndarray  # int32[nS, nA]; times it was seen to fail
+    seen: np.ndarray  # int32[nS * nA]; flat pairs s * nA + a in the order first seen
+    n_seen: np.ndarray  # int64[1]; how many of ``seen`` are in use
+    r_fail: np.ndarray  # float64[1]; the reward of the last failure (its replayed reward)
+
+
+def new_move_model(n_s: int, n_a: int) -> MoveModel:
+    return MoveModel(np.full((n_s, n_a), -1, dtype=np.int32), np.zeros((n_s, n_a), np.bool_),
+                     np.zeros((n_s, n_a)), np.zeros((n_s, n_a), np.int32),
+                     np.zeros((n_s, n_a), np.int32), np.zeros(n_s * n_a, np.int32),
+                     np.zeros(1, np.int64), np.zeros(1))
+
+
 @njit(**INLINE)
-def observe_outcome(imap, fmap, counts, c0, fvar, n_a, s, a, r, s2, terminated, worked):
+def note_pair(m, s, a):
+    """Add (s, a) to the pairs planning draws from, if it is new; True if it was."""
+    if m.successor[s, a] >= 0:
+        return False
+    m.seen[m.n_seen[0]] = s * m.successor.shape[1] + a
+    m.n_seen[0] += 1
+    return True
+
+
+@njit(**INLINE)
+def observe_outcome(m, s, a, r, s2, terminated, worked):
     """Record the real step s -a-> s2 (reward r) in the model. ``worked``: the move did
     what it is for (RNH-QL+: reached the neighbour it heads for; Dyna-Q: moved at all)."""
-    j = c0 + 2 * (s * n_a + a)
-    if counts[j] + counts[j + 1] >= COUNT_CAP:  # int32: halve, keeping the rate and any 0
-        counts[j] = (counts[j] + 1) // 2
-        counts[j + 1] = (counts[j + 1] + 1) // 2
+    if m.works[s, a] + m.fails[s, a] >= COUNT_CAP:  # int32: halve, keeping the rate and any 0
+        m.works[s, a] = (m.works[s, a] + 1) // 2
+        m.fails[s, a] = (m.fails[s, a] + 1) // 2
     if worked:
-        counts[j] += 1
+        m.works[s, a] += 1
     else:
-        counts[j + 1] += 1
-        fvar[K.F_RFAIL] = r
-        if counts[j] > 0:
+        m.fails[s, a] += 1
+        m.r_fail[0] = r
+        if m.works[s, a] > 0:
             return  # seen to work before: the successor stays; this was a failure among works
-    imap[s, a] = s2
-    imap[s, n_a + a] = 1 if terminated else 0
-    fmap[s, a] = r
+    m.successor[s, a] = s2
+    m.to_goal[s, a] = terminated
+    m.reward[s, a] = r
 
 
 @njit(**INLINE)
-def never_worked(imap, counts, c0, n_a, s, a):
+def never_worked(m, s, a):
     """Tried, and never seen to work (the optimistic model's wall)."""
-    return imap[s, a] >= 0 and counts[c0 + 2 * (s * n_a + a)] == 0
+    return m.successor[s, a] >= 0 and m.works[s, a] == 0
 
 
 @njit(**INLINE)
-def replay_fails(counts, c0, n_a, s, a, rng):
-    """Whether a planned replay of the seen pair (s, a) draws the failure outcome (stay
-    put, ``fvar[F_RFAIL]``) instead of the stored one. Only a pair seen both to work and
-    to fail draws (one ``rng.random()``), with the frequency failures were seen; a pair
-    that never worked replays its stored failure, one that never failed its success."""
-    j = c0 + 2 * (s * n_a + a)
-    n_ok, n_fail = counts[j], counts[j + 1]
+def pair_of(j, n_a):
+    """(s, a) of the flat pair j = s * n_a + a."""
+    if n_a == 4:  # the grid's four moves: shifts, not two integer divisions
+        return j >> 2, j & 3
+    return j // n_a, j % n_a
+
+
+@njit(**INLINE)
+def draw_seen(m, rng):
+    """A seen pair (s, a), uniform over the pairs seen (one ``rng.random()``)."""
+    return pair_of(m.seen[draw_below(rng, m.n_seen[0])], m.successor.shape[1])
+
+
+@njit(**INLINE)
+def replay_draws_failure(n_ok, n_fail, rng):
+    """:func:`replay_fails` on the pair's two counts."""
     if n_ok == 0 or n_fail == 0:
         return False
     return rng.random() * (n_ok + n_fail) < n_fail
+
+
+@njit(**INLINE)
+def replay_fails(m, s, a, rng):
+    """Whether a planned replay of the seen pair (s, a) draws the failure outcome (stay
+    put, ``r_fail``) instead of the stored one. Only a pair seen both to work and to fail
+    draws (one ``rng.random()``), with the frequency failures were seen; a pair that
+    never worked replays its stored failure, one that never failed its success."""
+    return replay_draws_failure(m.works[s, a], m.fails[s, a], rng)

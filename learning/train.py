@@ -15,18 +15,18 @@ from typing import Protocol
 
 import numpy as np
 
-from learning import kinds as K
 from learning.checkpoint import Checkpoint, CheckpointError
 from learning.geometry import TabularMDP, geometry_of
 from learning.kernels import NO_TRACE, greedy_route, on_shortest_fraction, run_episodes
-from learning.methods import MethodConfig
+from learning.config import MethodConfig
 from learning.metrics import (
     episodes_to_first_optimal,
     episodes_to_stable_optimal,
     optimal_test_fraction,
     reward_per_step,
 )
-from learning.state import AgentState, copy_state, init_state
+from learning.named_state import copy_state, episodes_done
+from learning.state import init_state
 
 EPISODE_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std")
 KERNEL_OUT = ("steps", "returns", "success", "shaping_mean", "shaping_std")  # run_episodes' out
@@ -40,7 +40,7 @@ class TrainResult:
     """Everything a run measured; arrays are per episode unless named ``test_*``."""
 
     config: MethodConfig
-    state: AgentState  # the trained agent (tables, weights)
+    state: object  # the trained agent: its method's named state (tables, weights)
     episodes: int  # episodes trained in all
     env_steps: int  # env steps in all
     steps: np.ndarray  # int32[n]; steps of each episode
@@ -90,7 +90,7 @@ class TrainResult:
         return {f: getattr(self, f) for f in EPISODE_FIELDS}
 
 
-def greedy_test(st: AgentState, model: TabularMDP, start: int | None = None) -> tuple[int, list]:
+def greedy_test(st, model: TabularMDP, start: int | None = None) -> tuple[int, list]:
     """(route length or -1, route states) of the exploitation policy from ``start`` (S)."""
     route = np.zeros(int(model.max_steps) + 1, dtype=np.int32)
     s0 = int(model.start if start is None else start)
@@ -98,7 +98,7 @@ def greedy_test(st: AgentState, model: TabularMDP, start: int | None = None) -> 
     return int(length), route[:n].tolist()
 
 
-def epsilon_route_lengths(st: AgentState, model: TabularMDP, eps: float,
+def epsilon_route_lengths(st, model: TabularMDP, eps: float,
                           rng: np.random.Generator, n: int = 20) -> np.ndarray:
     """Route lengths (-1: G missed) of ``n`` epsilon-greedy rollouts from S, no learning."""
     from learning.kernels import epsilon_rollouts
@@ -107,14 +107,14 @@ def epsilon_route_lengths(st: AgentState, model: TabularMDP, eps: float,
                             int(model.max_steps), float(eps), int(n), rng)
 
 
-def shortest_fraction(st: AgentState, model: TabularMDP) -> float:
+def shortest_fraction(st, model: TabularMDP) -> float:
     return float(on_shortest_fraction(st, model.next_state, model.distance_to_goal,
                                       model.start_states))
 
 
 def _resume(ck: Checkpoint, cfg: MethodConfig, model: TabularMDP, n_episodes: int,
             rng: np.random.Generator, arrays: dict[str, np.ndarray],
-            start_rng: np.random.Generator | None = None) -> tuple[AgentState, int, int]:
+            start_rng: np.random.Generator | None = None) -> tuple[object, int, int]:
     """Check ``ck`` fits this run, restore ``rng`` and the metrics so far; a copy of its state."""
     ck.check_compatible(cfg, model.next_state.shape[0], geometry_of(model))
     done = ck.episodes
@@ -151,7 +151,7 @@ class TrainObserver(Protocol):
         """Whether the states of episodes ``first_episode .. first_episode + n - 1`` are wanted."""
 
     def after_chunk(self, first_episode: int, n: int, trace: np.ndarray | None,
-                    arrays: dict[str, np.ndarray], state: AgentState,
+                    arrays: dict[str, np.ndarray], state,
                     test: tuple[int, list[int]]) -> None:
         """After a chunk: its traces (or None), the metric arrays so far, the greedy test."""
 
@@ -201,7 +201,7 @@ def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np
         if observer is not None:
             observer.after_chunk(done - n, n, trace if trace.shape[0] else None, arrays, st,
                                  test)
-    assert int(st.ivar[K.I_EPISODE]) == done
+    assert episodes_done(st) == done
     length, route = greedy_test(st, model)
     return TrainResult(config=cfg, state=st, episodes=done, env_steps=env_steps, **arrays,
                        test_episodes=np.asarray(tests_e, dtype=np.int64),

@@ -15,7 +15,7 @@ import pytest
 import sim.envs  # noqa: F401  (registers rnhql/GridRoute-v0)
 from learning import METHODS, RNHQL, geometry_of, init_state, make_agent, run_env_episodes
 from learning.kernels import run_episodes
-from learning.methods import RNHQLPlus
+from learning.rnh_ql_plus import RNHQLPlus
 
 EPISODES = 50
 

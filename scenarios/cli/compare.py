@@ -83,7 +83,7 @@ def overrides_per_method(methods: list[str], overrides: tuple[tuple[str, float],
     """
     import dataclasses
 
-    from learning.methods import METHODS
+    from learning.registry import METHODS
 
     make_config(methods[0], ())  # an unknown method name fails here, with the list of names
     out: dict[str, tuple[tuple[str, float], ...]] = {}
@@ -96,7 +96,9 @@ def overrides_per_method(methods: list[str], overrides: tuple[tuple[str, float],
         if not any(k in dict(o) for o in out.values()):
             raise ExperimentError("command line", f"--set {k}",
                                   f"none of the methods ({', '.join(methods)}) has a field "
-                                  f"{k!r}", "check the field name in learning/methods.py")
+                                  f"{k!r}", "use one of their fields: " + ", ".join(sorted(
+                                      {f.name for m in methods
+                                       for f in dataclasses.fields(METHODS[m])})))
     return out
 
 

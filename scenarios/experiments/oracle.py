@@ -23,7 +23,7 @@ import numpy as np
 
 from learning.geometry import geometry_of
 from learning.kernels import run_episodes
-from learning.methods import PFHRL
+from learning.pfh_rl import PFHRL
 from learning.metrics import episodes_to_stable_optimal
 from learning.rbf import rbf_features
 from learning.state import init_state
@@ -46,7 +46,7 @@ def train_with_potential(model, potential: np.ndarray, seed: int, episodes: int,
     cfg = PFHRL(gamma=gamma)
     rs = streams(seed)
     st = init_state(cfg, geometry_of(model), rs.learner)
-    st.feat[:, 0] = potential - potential[model.goal]  # Phi(G) = 0
+    st.phi[:] = potential - potential[model.goal]  # Phi(G) = 0
     tests_e, tests_l = [], []
     out = tuple(np.zeros(10, dtype=np.int32 if f == "steps" else bool if f == "success"
                          else np.float64) for f in KERNEL_OUT)

@@ -18,7 +18,6 @@ import gymnasium as gym
 import numpy as np
 
 from learning.readout import greedy_actions, potential, q_table
-from learning.state import AgentState
 from scenarios.recording.recorder import Recorder
 
 
@@ -67,7 +66,7 @@ class ChunkLogger:
     def __init__(self, rec: Recorder, plan: RecordPlan, first_episode: int = 0) -> None:
         self.rec, self.plan, self.logged = rec, plan, first_episode
 
-    def after_chunk(self, done: int, arrays: dict[str, np.ndarray], st: AgentState,
+    def after_chunk(self, done: int, arrays: dict[str, np.ndarray], st,
                     test_route: list[int]) -> None:
         if self.plan.detail:
             self.rec.log_episode_trajectory(done - 1, np.asarray(test_route),
@@ -90,7 +89,7 @@ class GridRecorder:
         return bool(self.plan.wanted(first_episode, n))
 
     def after_chunk(self, first_episode: int, n: int, trace: np.ndarray | None,
-                    arrays: dict[str, np.ndarray], state: AgentState,
+                    arrays: dict[str, np.ndarray], state,
                     test: tuple[int, list[int]]) -> None:
         if trace is not None:
             steps = arrays["steps"]

@@ -113,7 +113,7 @@ def scenario_digest(scenario: str, start: Cell | None = None, goal: Cell | None 
 
 def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
     """The method's frozen config with paper defaults, fields overridden by name."""
-    from learning.methods import METHODS
+    from learning.registry import METHODS
 
     if method not in METHODS:
         raise ExperimentError("command line", "--method", f"unknown method {method!r}",

@@ -1,21 +1,30 @@
 """RNH-QL+'s features: a map-sized lattice, sparse Gaussian features, leak-free supports.
 
-Split from :mod:`learning.rules_plus` (the update rules and agent events). Built
-once per agent in numpy (:func:`init_plus`); the leak-free flood fill runs in
-numba when the agent sees a new move succeed. Layout of the slots: see
-:mod:`learning.rules_plus`.
+Built once per agent in numpy (:func:`new_features`); the leak-free flood fill
+runs in numba when the agent sees a new move succeed.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from learning.explored import COL_NEXT, init_explored
 from learning.geometry import Geometry
-from learning.plus_optimism import optimistic_bfs
+
+
+class Features(NamedTuple):
+    """M feature slots per state, each one of the K centres (nearest first)."""
+
+    on: np.ndarray  # float64[nS, M]; the values in effect (leak-free: 0 until switched on)
+    base: np.ndarray  # float64[nS, M]; the Gaussian values (derived)
+    centre: np.ndarray  # int32[nS, M]; the centre of each slot (derived)
+    preds: np.ndarray  # int32[nS, nA]; states seen to move into this one (-1: none)
+    anchor: np.ndarray  # int32[K]; the first visited cell nearest each centre (-1: none)
+    stack: np.ndarray  # int32[nS]; the flood fill's stack
+
 
 # ---------------------------------------------------------------- features (numpy, once)
 
@@ -88,120 +97,98 @@ def sparse_features(geom: Geometry, spacing: int, k: int, sigma: float, cutoff: 
     return np.ascontiguousarray(vals), np.ascontiguousarray(cids), n_c
 
 
-def init_plus(cfg, geom: Geometry) -> dict[str, np.ndarray]:
-    """The RNH-QL+ slots (see the module docs) and the V_NN step size fvar[F_STEP_V]."""
-    n_s, n_a = geom.n_states, geom.n_actions
+def new_features(cfg, geom: Geometry) -> Features:
     base, cids, n_c = sparse_features(geom, cfg.spacing, cfg.k, cfg.sigma, cfg.cutoff,
                                       bool(cfg.normalise))
-    m = base.shape[1]
-    feat = np.zeros((n_s, 2 * m))
-    feat[:, m:] = base
-    if not cfg.leak_free:
-        feat[:, :m] = base
-    imap = np.full((n_s, 3 * n_a + m), -1, dtype=np.int32)
-    imap[:, n_a:2 * n_a] = 0
-    imap[:, 2 * n_a:2 * n_a + m] = cids
-    ilist = np.zeros(2 * n_s * n_a + n_c + 3 * n_s * n_a + 3 * n_s, dtype=np.int32)
-    a0 = 2 * n_s * n_a
-    ilist[a0:a0 + n_c] = -1
-    # the arena's neighbour table (the agent knows the cells, not the obstacles)
-    ilist[a0 + n_c:a0 + n_c + n_s * n_a] = init_explored(geom, False)[0][:, COL_NEXT:].ravel()
-    optimistic_bfs(imap, ilist, n_s, n_a, n_c, int(geom.goal))
-    step_v = cfg.beta / float(np.mean(np.sum(base * base, axis=1)))
-    e = np.zeros(n_c + 2 * n_s + 2)
-    e[n_c + 2 * n_s] = -1.0  # y not computed yet (learning.plus_optimism)
-    return dict(q=np.zeros((n_s, n_a)), w=np.zeros(n_c), e=e, feat=feat,
-                imap=imap, fmap=np.zeros((2 * n_s + 1, n_a)), ilist=ilist, step_v=step_v,
-                goal=int(geom.goal))
+    n_s, n_a = geom.n_states, geom.n_actions
+    on = np.zeros_like(base) if cfg.leak_free else base.copy()
+    return Features(on, base, cids, np.full((n_s, n_a), -1, np.int32),
+                    np.full(n_c, -1, np.int32), np.zeros(n_s, np.int32))
 
 
-# ---------------------------------------------------------------- V_NN over sparse features
+# ---------------------------------------------------------------- leak-free supports
 
 
 @njit(cache=True)
-def _slot(feat, imap, off, c, i):
+def _slot(ft, c, i):
     """Feature slot of centre i at state c, -1 if c is outside i's support window."""
-    m_n = feat.shape[1] // 2
-    for m in range(m_n):
-        if imap[c, off + m] == i and feat[c, m_n + m] > 0.0:
+    for m in range(ft.on.shape[1]):
+        if ft.centre[c, m] == i and ft.base[c, m] > 0.0:
             return m
     return -1
 
 
 @njit(cache=True)
-def _switch_on(feat, c, m, normalise):
-    m_n = feat.shape[1] // 2
-    feat[c, m] = feat[c, m_n + m]
+def _switch_on(ft, c, m, normalise):
+    on = ft.on
+    base = ft.base
+    on[c, m] = base[c, m]
     if normalise:  # renormalise the row over the switched-on features (bases sum to 1)
         tot = 0.0
-        for j in range(m_n):
-            if feat[c, j] > 0.0:
-                tot += feat[c, m_n + j]
-        for j in range(m_n):
-            if feat[c, j] > 0.0:
-                feat[c, j] = feat[c, m_n + j] / tot
+        for j in range(on.shape[1]):
+            if on[c, j] > 0.0:
+                tot += base[c, j]
+        for j in range(on.shape[1]):
+            if on[c, j] > 0.0:
+                on[c, j] = base[c, j] / tot
 
 
 @njit(cache=True)
-def _flood(feat, imap, ilist, stack0, off, roff, n_a, i, c, normalise):
+def _flood(ft, successor, i, c, normalise):
     """Switch centre i on at c and at every cell of i's window connected to c by seen moves."""
-    m = _slot(feat, imap, off, c, i)
-    if m < 0 or feat[c, m] > 0.0:
+    m = _slot(ft, c, i)
+    if m < 0 or ft.on[c, m] > 0.0:
         return
-    _switch_on(feat, c, m, normalise)
-    ilist[stack0] = c
+    _switch_on(ft, c, m, normalise)
+    stack = ft.stack
+    n_a = successor.shape[1]
+    stack[0] = c
     top = 1
     while top > 0:
         top -= 1
-        x = ilist[stack0 + top]
+        x = stack[top]
         for j in range(2 * n_a):
-            y = imap[x, j] if j < n_a else imap[x, roff + j - n_a]
+            y = successor[x, j] if j < n_a else ft.preds[x, j - n_a]
             if y < 0 or y == x:
                 continue
-            my = _slot(feat, imap, off, y, i)
-            if my >= 0 and feat[y, my] == 0.0:
-                _switch_on(feat, y, my, normalise)
-                ilist[stack0 + top] = y
+            my = _slot(ft, y, i)
+            if my >= 0 and ft.on[y, my] == 0.0:
+                _switch_on(ft, y, my, normalise)
+                stack[top] = y
                 top += 1
 
 
 @njit(cache=True)
-def leak_free_enter(feat, imap, ilist, n_s, n_a, s, normalise):
+def leak_free_enter(ft, successor, s, normalise):
     """On entering s: if s's nearest centre has no anchor yet, s becomes it and the
     centre's support is flooded from s."""
-    m_n = feat.shape[1] // 2
-    off = 2 * n_a
-    a0 = 2 * n_s * n_a
-    i = imap[s, off]
-    if ilist[a0 + i] < 0 and feat[s, m_n] > 0.0:
-        ilist[a0 + i] = s
-        _flood(feat, imap, ilist, ilist.shape[0] - n_s, off, off + m_n, n_a, i, s, normalise)
+    i = ft.centre[s, 0]
+    if ft.anchor[i] < 0 and ft.base[s, 0] > 0.0:
+        ft.anchor[i] = s
+        _flood(ft, successor, i, s, normalise)
 
 
 @njit(cache=True)
-def leak_free_edge(feat, imap, ilist, n_s, n_a, s, s2, normalise):
+def leak_free_edge(ft, successor, s, s2, normalise):
     """A move s -> s2 was seen for the first time: remember s as a predecessor of s2, and
     join s2 (or s) to every support that holds s (or s2) and whose window holds both."""
-    m_n = feat.shape[1] // 2
-    off = 2 * n_a
-    roff = off + m_n
-    for k in range(n_a):
-        if imap[s2, roff + k] == s:
+    preds = ft.preds
+    for k in range(preds.shape[1]):
+        if preds[s2, k] == s:
             break
-        if imap[s2, roff + k] < 0:
-            imap[s2, roff + k] = s
+        if preds[s2, k] < 0:
+            preds[s2, k] = s
             break
-    stack0 = ilist.shape[0] - n_s
-    for m in range(m_n):
-        if feat[s, m_n + m] <= 0.0:
+    for m in range(ft.on.shape[1]):
+        if ft.base[s, m] <= 0.0:
             continue
-        i = imap[s, off + m]
-        m2 = _slot(feat, imap, off, s2, i)
+        i = ft.centre[s, m]
+        m2 = _slot(ft, s2, i)
         if m2 < 0:
             continue
-        on1 = feat[s, m] > 0.0
-        on2 = feat[s2, m2] > 0.0
+        on1 = ft.on[s, m] > 0.0
+        on2 = ft.on[s2, m2] > 0.0
         if on1 and not on2:
-            _flood(feat, imap, ilist, stack0, off, roff, n_a, i, s2, normalise)
+            _flood(ft, successor, i, s2, normalise)
         elif on2 and not on1:
-            _flood(feat, imap, ilist, stack0, off, roff, n_a, i, s, normalise)
+            _flood(ft, successor, i, s, normalise)

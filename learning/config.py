@@ -1,0 +1,83 @@
+"""What every method's config has: the frozen dataclass base, its checks, and its parameters.
+
+A config is pure data (units and meaning in the field comments). Its
+:meth:`MethodConfig.params` is the same data as a named tuple of scalars, which
+is what the compiled rules read (``st.par.alpha``): numba types a named tuple's
+fields by name, so a rule says which parameter it uses.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import ClassVar, NamedTuple
+
+# field -> (valid?, what a valid value is); checked for every config that has the field
+_VALID = {
+    "eps": (lambda v: 0.0 <= v <= 1.0, "in [0, 1]"),
+    "alpha": (lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
+    "gamma": (lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
+    "lam": (lambda v: 0.0 <= v <= 1.0, "in [0, 1]"),
+    "k": (lambda v: v >= 1, ">= 1"),
+    "spacing_m": (lambda v: v >= 0.0, ">= 0 (0: k x k centres)"),
+    "block": (lambda v: v >= 1, ">= 1"),
+    "n_planning": (lambda v: v >= 0, ">= 0"),
+    "warmup_episodes": (lambda v: v >= 0, ">= 0"),
+    "freeze_after_episodes": (lambda v: v >= 0, ">= 0 or None"),
+    "beta": (lambda v: v > 0.0, "> 0"),
+    "alpha_v": (lambda v: 0.0 < v <= 1.0, "in (0, 1]"),
+    "q_scale": (lambda v: v > 0.0, "> 0"),
+    "trace_min": (lambda v: v > 0.0, "> 0"),
+    "init_range": (lambda v: v > 0.0, "> 0"),
+    "spacing": (lambda v: v >= 0, ">= 0"),
+    "sigma": (lambda v: v > 0.0, "> 0"),
+    "cutoff": (lambda v: v >= 0.0, ">= 0 (0: no cut-off)"),
+    "normalise": (lambda v: v in (0, 1), "0 or 1"),
+    "v_target": (lambda v: v in (0, 1, 2, 3, 4, 5), "0 (TD on rewards), 1 (max_a Q + Phi), 2 "
+                 "(its log), 3 (log of the optimistic model's value), 4 (that value, no "
+                 "network), 5 (log of max_a Q + Phi over that value)"),
+    "shaping_scale": (lambda v: v >= 0.0, ">= 0"),
+    "lam_q": (lambda v: 0.0 <= v <= 1.0, "in [0, 1]"),
+    "leak_free": (lambda v: v in (0, 1), "0 or 1"),
+    "rebase": (lambda v: v in (0, 1), "0 or 1"),
+    "lookahead": (lambda v: v in (0, 1), "0 or 1"),
+    "n_fit": (lambda v: v >= 0, ">= 0"),
+    "explored": (lambda v: v in (0, 1), "0 or 1"),
+}
+
+
+class BaseParams(NamedTuple):
+    """The parameters every method reads (methods with more declare their own tuple)."""
+
+    eps: float
+    alpha: float
+    gamma: float
+
+
+@dataclass(frozen=True)
+class MethodConfig:
+    """Fields every method has. Episodes are 0-based; rewards are the env's."""
+
+    name: ClassVar[str] = "?"  # paper/display name
+    cli: ClassVar[str] = "?"  # CLI name, the key in learning.registry.METHODS
+
+    eps: float = 0.1  # probability of a uniformly random action (epsilon-greedy)
+    alpha: float = 0.1  # Q learning rate (step size on the TD error)
+    gamma: float = 0.95  # discount per step
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            if f.name in _VALID:
+                ok, what = _VALID[f.name]
+                v = getattr(self, f.name)
+                if v is not None and not ok(v):
+                    raise ValueError(f"{type(self).__name__}.{f.name} = {v!r} must be {what}")
+
+    def params(self) -> NamedTuple:
+        """The fields the compiled rules read, as a named tuple of float/int/bool scalars
+        (each cast to the type its rule expects, so a ``--set`` value never changes the
+        compiled signature)."""
+        return BaseParams(float(self.eps), float(self.alpha), float(self.gamma))
+
+    def fields(self) -> dict[str, object]:
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}

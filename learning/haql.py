@@ -1,0 +1,223 @@
+"""HAQL (``haql``, Bianchi 2008): heuristically accelerated Q-learning, act on
+argmax[Q + xi * H^beta] with H favouring the heuristic move pi_H(s).
+
+With a static heuristic (the Manhattan move) pi_H never changes, and with
+xi = beta = 1 the heuristic move always wins the argmax, so the route is fixed
+before learning starts. By default pi_H is a *heuristic from exploration*
+(Bianchi, Ribeiro & Costa 2008): the first move of a shortest route to G in the
+agent's free-space model (:mod:`learning.free_space`), re-derived for every
+state by one BFS from G when a move's blocked status changes. The route the
+agent follows therefore changes as it learns where the walls are.
+
+A move is blocked while bumps are its most likely outcome: more bumps than
+arrivals at its neighbour have been seen (the most-likely-outcome
+determinization of a stochastic move, as FF-Replan's). With wheel noise and
+carried pose a free move can fail now and then, and a move past an obstacle's
+edge can get through now and then: one unlucky bump does not wall off a route,
+one lucky pass does not open a wall. In a deterministic world a move's outcome
+never changes, and this is the original rule (blocked from its first bump).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar, NamedTuple
+
+import numpy as np
+from numba import njit
+
+from learning.config import MethodConfig
+from learning.free_space import FreeSpace, bfs_to_goal, new_free_space
+from learning.geometry import Geometry
+from learning.tabular import q_learning, row_max
+from learning.tally import Tally, begin_tally, new_tally
+
+HOOK = dict(cache=True, inline="always")
+COUNT_CAP = 1 << 30  # bumps minus arrivals saturate here (int32)
+
+
+@dataclass(frozen=True)
+class HAQL(MethodConfig):
+    """Heuristically accelerated Q-learning (Bianchi 2008): act on argmax[Q + xi * H^beta].
+
+    H(s,a) = max_b Q(s,b) - Q(s,a) + eta for the heuristic move a = pi_H(s), else
+    0; Q is learned off-policy. With xi = beta = 1 the heuristic move always wins
+    the argmax, so what pi_H is decides everything:
+
+    - ``explored = 1`` (default): pi_H is a heuristic from exploration
+      (:mod:`learning.haql`): the first move of a shortest route to G over the
+      moves not yet seen to fail, re-derived at every new bump. The route follows
+      what the agent has learned about the walls.
+    - ``explored = 0``: Bianchi's static heuristic, the move that most reduces
+      the Manhattan distance to G. It never changes, so the route is fixed before
+      learning starts (kept to show exactly that).
+    """
+
+    name: ClassVar[str] = "HAQL"
+    cli: ClassVar[str] = "haql"
+    xi: float = 1.0  # heuristic weight xi
+    beta_h: float = 1.0  # heuristic exponent beta
+    eta: float = 0.1  # margin of the heuristic move over the current max [reward units]
+    explored: int = 1  # 1: heuristic from exploration; 0: the static Manhattan move
+
+    def params(self) -> Params:
+        return Params(float(self.eps), float(self.alpha), float(self.gamma), float(self.xi),
+                      float(self.beta_h), float(self.eta), bool(self.explored))
+
+
+class Params(NamedTuple):
+    eps: float
+    alpha: float
+    gamma: float
+    xi: float
+    beta_h: float
+    eta: float
+    explored: bool
+
+
+class State(NamedTuple):
+    par: Params
+    tally: Tally
+    q: np.ndarray  # float64[nS, nA]
+    pi_h: np.ndarray  # int32[nS]; the heuristic move of each state
+    balance: np.ndarray  # int32[nS, nA]; bumps minus arrivals seen (blocked when > 0)
+    free: FreeSpace  # the free-space model pi_H is derived from
+
+
+def heuristic_actions(geom: Geometry) -> np.ndarray:
+    """int32[nS]: Bianchi's static pi_H(s), the move that most reduces the Manhattan distance
+    to G. Both axes usually reduce it by one cell; the move is then along the axis with
+    more cells left (x on equal), a straight-ish diagonal staircase. At the goal: 0."""
+    d = geom.cells[geom.goal] - geom.cells  # cells still to go (dx, dy)
+    dx, dy = d[:, 0], d[:, 1]
+    along_x = np.abs(dx) >= np.abs(dy)
+    act_x = np.where(dx > 0, 3, 2)
+    act_y = np.where(dy > 0, 0, 1)
+    pi = np.where(along_x, act_x, act_y)
+    pi[(dx == 0) & (dy == 0)] = 0
+    return np.ascontiguousarray(pi.astype(np.int32))
+
+
+def init_state(cfg: HAQL, geom: Geometry, rng: np.random.Generator) -> State:
+    n_s, n_a = geom.n_states, geom.n_actions
+    st = State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), np.zeros(n_s, np.int32),
+               np.zeros((n_s, n_a), np.int32), new_free_space(geom))
+    if cfg.explored:
+        rederive(st.pi_h, st.free)
+    else:
+        st.pi_h[:] = heuristic_actions(geom)
+    return st
+
+
+@njit(cache=True)
+def rederive(pi_h, fs):
+    """pi_H for every state: the unblocked move to the neighbour nearest G (lowest index on
+    ties; move 0 where no neighbour has a route), after one BFS from G."""
+    bfs_to_goal(fs)
+    nb = fs.neighbour
+    dist = fs.distance
+    for s in range(pi_h.shape[0]):
+        best, best_d = 0, -1
+        for a in range(nb.shape[1]):
+            t = nb[s, a]
+            if t < 0 or fs.blocked[s, a] or dist[t] < 0:
+                continue
+            if best_d < 0 or dist[t] < best_d:
+                best, best_d = a, dist[t]
+        pi_h[s] = best
+
+
+@njit(cache=True, inline="always")
+def observe(st, s, a, s2, terminated):
+    """After a move: a bump (stayed in s) counts up, a move that reached its neighbour
+    down; when the sign flips (the move's most likely outcome changed), re-derive pi_H.
+    (A move that drifted into another cell tells nothing about this one.)"""
+    bal = st.balance
+    if s2 == st.free.neighbour[s, a]:
+        if bal[s, a] > -COUNT_CAP:  # int32: a long run must not wrap round
+            bal[s, a] -= 1
+    elif s2 == s and not terminated:
+        if bal[s, a] < COUNT_CAP:
+            bal[s, a] += 1
+    else:
+        return
+    now = bal[s, a] > 0
+    if now != st.free.blocked[s, a]:
+        st.free.blocked[s, a] = now
+        rederive(st.pi_h, st.free)
+
+
+@njit(cache=True)
+def score(q, s, b, m, pi_h, xi, beta, eta):
+    """Q(s,b) + xi * H(s,b)^beta, H = max Q - Q(s,b) + eta on the heuristic move, else 0."""
+    if b != pi_h:
+        return q[s, b]
+    return q[s, b] + xi * (m - q[s, b] + eta) ** beta
+
+
+@njit(cache=True)
+def best_first(q, s, pi_h, xi, beta, eta):
+    """argmax of the HAQL scores, ties to the lowest index (the deterministic test policy)."""
+    m = row_max(q, s)
+    best = score(q, s, 0, m, pi_h, xi, beta, eta)
+    a = 0
+    for b in range(1, q.shape[1]):
+        v = score(q, s, b, m, pi_h, xi, beta, eta)
+        if v > best:
+            best = v
+            a = b
+    return a
+
+
+@njit(cache=True, inline="always")
+def best_drawn(q, s, pi_h, xi, beta, eta, rng):
+    """argmax of the HAQL scores; ties broken with ``rng.integers(0, n_ties)``."""
+    m = row_max(q, s)
+    best = score(q, s, 0, m, pi_h, xi, beta, eta)
+    a = 0
+    ties = 1
+    for b in range(1, q.shape[1]):
+        v = score(q, s, b, m, pi_h, xi, beta, eta)
+        if v > best:
+            best = v
+            a = b
+            ties = 1
+        elif v == best:
+            ties += 1
+    if ties == 1:
+        return a
+    k = rng.integers(0, ties)
+    for b in range(q.shape[1]):
+        if score(q, s, b, m, pi_h, xi, beta, eta) == best:
+            if k == 0:
+                return b
+            k -= 1
+    return a
+
+
+@njit(**HOOK)
+def act(st, s, rng):
+    """Epsilon-greedy around argmax[Q + xi * H^beta]."""
+    p = st.par
+    if rng.random() < p.eps:
+        return rng.integers(0, st.q.shape[1])
+    return best_drawn(st.q, s, st.pi_h[s], p.xi, p.beta_h, p.eta, rng)
+
+
+@njit(**HOOK)
+def update(st, s, a, r, s2, terminated, rng):
+    """Q-learning, and the heuristic from exploration learns from the move's outcome."""
+    q_learning(st.q, s, a, r, s2, terminated, st.par.alpha, st.par.gamma, 0.0)
+    if st.par.explored:
+        observe(st, s, a, s2, terminated)
+
+
+@njit(**HOOK)
+def begin(st, s0):
+    begin_tally(st.tally)
+
+
+@njit(**HOOK)
+def exploit(st, s):
+    p = st.par
+    return best_first(st.q, s, st.pi_h[s], p.xi, p.beta_h, p.eta)

@@ -1,0 +1,422 @@
+"""RNH-QL+'s rules and agent events.
+
+The architecture is RNH-QL's: a Q-table below, a potential above that shapes
+the Q update with F = gamma * Phi(s') - Phi(s), Phi(goal) = 0. What changes
+(each a config field, see :class:`learning.rnh_ql_plus.config.RNHQLPlus`):
+
+* the potential (``v_target``, a :class:`~learning.rnh_ql_plus.config.Potential`):
+  the paper's V_NN by TD(lambda) on rewards; V_NN toward the table's own value or
+  its log; V_NN toward the log of the optimistic model's value y(s); **Phi = y(s)
+  itself, no network (the default)**; or y(s) * exp(V_NN(s)), V_NN learning a
+  residual of at most 0;
+* ``lookahead``: an untried action is valued by one step of look-ahead on Phi
+  in the optimistic model (Wiewiora's look-ahead advice), so the agent heads
+  for G along the route it believes free instead of trying actions in index
+  order;
+* the lattice is tied to the map (a centre every ``spacing`` cells) and the
+  features are **sparse** (:mod:`learning.rnh_ql_plus.features`): a step costs
+  O(M), not O(K), on any map size; ``leak_free`` supports grow by flood fill
+  along moves seen to succeed;
+* ``rebase``: when Phi(s) changes, row s's tried actions are shifted so Q + Phi
+  is unchanged (off by default: when the optimistic model learns of a wall,
+  Phi falls and so should the values learned through it);
+* a learned model (:mod:`learning.move_model`: a move's successor and how often
+  it failed) drives ``n_planning`` shaped Q updates per step (Dyna), and
+  ``lam_q`` adds Watkins Q(lambda) traces to the real step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from learning.free_space import bfs_to_goal, distances_change
+from learning.move_model import (
+    never_worked,
+    note_pair,
+    observe_outcome,
+    pair_of,
+    replay_draws_failure,
+)
+from learning.rnh_ql_plus.config import Potential
+from learning.rnh_ql_plus.features import leak_free_edge, leak_free_enter
+from learning.rnh_ql_plus.optimism import ensure_values, goal_reward, mark_stale, observe_rewards
+from learning.tabular import (
+    argmax_drawn,
+    argmax_first,
+    draw_below,
+    eps_greedy,
+    is_greedy,
+    q_learning,
+    row_max,
+)
+from learning.tally import begin_tally, record_shaping
+from learning.traces import clear_traces, q_lambda
+
+HOOK = dict(cache=True, inline="always")
+# Paths the default configuration never takes on a step (V_NN fits, TD(lambda), the
+# potential as a function, re-basing) stay real calls: inlined at each of their ~15 call
+# sites they made the rnh-ql+ kernel take minutes to compile.
+COLD = dict(cache=True)
+LOG_FLOOR = 1e-3  # LOG_TABLE: values below this [reward units] are learned as this
+OPT_FLOOR = 1e-12  # LOG_OPTIMISTIC: optimistic values below this are learned as this
+# the potentials as plain ints for compiled comparisons
+TD_REWARDS, LOG_TABLE = int(Potential.TD_REWARDS), int(Potential.LOG_TABLE)
+LOG_OPTIMISTIC, OPTIMISTIC = int(Potential.LOG_OPTIMISTIC), int(Potential.OPTIMISTIC)
+RESIDUAL = int(Potential.RESIDUAL)
+
+
+# ---------------------------------------------------------------- V_NN over sparse features
+
+
+@njit(**HOOK)
+def v_of(w, on, centre, s):
+    """V_NN(s) = sum_m on[s, m] * w[centre[s, m]] over the effective features."""
+    v = 0.0
+    for m in range(on.shape[1]):
+        v += on[s, m] * w[centre[s, m]]
+    return v
+
+
+@njit(**COLD)
+def v_regress(w, on, centre, s, target, step):
+    """Normalised LMS: w += step * (target - V(s)) * phi(s)."""
+    c = step * (target - v_of(w, on, centre, s))
+    for m in range(on.shape[1]):
+        w[centre[s, m]] += c * on[s, m]
+
+
+@njit(**COLD)
+def v_td_lambda(w, e, on, centre, s, r, v_s2, greedy, gamma, lam, step):
+    """TD(lambda) on env rewards with Watkins cutting (learning.rbf.td_lambda, sparse phi)."""
+    if not greedy:
+        e[:] = 0.0
+        return
+    delta = r + gamma * v_s2 - v_of(w, on, centre, s)
+    gl = gamma * lam
+    for i in range(w.shape[0]):
+        e[i] *= gl
+    for m in range(on.shape[1]):
+        e[centre[s, m]] += on[s, m]
+    c = step * delta
+    for i in range(w.shape[0]):
+        w[i] += c * e[i]
+
+
+@njit(**COLD)
+def potential(par, w, on, centre, y, s):
+    """Phi(s) = scale * V_NN(s); scale * exp(V_NN(s)) when V_NN learns log values
+    (LOG_TABLE, LOG_OPTIMISTIC); scale * y(s), the optimistic model's value itself, with
+    no network (OPTIMISTIC, the reference row of the ablation)."""
+    vt = par.v_target
+    if vt == OPTIMISTIC:
+        return par.scale * y[s]
+    v = v_of(w, on, centre, s)
+    if vt == RESIDUAL:  # V_NN learns log(V / y), at most 0: Phi never above the optimistic value
+        return par.scale * y[s] * math.exp(min(v, 0.0))
+    if vt == LOG_TABLE or vt == LOG_OPTIMISTIC:
+        v = math.exp(min(v, 50.0))
+    return par.scale * v
+
+
+@njit(**HOOK)
+def phi_of(st, s):
+    return potential(st.par, st.w, st.feat.on, st.feat.centre, st.opt.y, s)
+
+
+@njit(**HOOK)
+def model_phi(par):
+    """True when Phi is the optimistic model's value itself (no re-basing): hot loops then
+    read scale * y from its cache instead of calling :func:`potential`, whose array
+    arguments numba reference-counts on every call it cannot prune (measured: 37 ns a
+    call against 4 ns for the load)."""
+    return par.v_target == OPTIMISTIC and not par.rebase
+
+
+# ---------------------------------------------------------------- re-based rows
+
+
+@njit(**COLD)
+def rebase(par, q, w, on, centre, y, phi_row, successor, s):
+    """Phi(s) now; row s's tried actions re-based onto it (Q + Phi unchanged), untried ones
+    left at 0, i.e. valued at Phi(s). Returns Phi(s)."""
+    phi = potential(par, w, on, centre, y, s)
+    d = phi_row[s] - phi
+    if d != 0.0:
+        for a in range(q.shape[1]):
+            if successor[s, a] >= 0:
+                q[s, a] += d
+        phi_row[s] = phi
+    return phi
+
+
+@njit(**HOOK)
+def rebase_at(st, s):
+    return rebase(st.par, st.q, st.w, st.feat.on, st.feat.centre, st.opt.y, st.phi_row,
+                  st.model.successor, s)
+
+
+@njit(**HOOK)
+def tried_max(q, successor, s):
+    """max over the tried actions of Q(s, .) (-inf if none)."""
+    m = -np.inf
+    for a in range(q.shape[1]):
+        if successor[s, a] >= 0 and q[s, a] > m:
+            m = q[s, a]
+    return m
+
+
+@njit(**HOOK)
+def action_values(st, s):
+    """Row s's action values (in re-based units, Q + Phi - Phi(s)) into the scratch row
+    ``values[0]``: a tried action its Q; an untried one one step of look-ahead in the
+    optimistic model, r_free + gamma * Phi(neighbour) - Phi(s) (r_goal - Phi(s) into G,
+    -inf off the arena)."""
+    par = st.par
+    q = st.q
+    out = st.values
+    direct = model_phi(par)
+    scale = par.scale
+    y = st.opt.y
+    if direct:
+        phi_s = scale * y[s]
+    elif par.rebase:
+        phi_s = st.phi_row[s]
+    else:
+        phi_s = phi_of(st, s)
+    goal = st.free.goal[0]
+    succ = st.model.successor  # hoisted: a nested tuple's field read in a loop costs a
+    nb = st.free.neighbour  # reference count per read
+    r_free = st.opt.r_free[0]
+    r_goal = goal_reward(st.opt, par.gamma)
+    for a in range(q.shape[1]):
+        if succ[s, a] >= 0:
+            out[0, a] = q[s, a]
+            continue
+        u = nb[s, a]
+        if u < 0:
+            out[0, a] = -np.inf
+        elif u == goal:
+            out[0, a] = r_goal - phi_s
+        else:
+            phi_u = scale * y[u] if direct else phi_of(st, u)
+            out[0, a] = r_free + par.gamma * phi_u - phi_s
+
+
+@njit(**HOOK)
+def lookahead_on(st):
+    return st.par.lookahead and st.shaping[0]
+
+
+@njit(**HOOK)
+def act(st, s, rng):
+    """Epsilon-greedy; with look-ahead, greedy over :func:`action_values` (ties drawn)."""
+    if not lookahead_on(st):
+        return eps_greedy(st.q, s, st.par.eps, rng)
+    if rng.random() < st.par.eps:
+        return draw_below(rng, st.q.shape[1])
+    action_values(st, s)
+    return argmax_drawn(st.values, 0, rng)
+
+
+@njit(**HOOK)
+def exploit(st, s):
+    """Greedy test policy, ties to the lowest index: with look-ahead over
+    :func:`action_values`; else over tried actions (re-based rows), or over Q."""
+    q = st.q
+    if lookahead_on(st):
+        if st.par.rebase:
+            rebase_at(st, s)
+        action_values(st, s)
+        return argmax_first(st.values, 0)
+    a = 0
+    if st.par.rebase:
+        m = -np.inf
+        for b in range(q.shape[1]):
+            if st.model.successor[s, b] >= 0 and q[s, b] > m:
+                m = q[s, b]
+                a = b
+        if m > -np.inf:
+            return a
+    for b in range(1, q.shape[1]):
+        if q[s, b] > q[s, a]:
+            a = b
+    return a
+
+
+# ---------------------------------------------------------------- agent events
+
+
+@njit(**COLD)
+def fit_v(st, s, shaping, based, rng):
+    """The network variants' V_NN fit at s (and LOG_OPTIMISTIC's ``n_fit`` random states)."""
+    par = st.par
+    w = st.w
+    on = st.feat.on
+    centre = st.feat.centre
+    y = st.opt.y
+    vt = par.v_target
+    step = st.step_v[0]
+    if vt == LOG_OPTIMISTIC:  # V_NN learns log y: at s and at n_fit random states
+        v_regress(w, on, centre, s, math.log(max(y[s], OPT_FLOOR)), step)
+        for _ in range(par.n_fit):
+            j = draw_below(rng, st.q.shape[0])
+            v_regress(w, on, centre, j, math.log(max(y[j], OPT_FLOOR)), step)
+        return
+    if based:
+        target = tried_max(st.q, st.model.successor, s) + st.phi_row[s]
+    else:
+        target = row_max(st.q, s)
+        if shaping:
+            target += st.phi_here[0]
+    if vt == LOG_TABLE:  # V_NN learns log values: Phi = scale * exp(V_NN)
+        target = math.log(max(target, LOG_FLOOR))
+    elif vt == RESIDUAL:  # V_NN learns the log of the table's value over the optimistic one
+        yy = y[s] * par.scale
+        if not yy > 0.0:
+            return
+        target = math.log(max(target, OPT_FLOOR) / yy)
+    v_regress(w, on, centre, s, target, step)
+
+
+@njit(**HOOK)
+def plan(st, based, shaping, rng):
+    """``n_planning`` shaped Q updates on seen pairs, each replaying a drawn outcome."""
+    par = st.par
+    q = st.q
+    m = st.model
+    gamma = par.gamma
+    alpha = par.alpha
+    scale = par.scale
+    y = st.opt.y
+    direct = model_phi(par)
+    seen = m.seen  # hoisted out of the loop (see action_values)
+    n_seen = m.n_seen[0]
+    succ = m.successor
+    to_goal = m.to_goal
+    reward = m.reward
+    works = m.works
+    fails = m.fails
+    r_fail = m.r_fail[0]
+    n_a = q.shape[1]
+    for _ in range(par.n_planning):
+        ps, pa = pair_of(seen[draw_below(rng, n_seen)], n_a)
+        ps2 = succ[ps, pa]
+        pterm = to_goal[ps, pa]
+        pr = reward[ps, pa]
+        if replay_draws_failure(works[ps, pa], fails[ps, pa], rng):
+            ps2 = ps
+            pterm = False
+            pr = r_fail
+        pf = 0.0
+        if based:
+            p1 = rebase_at(st, ps)
+            p2 = 0.0 if pterm else rebase_at(st, ps2)
+            pf = gamma * p2 - p1
+        elif shaping and direct:
+            p2 = 0.0 if pterm else scale * y[ps2]
+            pf = gamma * p2 - scale * y[ps]
+        elif shaping:
+            p2 = 0.0 if pterm else phi_of(st, ps2)
+            pf = gamma * p2 - phi_of(st, ps)
+        q_learning(q, ps, pa, pr, ps2, pterm, alpha, gamma, pf)
+
+
+@njit(**HOOK)
+def update(st, s, a, r, s2, terminated, rng):
+    """Real step: F from the cached Phi(s) and Phi(s'); Q(-lambda) update; V_NN update;
+    model (and leak-free supports) update; ``n_planning`` shaped model updates."""
+    par = st.par
+    q = st.q
+    m = st.model
+    fs = st.free
+    ft = st.feat
+    gamma = par.gamma
+    shaping = st.shaping[0]
+    based = shaping and par.rebase
+    direct = model_phi(par)  # Phi read as scale * y
+    scale = par.scale
+    vt = par.v_target
+    optimistic = vt >= LOG_OPTIMISTIC
+    if based:
+        rebase_at(st, s)
+    stale = observe_rewards(st.opt, s, r, s2, terminated)
+    # model first: a new move may join s' to supports before Phi(s') is read
+    was_fail = fs.blocked[s, a]
+    if note_pair(m, s, a) and par.leak_free and s2 != s:
+        leak_free_edge(ft, m.successor, s, s2, par.normalise)
+    observe_outcome(m, s, a, r, s2, terminated, s2 == fs.neighbour[s, a])
+    now_fail = never_worked(m, s, a)
+    fs.blocked[s, a] = now_fail
+    # the optimistic model changed: a move now known to fail (BFS only if a distance
+    # changes), or one known to fail that moved after all (noisy physics worlds; on the
+    # grid and at the exact fidelity a move's outcome never changes)
+    if optimistic and now_fail != was_fail and (was_fail or distances_change(fs, s, a)):
+        bfs_to_goal(fs)
+        mark_stale(st.opt)
+        stale = True
+    if stale and optimistic:
+        ensure_values(st.opt, fs, gamma)
+    if par.leak_free and not terminated:
+        leak_free_enter(ft, m.successor, s2, par.normalise)
+    if terminated:
+        phi_s2 = 0.0
+    elif direct:
+        phi_s2 = scale * st.opt.y[s2]
+    else:
+        phi_s2 = phi_of(st, s2)
+    if based and not terminated:
+        phi_s2 = rebase_at(st, s2)
+    train_v = st.train_v[0]
+    if train_v and vt == TD_REWARDS:  # V_NN(s') only where TD(lambda) needs it
+        v2 = 0.0 if terminated else v_of(st.w, ft.on, ft.centre, s2)
+        v_td_lambda(st.w, st.v_trace, ft.on, ft.centre, s, r, v2, is_greedy(q, s, a), gamma,
+                    par.lam, st.step_v[0])
+    f = 0.0
+    if shaping:
+        phi_s = st.phi_row[s] if based else st.phi_here[0]
+        f = gamma * phi_s2 - phi_s
+        record_shaping(st.tally, f)
+    if par.lam_q > 0.0:
+        q_lambda(q, st.traces, s, a, r, s2, terminated, par.alpha, gamma, par.lam_q,
+                 par.trace_min, f)
+    else:
+        q_learning(q, s, a, r, s2, terminated, par.alpha, gamma, f)
+    if train_v and vt != TD_REWARDS and vt != OPTIMISTIC:
+        fit_v(st, s, shaping, based, rng)
+    plan(st, based, shaping, rng)
+    st.phi_here[0] = phi_s2
+
+
+@njit(**HOOK)
+def begin(st, s0):
+    """Reset traces and per-episode sums; shaping on from ``warmup``; V_NN frozen from
+    ``freeze``; anchor s0's centre (leak-free); cache Phi(s0)."""
+    par = st.par
+    begin_tally(st.tally)
+    if par.v_target >= LOG_OPTIMISTIC:  # the first episode, or a state changed from outside
+        ensure_values(st.opt, st.free, par.gamma)
+    if par.v_target == TD_REWARDS:
+        st.v_trace[:] = 0.0
+    if par.lam_q > 0.0:
+        clear_traces(st.traces)
+    ep = st.tally.episode[0]
+    st.shaping[0] = ep >= par.warmup
+    st.train_v[0] = ep < par.freeze
+    if par.leak_free:
+        leak_free_enter(st.feat, st.model.successor, s0, par.normalise)
+    if st.shaping[0] and par.rebase:
+        st.phi_here[0] = rebase_at(st, s0)
+    else:
+        st.phi_here[0] = phi_of(st, s0)
+
+
+@njit(cache=True)
+def potential_table(st, out):
+    """out[s] = Phi(s) for every state (the recorder's potential panel)."""
+    if st.par.v_target >= LOG_OPTIMISTIC:
+        ensure_values(st.opt, st.free, st.par.gamma)
+    for s in range(out.shape[0]):
+        out[s] = phi_of(st, s)

@@ -1,0 +1,49 @@
+"""RNH-QL+'s named state and a fresh agent's."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from learning.free_space import FreeSpace, new_free_space
+from learning.geometry import Geometry
+from learning.move_model import MoveModel, new_move_model
+from learning.rnh_ql_plus.config import Params, RNHQLPlus
+from learning.rnh_ql_plus.features import Features, new_features
+from learning.rnh_ql_plus.optimism import Optimism, new_optimism
+from learning.tally import Tally, new_tally
+from learning.traces import QTraces, new_traces
+
+
+class State(NamedTuple):
+    par: Params
+    tally: Tally
+    q: np.ndarray  # float64[nS, nA]
+    w: np.ndarray  # float64[K]; V_NN weights (network potentials)
+    v_trace: np.ndarray  # float64[K]; their TD(lambda) traces (TD_REWARDS)
+    phi_row: np.ndarray  # float64[nS]; the Phi each row's tried actions are based on (rebase)
+    feat: Features  # sparse features and leak-free supports
+    model: MoveModel  # the moves seen, what planning replays
+    free: FreeSpace  # the optimistic model: moves believed blocked, distances to G
+    opt: Optimism  # the optimistic values y(s)
+    traces: QTraces  # Q-table traces (lam_q > 0)
+    values: np.ndarray  # float64[1, nA]; scratch: one row's action values (look-ahead)
+    step_v: np.ndarray  # float64[1]; V_NN step, beta / mean |phi|^2 (derived)
+    phi_here: np.ndarray  # float64[1]; Phi cached when the current state was entered
+    shaping: np.ndarray  # bool[1]; shaping on this episode
+    train_v: np.ndarray  # bool[1]; V_NN learns this episode
+
+
+DERIVED = ("feat.base", "feat.centre", "step_v")
+
+
+def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> State:
+    n_s, n_a = geom.n_states, geom.n_actions
+    feat = new_features(cfg, geom)
+    n_c = int(feat.anchor.shape[0])
+    step_v = cfg.beta / float(np.mean(np.sum(feat.base * feat.base, axis=1)))
+    return State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), np.zeros(n_c), np.zeros(n_c),
+                 np.zeros(n_s), feat, new_move_model(n_s, n_a), new_free_space(geom),
+                 new_optimism(n_s), new_traces(n_s, n_a), np.zeros((1, n_a)),
+                 np.array([step_v]), np.zeros(1), np.zeros(1, np.bool_), np.zeros(1, np.bool_))

@@ -17,13 +17,13 @@ from learning.config import MethodConfig
 from learning.geometry import Geometry
 from learning.move_model import (
     MoveModel,
-    draw_seen,
     new_move_model,
     note_pair,
     observe_outcome,
-    replay_fails,
+    pair_of,
+    replay_draws_failure,
 )
-from learning.tabular import argmax_first, eps_greedy, q_learning
+from learning.tabular import argmax_first, draw_below, eps_greedy, q_learning
 from learning.tally import Tally, begin_tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
@@ -66,26 +66,36 @@ def act(st, s, rng):
     return eps_greedy(st.q, s, st.par.eps, rng)
 
 
-@njit(cache=True)
-def _plan(q, m, n_plan, alpha, gamma, rng):
-    for _ in range(n_plan):
-        ps, pa = draw_seen(m, rng)
-        if replay_fails(m, ps, pa, rng):
-            q_learning(q, ps, pa, m.r_fail[0], ps, False, alpha, gamma, 0.0)
-        else:
-            q_learning(q, ps, pa, m.reward[ps, pa], m.successor[ps, pa], m.to_goal[ps, pa],
-                       alpha, gamma, 0.0)
-
-
 @njit(**HOOK)
 def update(st, s, a, r, s2, terminated, rng):
-    """Q-learning, then the model learns (s, a) -> (r, s', terminated), then planning."""
+    """Q-learning, then the model learns (s, a) -> (r, s', terminated), then ``n_planning``
+    updates replaying seen pairs. The model's arrays are read once, here (see
+    :mod:`learning.rnh_ql_plus.rules` on reads of a named tuple's fields)."""
     p = st.par
-    m = st.model
-    q_learning(st.q, s, a, r, s2, terminated, p.alpha, p.gamma, 0.0)
-    note_pair(m, s, a)
-    observe_outcome(m, s, a, r, s2, terminated, s2 != s or terminated)
-    _plan(st.q, m, p.n_planning, p.alpha, p.gamma, rng)
+    q = st.q
+    succ = st.model.successor
+    to_goal = st.model.to_goal
+    reward = st.model.reward
+    works = st.model.works
+    fails = st.model.fails
+    seen = st.model.seen
+    n_seen = st.model.n_seen
+    r_fail = st.model.r_fail
+    alpha = p.alpha
+    gamma = p.gamma
+    q_learning(q, s, a, r, s2, terminated, alpha, gamma, 0.0)
+    note_pair(succ, seen, n_seen, s, a)
+    observe_outcome(succ, to_goal, reward, works, fails, r_fail, s, a, r, s2, terminated,
+                    s2 != s or terminated)
+    n = n_seen[0]
+    n_a = q.shape[1]
+    for _ in range(p.n_planning):
+        ps, pa = pair_of(seen[draw_below(rng, n)], n_a)
+        if replay_draws_failure(works[ps, pa], fails[ps, pa], rng):
+            q_learning(q, ps, pa, r_fail[0], ps, False, alpha, gamma, 0.0)
+        else:
+            q_learning(q, ps, pa, reward[ps, pa], succ[ps, pa], to_goal[ps, pa], alpha, gamma,
+                       0.0)
 
 
 @njit(**HOOK)

@@ -65,11 +65,13 @@ def back_move(a):
 @njit(cache=True)
 def bfs_to_goal(fs):
     """Distances to G over the moves not blocked, and the BFS order in ``queue``."""
-    nb = fs.neighbour
-    blocked = fs.blocked
-    dist = fs.distance
-    queue = fs.queue
-    goal = fs.goal[0]
+    bfs_distances(fs.neighbour, fs.blocked, fs.distance, fs.queue, fs.goal[0])
+
+
+@njit(cache=True)
+def bfs_distances(nb, blocked, dist, queue, goal):
+    """:func:`bfs_to_goal` on the free space's arrays: what compiled hooks call (they read
+    a named tuple's fields once, at their top; see :mod:`learning.rnh_ql_plus.rules`)."""
     for s in range(dist.shape[0]):
         dist[s] = -1
     dist[goal] = 0
@@ -90,14 +92,13 @@ def bfs_to_goal(fs):
 
 
 @njit(cache=True, inline="always")
-def distances_change(fs, s, a):
+def distances_change(nb, dist, blocked, s, a):
     """Whether the move s -a-> just blocked changes any distance. The distances solve
     d(s) = 1 + min d(u) over s's unblocked moves, a solution that is unique; the blocked
     move matters only if it was s's one move to a neighbour u with d(u) = d(s) - 1.
     Otherwise every old distance still solves the equations and the O(states) BFS is
-    skipped (on most new walls: a cell usually has two moves towards G)."""
-    nb = fs.neighbour
-    dist = fs.distance
+    skipped (on most new walls: a cell usually has two moves towards G). Takes the free
+    space's arrays (``neighbour``, ``distance``, ``blocked``), read once by the caller."""
     ds = dist[s]
     u = nb[s, a]
     if ds <= 0 or u < 0 or dist[u] != ds - 1:
@@ -106,6 +107,6 @@ def distances_change(fs, s, a):
         if b == a:
             continue
         v = nb[s, b]
-        if v >= 0 and dist[v] == ds - 1 and not fs.blocked[s, b]:
+        if v >= 0 and dist[v] == ds - 1 and not blocked[s, b]:
             return False
     return True

@@ -27,7 +27,7 @@ import numpy as np
 from numba import njit
 
 from learning.config import MethodConfig
-from learning.free_space import FreeSpace, bfs_to_goal, new_free_space
+from learning.free_space import FreeSpace, bfs_distances, new_free_space
 from learning.geometry import Geometry
 from learning.tabular import q_learning, row_max
 from learning.tally import Tally, begin_tally, new_tally
@@ -103,24 +103,25 @@ def init_state(cfg: HAQL, geom: Geometry, rng: np.random.Generator) -> State:
     st = State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), np.zeros(n_s, np.int32),
                np.zeros((n_s, n_a), np.int32), new_free_space(geom))
     if cfg.explored:
-        rederive(st.pi_h, st.free)
+        fs = st.free
+        rederive(st.pi_h, fs.neighbour, fs.blocked, fs.distance, fs.queue, int(fs.goal[0]))
     else:
         st.pi_h[:] = heuristic_actions(geom)
     return st
 
 
 @njit(cache=True)
-def rederive(pi_h, fs):
+def rederive(pi_h, nb, blocked, dist, queue, goal):
     """pi_H for every state: the unblocked move to the neighbour nearest G (lowest index on
-    ties; move 0 where no neighbour has a route), after one BFS from G."""
-    bfs_to_goal(fs)
-    nb = fs.neighbour
-    dist = fs.distance
+    ties; move 0 where no neighbour has a route), after one BFS from G. Takes the free
+    space's arrays (hooks read a named tuple's fields once, at their top; see
+    :mod:`learning.rnh_ql_plus.rules`)."""
+    bfs_distances(nb, blocked, dist, queue, goal)
     for s in range(pi_h.shape[0]):
         best, best_d = 0, -1
         for a in range(nb.shape[1]):
             t = nb[s, a]
-            if t < 0 or fs.blocked[s, a] or dist[t] < 0:
+            if t < 0 or blocked[s, a] or dist[t] < 0:
                 continue
             if best_d < 0 or dist[t] < best_d:
                 best, best_d = a, dist[t]
@@ -128,12 +129,11 @@ def rederive(pi_h, fs):
 
 
 @njit(cache=True, inline="always")
-def observe(st, s, a, s2, terminated):
+def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated):
     """After a move: a bump (stayed in s) counts up, a move that reached its neighbour
     down; when the sign flips (the move's most likely outcome changed), re-derive pi_H.
     (A move that drifted into another cell tells nothing about this one.)"""
-    bal = st.balance
-    if s2 == st.free.neighbour[s, a]:
+    if s2 == nb[s, a]:
         if bal[s, a] > -COUNT_CAP:  # int32: a long run must not wrap round
             bal[s, a] -= 1
     elif s2 == s and not terminated:
@@ -142,9 +142,9 @@ def observe(st, s, a, s2, terminated):
     else:
         return
     now = bal[s, a] > 0
-    if now != st.free.blocked[s, a]:
-        st.free.blocked[s, a] = now
-        rederive(st.pi_h, st.free)
+    if now != blocked[s, a]:
+        blocked[s, a] = now
+        rederive(pi_h, nb, blocked, dist, queue, goal)
 
 
 @njit(cache=True)
@@ -199,17 +199,26 @@ def best_drawn(q, s, pi_h, xi, beta, eta, rng):
 def act(st, s, rng):
     """Epsilon-greedy around argmax[Q + xi * H^beta]."""
     p = st.par
+    q = st.q
+    pi_h = st.pi_h
     if rng.random() < p.eps:
-        return rng.integers(0, st.q.shape[1])
-    return best_drawn(st.q, s, st.pi_h[s], p.xi, p.beta_h, p.eta, rng)
+        return rng.integers(0, q.shape[1])
+    return best_drawn(q, s, pi_h[s], p.xi, p.beta_h, p.eta, rng)
 
 
 @njit(**HOOK)
 def update(st, s, a, r, s2, terminated, rng):
     """Q-learning, and the heuristic from exploration learns from the move's outcome."""
+    bal = st.balance
+    pi_h = st.pi_h
+    nb = st.free.neighbour
+    blocked = st.free.blocked
+    dist = st.free.distance
+    queue = st.free.queue
+    goal = st.free.goal[0]
     q_learning(st.q, s, a, r, s2, terminated, st.par.alpha, st.par.gamma, 0.0)
     if st.par.explored:
-        observe(st, s, a, s2, terminated)
+        observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated)
 
 
 @njit(**HOOK)

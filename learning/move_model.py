@@ -65,38 +65,42 @@ def new_move_model(n_s: int, n_a: int) -> MoveModel:
 
 
 @njit(**INLINE)
-def note_pair(m, s, a):
-    """Add (s, a) to the pairs planning draws from, if it is new; True if it was."""
-    if m.successor[s, a] >= 0:
+def note_pair(successor, seen, n_seen, s, a):
+    """Add (s, a) to the pairs planning draws from, if it is new; True if it was.
+
+    The helpers here take the model's arrays, not the model: a hook reads them from its
+    state once, at its top (see :mod:`learning.rnh_ql_plus.rules` for why)."""
+    if successor[s, a] >= 0:
         return False
-    m.seen[m.n_seen[0]] = s * m.successor.shape[1] + a
-    m.n_seen[0] += 1
+    seen[n_seen[0]] = s * successor.shape[1] + a
+    n_seen[0] += 1
     return True
 
 
 @njit(**INLINE)
-def observe_outcome(m, s, a, r, s2, terminated, worked):
+def observe_outcome(successor, to_goal, reward, works, fails, r_fail, s, a, r, s2, terminated,
+                    worked):
     """Record the real step s -a-> s2 (reward r) in the model. ``worked``: the move did
     what it is for (RNH-QL+: reached the neighbour it heads for; Dyna-Q: moved at all)."""
-    if m.works[s, a] + m.fails[s, a] >= COUNT_CAP:  # int32: halve, keeping the rate and any 0
-        m.works[s, a] = (m.works[s, a] + 1) // 2
-        m.fails[s, a] = (m.fails[s, a] + 1) // 2
+    if works[s, a] + fails[s, a] >= COUNT_CAP:  # int32: halve, keeping the rate and any 0
+        works[s, a] = (works[s, a] + 1) // 2
+        fails[s, a] = (fails[s, a] + 1) // 2
     if worked:
-        m.works[s, a] += 1
+        works[s, a] += 1
     else:
-        m.fails[s, a] += 1
-        m.r_fail[0] = r
-        if m.works[s, a] > 0:
+        fails[s, a] += 1
+        r_fail[0] = r
+        if works[s, a] > 0:
             return  # seen to work before: the successor stays; this was a failure among works
-    m.successor[s, a] = s2
-    m.to_goal[s, a] = terminated
-    m.reward[s, a] = r
+    successor[s, a] = s2
+    to_goal[s, a] = terminated
+    reward[s, a] = r
 
 
 @njit(**INLINE)
-def never_worked(m, s, a):
+def never_worked(successor, works, s, a):
     """Tried, and never seen to work (the optimistic model's wall)."""
-    return m.successor[s, a] >= 0 and m.works[s, a] == 0
+    return successor[s, a] >= 0 and works[s, a] == 0
 
 
 @njit(**INLINE)

@@ -64,9 +64,10 @@ def act(st, s, rng):
 @njit(**HOOK)
 def update(st, s, a, r, s2, terminated, rng):
     gamma = st.par.gamma
-    p2 = 0.0 if terminated else st.phi[s2]
-    f = gamma * p2 - st.phi[s]
-    record_shaping(st.tally, f)
+    phi = st.phi  # read before the branch (see learning.rnh_ql_plus.rules)
+    p2 = 0.0 if terminated else phi[s2]
+    f = gamma * p2 - phi[s]
+    record_shaping(st.tally, f, True)
     q_learning(st.q, s, a, r, s2, terminated, st.par.alpha, gamma, f)
 
 

@@ -63,14 +63,14 @@ def act(st, s, rng):
 @njit(**HOOK)
 def update(st, s, a, r, s2, terminated, rng):
     p = st.par
-    q_lambda(st.q, st.traces, s, a, r, s2, terminated, p.alpha, p.gamma, p.lam, p.trace_min,
-             0.0)
+    q_lambda(st.q, st.traces.e, st.traces.pairs, st.traces.n, s, a, r, s2, terminated, p.alpha,
+             p.gamma, p.lam, p.trace_min, 0.0)
 
 
 @njit(**HOOK)
 def begin(st, s0):
     begin_tally(st.tally)
-    clear_traces(st.traces)
+    clear_traces(st.traces.e, st.traces.pairs, st.traces.n)
 
 
 @njit(**HOOK)

@@ -103,17 +103,24 @@ def update(st, s, a, r, s2, terminated, rng):
     step's V_NN update, and cached (``phi_here``) until s' is left; Phi(goal) = 0.
     """
     p = st.par
+    q = st.q
+    w = st.w
+    e = st.e
+    phi = st.phi
+    step_v = st.step_v
+    phi_here = st.phi_here
+    shaping = st.shaping[0]
     gamma = p.gamma
-    greedy = is_greedy(st.q, s, a)
-    phi_s2 = 0.0 if terminated else rbf.value(st.phi, s2, st.w)
+    greedy = is_greedy(q, s, a)
+    phi_s2 = 0.0 if terminated else rbf.value(phi, s2, w)
     if st.train_v[0]:
-        rbf.td_lambda(st.w, st.e, st.phi, s, r, phi_s2, greedy, gamma, p.lam, st.step_v[0])
+        rbf.td_lambda(w, e, phi, s, r, phi_s2, greedy, gamma, p.lam, step_v[0])
     f = 0.0
-    if st.shaping[0]:
-        f = gamma * phi_s2 - st.phi_here[0]
-        record_shaping(st.tally, f)
-    q_learning(st.q, s, a, r, s2, terminated, p.alpha, gamma, f)
-    st.phi_here[0] = phi_s2
+    if shaping:
+        f = gamma * phi_s2 - phi_here[0]
+    record_shaping(st.tally, f, shaping)
+    q_learning(q, s, a, r, s2, terminated, p.alpha, gamma, f)
+    phi_here[0] = phi_s2
 
 
 @njit(**HOOK)

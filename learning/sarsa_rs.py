@@ -85,9 +85,10 @@ def init_state(cfg: SarsaRS, geom: Geometry, rng: np.random.Generator) -> State:
 @njit(**HOOK)
 def act(st, s, rng):
     """Replay the action SARSA chose at its last update (no draws), else epsilon-greedy."""
-    a = st.pending[0]
+    pending = st.pending
+    a = pending[0]
     if a >= 0:
-        st.pending[0] = -1
+        pending[0] = -1
         return a
     return eps_greedy(st.q, s, st.par.eps, rng)
 
@@ -98,29 +99,32 @@ def _learn(st, s, a, r, s2, a2, terminated):
     then SMDP TD on the abstract V."""
     p = st.par
     v = st.v
+    r_since = st.r_since
+    g_since = st.g_since
     zs = st.z[s]
     zs2 = st.z[s2]
     p2 = 0.0 if terminated else p.omega * v[zs2]
     f = p.gamma * p2 - p.omega * v[zs]
-    record_shaping(st.tally, f)
+    record_shaping(st.tally, f, True)
     sarsa(st.q, s, a, r, s2, a2, terminated, p.alpha, p.gamma, f)
-    st.r_since[0] += st.g_since[0] * r
-    st.g_since[0] *= p.gamma
+    r_since[0] += g_since[0] * r
+    g_since[0] *= p.gamma
     if terminated or zs2 != zs:
-        target = st.r_since[0]
+        target = r_since[0]
         if not terminated:
-            target += st.g_since[0] * v[zs2]
+            target += g_since[0] * v[zs2]
         v[zs] += p.alpha_v * (target - v[zs])
-        st.r_since[0] = 0.0
-        st.g_since[0] = 1.0
+        r_since[0] = 0.0
+        g_since[0] = 1.0
 
 
 @njit(**HOOK)
 def update(st, s, a, r, s2, terminated, rng):
     """Draw a' at s' first (unless terminated); SARSA-RS learns with it; act() replays it."""
+    q = st.q
     a2 = -1
     if not terminated:
-        a2 = eps_greedy(st.q, s2, st.par.eps, rng)
+        a2 = eps_greedy(q, s2, st.par.eps, rng)
     _learn(st, s, a, r, s2, a2, terminated)
     st.pending[0] = a2
 

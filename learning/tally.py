@@ -28,10 +28,17 @@ def new_tally() -> Tally:
 
 
 @njit(cache=True, inline="always")
-def record_shaping(tally, f):
-    tally.f_sum[0] += f
-    tally.f_sq[0] += f * f
-    tally.n_shaped[0] += 1
+def record_shaping(tally, f, on):
+    """Add the shaping term f to the episode's sums if ``on``. Called on every step, the
+    switch inside: a named tuple's fields read inside a branch cost reference counts (see
+    :mod:`learning.rnh_ql_plus.rules`)."""
+    f_sum = tally.f_sum
+    f_sq = tally.f_sq
+    n_shaped = tally.n_shaped
+    if on:
+        f_sum[0] += f
+        f_sq[0] += f * f
+        n_shaped[0] += 1
 
 
 @njit(cache=True, inline="always")

@@ -27,29 +27,28 @@ def new_traces(n_s: int, n_a: int) -> QTraces:
 
 
 @njit(cache=True)
-def clear_traces(tr):
-    e = tr.e
-    tl = tr.pairs
+def clear_traces(e, pairs, n):
+    """Zero the touched traces. Takes :class:`QTraces`' arrays (compiled hooks read a
+    named tuple's fields once, at their top; see :mod:`learning.rnh_ql_plus.rules`)."""
     n_a = e.shape[1]
-    for i in range(tr.n[0]):
-        e[tl[i] // n_a, tl[i] % n_a] = 0.0
-    tr.n[0] = 0
+    for i in range(n[0]):
+        e[pairs[i] // n_a, pairs[i] % n_a] = 0.0
+    n[0] = 0
 
 
 @njit(cache=True)
-def q_lambda(q, tr, s, a, r, s2, terminated, alpha, gamma, lam, trace_min, f):
+def q_lambda(q, e, tl, n_used, s, a, r, s2, terminated, alpha, gamma, lam, trace_min, f):
     """Tabular Watkins Q(lambda) with replacing traces; ``f`` is a shaping term.
 
     Cutting the traces when the action *taken* is non-greedy (before its trace
     is set) is Sutton & Barto's "cut when the next action is exploratory".
-    Only the touched pairs are visited; traces below trace_min are dropped.
+    Only the touched pairs are visited; traces below trace_min are dropped. ``e``,
+    ``tl``, ``n_used``: :class:`QTraces`' ``e``, ``pairs`` and ``n``.
     """
-    e = tr.e
-    tl = tr.pairs
     n_a = q.shape[1]
-    n = tr.n[0]
+    n = n_used[0]
     if not is_greedy(q, s, a):
-        clear_traces(tr)
+        clear_traces(e, tl, n_used)
         n = 0
     else:
         gl = gamma * lam
@@ -75,4 +74,4 @@ def q_lambda(q, tr, s, a, r, s2, terminated, alpha, gamma, lam, trace_min, f):
     for i in range(n):
         j = tl[i]
         q[j // n_a, j % n_a] += step * e[j // n_a, j % n_a]
-    tr.n[0] = n
+    n_used[0] = n

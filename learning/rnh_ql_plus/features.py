@@ -159,9 +159,12 @@ def _flood(ft, successor, i, c, normalise):
 
 
 @njit(cache=True)
-def leak_free_enter(ft, successor, s, normalise):
+def leak_free_enter(on, base, centre, preds, anchor, stack, successor, s, normalise):
     """On entering s: if s's nearest centre has no anchor yet, s becomes it and the
-    centre's support is flooded from s."""
+    centre's support is flooded from s. Takes :class:`Features`' arrays, in its order
+    (compiled hooks read a named tuple's fields once, at their top; see
+    :mod:`learning.rnh_ql_plus.rules`)."""
+    ft = Features(on, base, centre, preds, anchor, stack)
     i = ft.centre[s, 0]
     if ft.anchor[i] < 0 and ft.base[s, 0] > 0.0:
         ft.anchor[i] = s
@@ -169,10 +172,11 @@ def leak_free_enter(ft, successor, s, normalise):
 
 
 @njit(cache=True)
-def leak_free_edge(ft, successor, s, s2, normalise):
+def leak_free_edge(on, base, centre, preds, anchor, stack, successor, s, s2, normalise):
     """A move s -> s2 was seen for the first time: remember s as a predecessor of s2, and
-    join s2 (or s) to every support that holds s (or s2) and whose window holds both."""
-    preds = ft.preds
+    join s2 (or s) to every support that holds s (or s2) and whose window holds both.
+    Takes :class:`Features`' arrays, like :func:`leak_free_enter`."""
+    ft = Features(on, base, centre, preds, anchor, stack)
     for k in range(preds.shape[1]):
         if preds[s2, k] == s:
             break

@@ -37,31 +37,28 @@ def new_optimism(n_s: int) -> Optimism:
 
 
 @njit(cache=True, inline="always")
-def goal_reward(opt, gamma):
+def goal_reward(r_goal_seen, r_free_seen, gamma):
     """r_G of the model: the reward seen on entering G; until then an optimistic stand-in,
     one more than wandering forever on free moves (r_free / (1 - gamma) + 1; 1 when a free
     move earns nothing or less), so that y falls with the distance to G under any reward
     scheme. (A stand-in of 1 under the paper's +1 per free move made y *rise* with the
     distance and drove the agent away from a G it had not reached yet.)"""
-    if opt.r_goal[0] > 0.0:
-        return opt.r_goal[0]
-    r_free = opt.r_free[0]
+    if r_goal_seen[0] > 0.0:
+        return r_goal_seen[0]
+    r_free = r_free_seen[0]
     return r_free / (1.0 - gamma) + 1.0 if r_free > 0.0 else 1.0
 
 
 @njit(cache=True)
-def refresh_values(opt, fs, gamma):
+def refresh_values(y, stamp, r_goal_seen, r_free_seen, dist, queue, gamma):
     """Fill the cache of y from the BFS distances and the rewards seen, and stamp it with
     those rewards. O(states); runs after a BFS and when a reward of the model changes.
     The reachable states are walked in the BFS queue's order, where the distance never
     falls, so the power gamma^(d-1) is taken once per distance, not once per state (it
     was 60% of the cost: 40 us a refresh on paper-50)."""
-    dist = fs.distance
-    queue = fs.queue
-    y = opt.y
     g = gamma
-    r_free = opt.r_free[0]
-    r_goal = goal_reward(opt, gamma)
+    r_free = r_free_seen[0]
+    r_goal = goal_reward(r_goal_seen, r_free_seen, gamma)
     wander = r_free / (1.0 - g) if r_free > 0.0 else 0.0
     n_reach = 0
     for s in range(dist.shape[0]):
@@ -82,35 +79,43 @@ def refresh_values(opt, fs, gamma):
                 gd = g ** (d - 1)
                 v = r_free * (1.0 - gd) / (1.0 - g) + gd * r_goal
         y[s] = v
-    opt.stamp[0] = r_goal
-    opt.stamp[1] = r_free
+    stamp[0] = r_goal
+    stamp[1] = r_free
 
 
 @njit(cache=True)
-def ensure_values(opt, fs, gamma):
+def ensure_values(y, stamp, r_goal_seen, r_free_seen, dist, queue, gamma):
     """Refresh the cache of y if it is stale: computed with other rewards than those now
     in force, or stamped -1 by a new BFS. Runs where the model can change (a real step,
     the start of an episode, a read-out), never in the reads themselves: a call with
-    arrays inside a hot read cost it ~15x (measured: 37 ns against 2.3 ns a read)."""
-    if opt.stamp[1] != opt.r_free[0] or opt.stamp[0] != goal_reward(opt, gamma):
-        refresh_values(opt, fs, gamma)
+    arrays inside a hot read cost it ~15x (measured: 37 ns against 2.3 ns a read).
+    Takes the arrays of :class:`Optimism` and of the free space (``distance``, ``queue``)."""
+    if stamp[1] != r_free_seen[0] or stamp[0] != goal_reward(r_goal_seen, r_free_seen, gamma):
+        refresh_values(y, stamp, r_goal_seen, r_free_seen, dist, queue, gamma)
+
+
+def ensure_values_of(opt: Optimism, fs, gamma: float) -> None:
+    """:func:`ensure_values` on the named tuples (from Python)."""
+    ensure_values(opt.y, opt.stamp, opt.r_goal, opt.r_free, fs.distance, fs.queue, gamma)
 
 
 @njit(cache=True, inline="always")
-def mark_stale(opt):
-    """The BFS distances changed: the next :func:`ensure_values` refreshes the cache."""
-    opt.stamp[0] = -1.0  # never a goal reward in force (those are > 0)
+def mark_stale(stamp):
+    """The BFS distances changed: the next :func:`ensure_values` refreshes the cache
+    (``stamp`` is :attr:`Optimism.stamp`)."""
+    stamp[0] = -1.0  # never a goal reward in force (those are > 0)
 
 
 @njit(cache=True, inline="always")
-def observe_rewards(opt, s, r, s2, terminated):
+def observe_rewards(r_goal_seen, r_free_seen, s, r, s2, terminated):
     """Remember the reward of entering G and of a free move (the optimistic model's
-    rewards); True if either changed (the cache of y is then stale)."""
+    rewards, :attr:`Optimism.r_goal` and :attr:`Optimism.r_free`); True if either changed
+    (the cache of y is then stale)."""
     if terminated:
-        if r > opt.r_goal[0]:
-            opt.r_goal[0] = r
+        if r > r_goal_seen[0]:
+            r_goal_seen[0] = r
             return True
-    elif s2 != s and opt.r_free[0] != r:
-        opt.r_free[0] = r
+    elif s2 != s and r_free_seen[0] != r:
+        r_free_seen[0] = r
         return True
     return False

@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from learning.free_space import bfs_to_goal, distances_change
+from learning.free_space import bfs_distances, distances_change
 from learning.move_model import (
     never_worked,
     note_pair,
@@ -122,16 +122,9 @@ def potential(par, w, on, centre, y, s):
 
 
 @njit(**HOOK)
-def phi_of(st, s):
-    return potential(st.par, st.w, st.feat.on, st.feat.centre, st.opt.y, s)
-
-
-@njit(**HOOK)
 def model_phi(par):
     """True when Phi is the optimistic model's value itself (no re-basing): hot loops then
-    read scale * y from its cache instead of calling :func:`potential`, whose array
-    arguments numba reference-counts on every call it cannot prune (measured: 37 ns a
-    call against 4 ns for the load)."""
+    read scale * y from its cache instead of calling :func:`potential`."""
     return par.v_target == OPTIMISTIC and not par.rebase
 
 
@@ -153,9 +146,15 @@ def rebase(par, q, w, on, centre, y, phi_row, successor, s):
 
 
 @njit(**HOOK)
-def rebase_at(st, s):
-    return rebase(st.par, st.q, st.w, st.feat.on, st.feat.centre, st.opt.y, st.phi_row,
-                  st.model.successor, s)
+def tried_argmax(q, successor, s):
+    """argmax over the tried actions of Q(s, .), ties to the lowest index (0 if none)."""
+    m = -np.inf
+    best = 0
+    for a in range(q.shape[1]):
+        if successor[s, a] >= 0 and q[s, a] > m:
+            m = q[s, a]
+            best = a
+    return best
 
 
 @njit(**HOOK)
@@ -169,28 +168,19 @@ def tried_max(q, successor, s):
 
 
 @njit(**HOOK)
-def action_values(st, s):
+def action_values(par, q, out, y, phi_row, w, on, centre, succ, nb, goal, r_free, r_goal, s):
     """Row s's action values (in re-based units, Q + Phi - Phi(s)) into the scratch row
-    ``values[0]``: a tried action its Q; an untried one one step of look-ahead in the
+    ``out[0]``: a tried action its Q; an untried one one step of look-ahead in the
     optimistic model, r_free + gamma * Phi(neighbour) - Phi(s) (r_goal - Phi(s) into G,
     -inf off the arena)."""
-    par = st.par
-    q = st.q
-    out = st.values
     direct = model_phi(par)
     scale = par.scale
-    y = st.opt.y
     if direct:
         phi_s = scale * y[s]
     elif par.rebase:
-        phi_s = st.phi_row[s]
+        phi_s = phi_row[s]
     else:
-        phi_s = phi_of(st, s)
-    goal = st.free.goal[0]
-    succ = st.model.successor  # hoisted: a nested tuple's field read in a loop costs a
-    nb = st.free.neighbour  # reference count per read
-    r_free = st.opt.r_free[0]
-    r_goal = goal_reward(st.opt, par.gamma)
+        phi_s = potential(par, w, on, centre, y, s)
     for a in range(q.shape[1]):
         if succ[s, a] >= 0:
             out[0, a] = q[s, a]
@@ -201,48 +191,75 @@ def action_values(st, s):
         elif u == goal:
             out[0, a] = r_goal - phi_s
         else:
-            phi_u = scale * y[u] if direct else phi_of(st, u)
+            phi_u = scale * y[u] if direct else potential(par, w, on, centre, y, u)
             out[0, a] = r_free + par.gamma * phi_u - phi_s
 
 
-@njit(**HOOK)
-def lookahead_on(st):
-    return st.par.lookahead and st.shaping[0]
+# Every hook below first reads each array it or its callees use into a local, one field per
+# statement, before any branch or loop; callees inside branches get arrays, never the state.
+# numba reference-counts each read of a named tuple's field, and prunes the count only
+# where the read is on every path through the hook: a read inside a branch costs two atomic
+# operations per call even when the branch never runs (measured: the rnh-ql+ kernel at 0.7M
+# env steps/s with reads in branches, 5M+ with them hoisted). Nested tuples (``st.model``,
+# ``st.free``) are read through once, at the top, for the same reason.
 
 
 @njit(**HOOK)
 def act(st, s, rng):
     """Epsilon-greedy; with look-ahead, greedy over :func:`action_values` (ties drawn)."""
-    if not lookahead_on(st):
-        return eps_greedy(st.q, s, st.par.eps, rng)
-    if rng.random() < st.par.eps:
-        return draw_below(rng, st.q.shape[1])
-    action_values(st, s)
-    return argmax_drawn(st.values, 0, rng)
+    par = st.par
+    q = st.q
+    values = st.values
+    shaping = st.shaping
+    y = st.opt.y
+    r_goal_seen = st.opt.r_goal
+    r_free_seen = st.opt.r_free
+    phi_row = st.phi_row
+    w = st.w
+    on = st.feat.on
+    centre = st.feat.centre
+    succ = st.model.successor
+    nb = st.free.neighbour
+    goal = st.free.goal[0]
+    if not (par.lookahead and shaping[0]):
+        a = eps_greedy(q, s, par.eps, rng)
+    elif rng.random() < par.eps:
+        a = draw_below(rng, q.shape[1])
+    else:
+        action_values(par, q, values, y, phi_row, w, on, centre, succ, nb, goal,
+                      r_free_seen[0], goal_reward(r_goal_seen, r_free_seen, par.gamma), s)
+        a = argmax_drawn(values, 0, rng)
+    return a
 
 
 @njit(**HOOK)
 def exploit(st, s):
     """Greedy test policy, ties to the lowest index: with look-ahead over
     :func:`action_values`; else over tried actions (re-based rows), or over Q."""
+    par = st.par
     q = st.q
-    if lookahead_on(st):
-        if st.par.rebase:
-            rebase_at(st, s)
-        action_values(st, s)
-        return argmax_first(st.values, 0)
-    a = 0
-    if st.par.rebase:
-        m = -np.inf
-        for b in range(q.shape[1]):
-            if st.model.successor[s, b] >= 0 and q[s, b] > m:
-                m = q[s, b]
-                a = b
-        if m > -np.inf:
-            return a
-    for b in range(1, q.shape[1]):
-        if q[s, b] > q[s, a]:
-            a = b
+    values = st.values
+    shaping = st.shaping
+    y = st.opt.y
+    r_goal_seen = st.opt.r_goal
+    r_free_seen = st.opt.r_free
+    phi_row = st.phi_row
+    w = st.w
+    on = st.feat.on
+    centre = st.feat.centre
+    succ = st.model.successor
+    nb = st.free.neighbour
+    goal = st.free.goal[0]
+    if par.lookahead and shaping[0]:
+        if par.rebase:
+            rebase(par, q, w, on, centre, y, phi_row, succ, s)
+        action_values(par, q, values, y, phi_row, w, on, centre, succ, nb, goal,
+                      r_free_seen[0], goal_reward(r_goal_seen, r_free_seen, par.gamma), s)
+        a = argmax_first(values, 0)
+    elif par.rebase and tried_max(q, succ, s) > -np.inf:
+        a = tried_argmax(q, succ, s)
+    else:
+        a = argmax_first(q, s)
     return a
 
 
@@ -250,27 +267,22 @@ def exploit(st, s):
 
 
 @njit(**COLD)
-def fit_v(st, s, shaping, based, rng):
+def fit_v(par, q, w, on, centre, y, succ, phi_row, phi_here, step_v, s, shaping, based, rng):
     """The network variants' V_NN fit at s (and LOG_OPTIMISTIC's ``n_fit`` random states)."""
-    par = st.par
-    w = st.w
-    on = st.feat.on
-    centre = st.feat.centre
-    y = st.opt.y
     vt = par.v_target
-    step = st.step_v[0]
+    step = step_v[0]
     if vt == LOG_OPTIMISTIC:  # V_NN learns log y: at s and at n_fit random states
         v_regress(w, on, centre, s, math.log(max(y[s], OPT_FLOOR)), step)
         for _ in range(par.n_fit):
-            j = draw_below(rng, st.q.shape[0])
+            j = draw_below(rng, q.shape[0])
             v_regress(w, on, centre, j, math.log(max(y[j], OPT_FLOOR)), step)
         return
     if based:
-        target = tried_max(st.q, st.model.successor, s) + st.phi_row[s]
+        target = tried_max(q, succ, s) + phi_row[s]
     else:
-        target = row_max(st.q, s)
+        target = row_max(q, s)
         if shaping:
-            target += st.phi_here[0]
+            target += phi_here[0]
     if vt == LOG_TABLE:  # V_NN learns log values: Phi = scale * exp(V_NN)
         target = math.log(max(target, LOG_FLOOR))
     elif vt == RESIDUAL:  # V_NN learns the log of the table's value over the optimistic one
@@ -282,45 +294,35 @@ def fit_v(st, s, shaping, based, rng):
 
 
 @njit(**HOOK)
-def plan(st, based, shaping, rng):
+def plan(par, q, w, on, centre, y, phi_row, succ, to_goal, reward, works, fails, seen, n_seen,
+         r_fail, based, shaping, rng):
     """``n_planning`` shaped Q updates on seen pairs, each replaying a drawn outcome."""
-    par = st.par
-    q = st.q
-    m = st.model
     gamma = par.gamma
     alpha = par.alpha
     scale = par.scale
-    y = st.opt.y
     direct = model_phi(par)
-    seen = m.seen  # hoisted out of the loop (see action_values)
-    n_seen = m.n_seen[0]
-    succ = m.successor
-    to_goal = m.to_goal
-    reward = m.reward
-    works = m.works
-    fails = m.fails
-    r_fail = m.r_fail[0]
+    n = n_seen[0]
     n_a = q.shape[1]
     for _ in range(par.n_planning):
-        ps, pa = pair_of(seen[draw_below(rng, n_seen)], n_a)
+        ps, pa = pair_of(seen[draw_below(rng, n)], n_a)
         ps2 = succ[ps, pa]
         pterm = to_goal[ps, pa]
         pr = reward[ps, pa]
         if replay_draws_failure(works[ps, pa], fails[ps, pa], rng):
             ps2 = ps
             pterm = False
-            pr = r_fail
+            pr = r_fail[0]
         pf = 0.0
         if based:
-            p1 = rebase_at(st, ps)
-            p2 = 0.0 if pterm else rebase_at(st, ps2)
+            p1 = rebase(par, q, w, on, centre, y, phi_row, succ, ps)
+            p2 = 0.0 if pterm else rebase(par, q, w, on, centre, y, phi_row, succ, ps2)
             pf = gamma * p2 - p1
         elif shaping and direct:
             p2 = 0.0 if pterm else scale * y[ps2]
             pf = gamma * p2 - scale * y[ps]
         elif shaping:
-            p2 = 0.0 if pterm else phi_of(st, ps2)
-            pf = gamma * p2 - phi_of(st, ps)
+            p2 = 0.0 if pterm else potential(par, w, on, centre, y, ps2)
+            pf = gamma * p2 - potential(par, w, on, centre, y, ps)
         q_learning(q, ps, pa, pr, ps2, pterm, alpha, gamma, pf)
 
 
@@ -330,64 +332,98 @@ def update(st, s, a, r, s2, terminated, rng):
     model (and leak-free supports) update; ``n_planning`` shaped model updates."""
     par = st.par
     q = st.q
-    m = st.model
-    fs = st.free
-    ft = st.feat
+    w = st.w
+    v_trace = st.v_trace
+    phi_row = st.phi_row
+    step_v = st.step_v
+    phi_here = st.phi_here
+    shaping_on = st.shaping
+    train_on = st.train_v
+    tally = st.tally
+    trace_e = st.traces.e
+    trace_pairs = st.traces.pairs
+    trace_n = st.traces.n
+    on = st.feat.on
+    base = st.feat.base
+    centre = st.feat.centre
+    preds = st.feat.preds
+    anchor = st.feat.anchor
+    stack = st.feat.stack
+    succ = st.model.successor
+    to_goal = st.model.to_goal
+    reward = st.model.reward
+    works = st.model.works
+    fails = st.model.fails
+    seen = st.model.seen
+    n_seen = st.model.n_seen
+    r_fail = st.model.r_fail
+    nb = st.free.neighbour
+    blocked = st.free.blocked
+    dist = st.free.distance
+    queue = st.free.queue
+    goal = st.free.goal[0]
+    y = st.opt.y
+    stamp = st.opt.stamp
+    r_goal_seen = st.opt.r_goal
+    r_free_seen = st.opt.r_free
     gamma = par.gamma
-    shaping = st.shaping[0]
+    shaping = shaping_on[0]
     based = shaping and par.rebase
     direct = model_phi(par)  # Phi read as scale * y
     scale = par.scale
     vt = par.v_target
     optimistic = vt >= LOG_OPTIMISTIC
     if based:
-        rebase_at(st, s)
-    stale = observe_rewards(st.opt, s, r, s2, terminated)
+        rebase(par, q, w, on, centre, y, phi_row, succ, s)
+    stale = observe_rewards(r_goal_seen, r_free_seen, s, r, s2, terminated)
     # model first: a new move may join s' to supports before Phi(s') is read
-    was_fail = fs.blocked[s, a]
-    if note_pair(m, s, a) and par.leak_free and s2 != s:
-        leak_free_edge(ft, m.successor, s, s2, par.normalise)
-    observe_outcome(m, s, a, r, s2, terminated, s2 == fs.neighbour[s, a])
-    now_fail = never_worked(m, s, a)
-    fs.blocked[s, a] = now_fail
+    was_fail = blocked[s, a]
+    if note_pair(succ, seen, n_seen, s, a) and par.leak_free and s2 != s:
+        leak_free_edge(on, base, centre, preds, anchor, stack, succ, s, s2, par.normalise)
+    observe_outcome(succ, to_goal, reward, works, fails, r_fail, s, a, r, s2, terminated,
+                    s2 == nb[s, a])
+    now_fail = never_worked(succ, works, s, a)
+    blocked[s, a] = now_fail
     # the optimistic model changed: a move now known to fail (BFS only if a distance
     # changes), or one known to fail that moved after all (noisy physics worlds; on the
     # grid and at the exact fidelity a move's outcome never changes)
-    if optimistic and now_fail != was_fail and (was_fail or distances_change(fs, s, a)):
-        bfs_to_goal(fs)
-        mark_stale(st.opt)
+    if optimistic and now_fail != was_fail and (
+            was_fail or distances_change(nb, dist, blocked, s, a)):
+        bfs_distances(nb, blocked, dist, queue, goal)
+        mark_stale(stamp)
         stale = True
     if stale and optimistic:
-        ensure_values(st.opt, fs, gamma)
+        ensure_values(y, stamp, r_goal_seen, r_free_seen, dist, queue, gamma)
     if par.leak_free and not terminated:
-        leak_free_enter(ft, m.successor, s2, par.normalise)
+        leak_free_enter(on, base, centre, preds, anchor, stack, succ, s2, par.normalise)
     if terminated:
         phi_s2 = 0.0
     elif direct:
-        phi_s2 = scale * st.opt.y[s2]
+        phi_s2 = scale * y[s2]
     else:
-        phi_s2 = phi_of(st, s2)
+        phi_s2 = potential(par, w, on, centre, y, s2)
     if based and not terminated:
-        phi_s2 = rebase_at(st, s2)
-    train_v = st.train_v[0]
+        phi_s2 = rebase(par, q, w, on, centre, y, phi_row, succ, s2)
+    train_v = train_on[0]
     if train_v and vt == TD_REWARDS:  # V_NN(s') only where TD(lambda) needs it
-        v2 = 0.0 if terminated else v_of(st.w, ft.on, ft.centre, s2)
-        v_td_lambda(st.w, st.v_trace, ft.on, ft.centre, s, r, v2, is_greedy(q, s, a), gamma,
-                    par.lam, st.step_v[0])
+        v2 = 0.0 if terminated else v_of(w, on, centre, s2)
+        v_td_lambda(w, v_trace, on, centre, s, r, v2, is_greedy(q, s, a), gamma, par.lam,
+                    step_v[0])
     f = 0.0
     if shaping:
-        phi_s = st.phi_row[s] if based else st.phi_here[0]
+        phi_s = phi_row[s] if based else phi_here[0]
         f = gamma * phi_s2 - phi_s
-        record_shaping(st.tally, f)
+    record_shaping(tally, f, shaping)
     if par.lam_q > 0.0:
-        q_lambda(q, st.traces, s, a, r, s2, terminated, par.alpha, gamma, par.lam_q,
-                 par.trace_min, f)
+        q_lambda(q, trace_e, trace_pairs, trace_n, s, a, r, s2, terminated, par.alpha, gamma,
+                 par.lam_q, par.trace_min, f)
     else:
         q_learning(q, s, a, r, s2, terminated, par.alpha, gamma, f)
     if train_v and vt != TD_REWARDS and vt != OPTIMISTIC:
-        fit_v(st, s, shaping, based, rng)
-    plan(st, based, shaping, rng)
-    st.phi_here[0] = phi_s2
+        fit_v(par, q, w, on, centre, y, succ, phi_row, phi_here, step_v, s, shaping, based, rng)
+    plan(par, q, w, on, centre, y, phi_row, succ, to_goal, reward, works, fails, seen, n_seen,
+         r_fail, based, shaping, rng)
+    phi_here[0] = phi_s2
 
 
 @njit(**HOOK)
@@ -395,28 +431,55 @@ def begin(st, s0):
     """Reset traces and per-episode sums; shaping on from ``warmup``; V_NN frozen from
     ``freeze``; anchor s0's centre (leak-free); cache Phi(s0)."""
     par = st.par
-    begin_tally(st.tally)
+    q = st.q
+    w = st.w
+    v_trace = st.v_trace
+    phi_row = st.phi_row
+    phi_here = st.phi_here
+    shaping_on = st.shaping
+    train_on = st.train_v
+    tally = st.tally
+    trace_e = st.traces.e
+    trace_pairs = st.traces.pairs
+    trace_n = st.traces.n
+    on = st.feat.on
+    base = st.feat.base
+    centre = st.feat.centre
+    preds = st.feat.preds
+    anchor = st.feat.anchor
+    stack = st.feat.stack
+    succ = st.model.successor
+    dist = st.free.distance
+    queue = st.free.queue
+    y = st.opt.y
+    stamp = st.opt.stamp
+    r_goal_seen = st.opt.r_goal
+    r_free_seen = st.opt.r_free
+    episode = st.tally.episode
+    begin_tally(tally)
     if par.v_target >= LOG_OPTIMISTIC:  # the first episode, or a state changed from outside
-        ensure_values(st.opt, st.free, par.gamma)
+        ensure_values(y, stamp, r_goal_seen, r_free_seen, dist, queue, par.gamma)
     if par.v_target == TD_REWARDS:
-        st.v_trace[:] = 0.0
+        v_trace[:] = 0.0
     if par.lam_q > 0.0:
-        clear_traces(st.traces)
-    ep = st.tally.episode[0]
-    st.shaping[0] = ep >= par.warmup
-    st.train_v[0] = ep < par.freeze
+        clear_traces(trace_e, trace_pairs, trace_n)
+    ep = episode[0]
+    shaping_on[0] = ep >= par.warmup
+    train_on[0] = ep < par.freeze
     if par.leak_free:
-        leak_free_enter(st.feat, st.model.successor, s0, par.normalise)
-    if st.shaping[0] and par.rebase:
-        st.phi_here[0] = rebase_at(st, s0)
+        leak_free_enter(on, base, centre, preds, anchor, stack, succ, s0, par.normalise)
+    if shaping_on[0] and par.rebase:
+        phi_here[0] = rebase(par, q, w, on, centre, y, phi_row, succ, s0)
     else:
-        st.phi_here[0] = phi_of(st, s0)
+        phi_here[0] = potential(par, w, on, centre, y, s0)
 
 
 @njit(cache=True)
 def potential_table(st, out):
     """out[s] = Phi(s) for every state (the recorder's potential panel)."""
-    if st.par.v_target >= LOG_OPTIMISTIC:
-        ensure_values(st.opt, st.free, st.par.gamma)
+    par = st.par
+    if par.v_target >= LOG_OPTIMISTIC:
+        ensure_values(st.opt.y, st.opt.stamp, st.opt.r_goal, st.opt.r_free, st.free.distance,
+                      st.free.queue, par.gamma)
     for s in range(out.shape[0]):
-        out[s] = phi_of(st, s)
+        out[s] = potential(par, st.w, st.feat.on, st.feat.centre, st.opt.y, s)

@@ -23,31 +23,35 @@ from learning.geometry import Geometry
 from learning.hooks import draw_start
 from learning.named_state import episodes_done
 from learning.state import init_state
+from learning.state_box import box_of
+
+
+# Each takes the state's box (learning.state_box): one reference to unbox per call.
 
 
 @njit(cache=True)
-def _act(st, s, h):
-    return hooks.act_h(st, s, h)
+def _act(box, s, h):
+    return hooks.act_h(box.state, s, h)
 
 
 @njit(cache=True)
-def _update(st, s, a, r, s2, terminated, h):
-    hooks.update_h(st, s, a, r, s2, terminated, h)
+def _update(box, s, a, r, s2, terminated, h):
+    hooks.update_h(box.state, s, a, r, s2, terminated, h)
 
 
 @njit(cache=True)
-def _begin(st, s0):
-    hooks.begin(st, s0)
+def _begin(box, s0):
+    hooks.begin(box.state, s0)
 
 
 @njit(cache=True)
-def _end(st):
-    hooks.end(st)
+def _end(box):
+    hooks.end(box.state)
 
 
 @njit(cache=True)
-def _exploit(st, s):
-    return hooks.exploit(st, s)
+def _exploit(box, s):
+    return hooks.exploit(box.state, s)
 
 
 class StepAgent:
@@ -68,6 +72,16 @@ class StepAgent:
         self._h = handle(rng)  # the generator, passed to compiled code without unboxing
 
     @property
+    def state(self):
+        """The learner's named state (tables, weights). Assigning a new one re-boxes it."""
+        return self._state
+
+    @state.setter
+    def state(self, st) -> None:
+        self._state = st
+        self._box = box_of(st)  # the same arrays, one reference for compiled calls
+
+    @property
     def episodes_done(self) -> int:
         return episodes_done(self.state)
 
@@ -79,23 +93,23 @@ class StepAgent:
 
     def begin_episode(self, s0: int) -> None:
         """Start an episode in state ``s0`` (RNH-QL caches Phi(s0) here)."""
-        _begin(self.state, int(s0))
+        _begin(self._box, int(s0))
 
     def act(self, s: int) -> int:
         """The behaviour (exploring) action at ``s``; draws from the agent's generator."""
-        return int(_act(self.state, int(s), self._h))
+        return int(_act(self._box, int(s), self._h))
 
     def update(self, s: int, a: int, r: float, s2: int, terminated: bool,
                truncated: bool) -> None:
         """Learn from one transition; bootstraps from ``s2`` unless ``terminated`` (a
         truncated step bootstraps like any other, so ``truncated`` changes nothing)."""
-        _update(self.state, int(s), int(a), float(r), int(s2), bool(terminated), self._h)
+        _update(self._box, int(s), int(a), float(r), int(s2), bool(terminated), self._h)
 
     def end_episode(self) -> None:
-        _end(self.state)
+        _end(self._box)
 
     def greedy_action(self, s: int) -> int:
-        return int(_exploit(self.state, int(s)))
+        return int(_exploit(self._box, int(s)))
 
 
 def make_agent(cfg: MethodConfig, geometry: Geometry, rng: np.random.Generator) -> StepAgent:

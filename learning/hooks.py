@@ -61,24 +61,36 @@ def exploit(st, s):
     raise NotImplementedError("compiled code only")
 
 
+def _hook(st, name: str):
+    """The hook's own body (its Python function), to be inlined: no call between. A family
+    with a lean configuration (``LEAN_PARAMS``, ``LEAN_HOOKS``) gets its lean copy when the
+    state's ``par`` is of that type (see :mod:`learning.rnh_ql_plus.rules`)."""
+    fam = _family(st)
+    lean = getattr(fam, "LEAN_PARAMS", None)
+    par = st.types[st.fields.index("par")]
+    if lean is not None and getattr(par, "instance_class", None) is lean:
+        return fam.LEAN_HOOKS[name]
+    return getattr(fam, name).py_func
+
+
 @overload(act, inline="always")
 def _act(st, s, rng):
-    return _family(st).act.py_func  # the hook's own body, inlined: no call between
+    return _hook(st, "act")
 
 
 @overload(update, inline="always")
 def _update(st, s, a, r, s2, terminated, rng):
-    return _family(st).update.py_func  # the hook's own body, inlined: no call between
+    return _hook(st, "update")
 
 
 @overload(begin, inline="always")
 def _begin(st, s0):
-    return _family(st).begin.py_func  # the hook's own body, inlined: no call between
+    return _hook(st, "begin")
 
 
 @overload(exploit, inline="always")
 def _exploit(st, s):
-    return _family(st).exploit.py_func  # the hook's own body, inlined: no call between
+    return _hook(st, "exploit")
 
 
 @njit(cache=True, inline="always")

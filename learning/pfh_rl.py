@@ -67,7 +67,7 @@ def update(st, s, a, r, s2, terminated, rng):
     phi = st.phi  # read before the branch (see learning.rnh_ql_plus.rules)
     p2 = 0.0 if terminated else phi[s2]
     f = gamma * p2 - phi[s]
-    record_shaping(st.tally, f, True)
+    record_shaping(st.tally.f_sum, st.tally.f_sq, st.tally.n_shaped, f, True)
     q_learning(st.q, s, a, r, s2, terminated, st.par.alpha, gamma, f)
 
 

@@ -109,6 +109,9 @@ def update(st, s, a, r, s2, terminated, rng):
     phi = st.phi
     step_v = st.step_v
     phi_here = st.phi_here
+    f_sum = st.tally.f_sum
+    f_sq = st.tally.f_sq
+    n_shaped = st.tally.n_shaped
     shaping = st.shaping[0]
     gamma = p.gamma
     greedy = is_greedy(q, s, a)
@@ -118,7 +121,7 @@ def update(st, s, a, r, s2, terminated, rng):
     f = 0.0
     if shaping:
         f = gamma * phi_s2 - phi_here[0]
-    record_shaping(st.tally, f, shaping)
+    record_shaping(f_sum, f_sq, n_shaped, f, shaping)
     q_learning(q, s, a, r, s2, terminated, p.alpha, gamma, f)
     phi_here[0] = phi_s2
 

@@ -105,7 +105,7 @@ def _learn(st, s, a, r, s2, a2, terminated):
     zs2 = st.z[s2]
     p2 = 0.0 if terminated else p.omega * v[zs2]
     f = p.gamma * p2 - p.omega * v[zs]
-    record_shaping(st.tally, f, True)
+    record_shaping(st.tally.f_sum, st.tally.f_sq, st.tally.n_shaped, f, True)
     sarsa(st.q, s, a, r, s2, a2, terminated, p.alpha, p.gamma, f)
     r_since[0] += g_since[0] * r
     g_since[0] *= p.gamma

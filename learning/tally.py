@@ -28,13 +28,11 @@ def new_tally() -> Tally:
 
 
 @njit(cache=True, inline="always")
-def record_shaping(tally, f, on):
-    """Add the shaping term f to the episode's sums if ``on``. Called on every step, the
-    switch inside: a named tuple's fields read inside a branch cost reference counts (see
+def record_shaping(f_sum, f_sq, n_shaped, f, on):
+    """Add the shaping term f to the episode's sums (:class:`Tally`'s ``f_sum``, ``f_sq``,
+    ``n_shaped``) if ``on``. Called on every step with the switch inside, and with the three
+    arrays, not the tally: a hook reads only the arrays it needs, once, at its top (see
     :mod:`learning.rnh_ql_plus.rules`)."""
-    f_sum = tally.f_sum
-    f_sq = tally.f_sq
-    n_shaped = tally.n_shaped
     if on:
         f_sum[0] += f
         f_sq[0] += f * f

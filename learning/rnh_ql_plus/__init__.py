@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from learning.rnh_ql_plus.config import Params, Potential, RNHQLPlus
-from learning.rnh_ql_plus.rules import act, begin, exploit, potential_table, update
+from learning.rnh_ql_plus.config import LeanParams, Params, Potential, RNHQLPlus
+from learning.rnh_ql_plus.rules import act, begin, exploit, lean_hooks, potential_table, update
 from learning.rnh_ql_plus.state import DERIVED, State, init_state
 
 
@@ -21,5 +21,9 @@ def potential(st: State) -> np.ndarray:
     return out
 
 
-__all__ = ["DERIVED", "Params", "Potential", "RNHQLPlus", "State", "act", "begin", "exploit",
-           "init_state", "potential", "update"]
+# a state whose ``par`` is a LEAN_PARAMS compiles LEAN_HOOKS (learning.hooks)
+LEAN_PARAMS = LeanParams
+LEAN_HOOKS = lean_hooks()
+
+__all__ = ["DERIVED", "LEAN_HOOKS", "LEAN_PARAMS", "LeanParams", "Params", "Potential",
+           "RNHQLPlus", "State", "act", "begin", "exploit", "init_state", "potential", "update"]

@@ -92,13 +92,20 @@ class RNHQLPlus(MethodConfig):
                              f"{self.v_target} (the optimistic model's value discounts: "
                              "use v_target 0-2 for gamma = 1)")
 
-    def params(self) -> Params:
+    def params(self) -> Params | LeanParams:
+        """The compiled rules' scalars. :class:`LeanParams` (same fields) when the potential
+        is the optimistic value and leak-free supports, re-basing and Q traces are off: the
+        kernel is then compiled without those paths (see
+        :func:`learning.rnh_ql_plus.rules.lean`)."""
         freeze = math.inf if self.freeze_after_episodes is None else self.freeze_after_episodes
-        return Params(float(self.eps), float(self.alpha), float(self.gamma), float(self.lam),
-                      float(self.warmup_episodes), float(freeze), int(self.n_planning),
-                      int(self.v_target), float(self.shaping_scale), float(self.lam_q),
-                      float(self.trace_min), bool(self.normalise), bool(self.leak_free),
-                      bool(self.rebase), bool(self.lookahead), int(self.n_fit))
+        lean = (self.v_target == Potential.OPTIMISTIC and not self.leak_free and not self.rebase
+                and self.lam_q == 0.0)
+        return (LeanParams if lean else Params)(
+            float(self.eps), float(self.alpha), float(self.gamma), float(self.lam),
+            float(self.warmup_episodes), float(freeze), int(self.n_planning),
+            int(self.v_target), float(self.shaping_scale), float(self.lam_q),
+            float(self.trace_min), bool(self.normalise), bool(self.leak_free),
+            bool(self.rebase), bool(self.lookahead), int(self.n_fit))
 
 
 
@@ -119,3 +126,7 @@ class Params(NamedTuple):
     rebase: bool
     lookahead: bool
     n_fit: int
+
+
+# The same fields; a state holding these compiles the lean kernel (see RNHQLPlus.params).
+LeanParams = NamedTuple("LeanParams", list(Params.__annotations__.items()))

@@ -102,7 +102,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.save:
         print(f"  saved agent           {args.save}")
     if args.json:
-        from scenarios.runs.results import atomic_write_text
+        from sim.files import atomic_write_text
 
         try:
             atomic_write_text(args.json, json.dumps(rec, indent=1))

@@ -10,7 +10,7 @@ from __future__ import annotations
 from gymnasium.envs.registration import register, registry
 
 ENV_SPECS = {
-    "rnhql/GridRoute-v0": ("sim.grid_env:GridRouteEnv", 600),
+    "rnhql/GridRoute-v0": ("sim.grid.env:GridRouteEnv", 600),
     "rnhql/PhysicsRoute-v0": ("sim.physics.envs:PhysicsRouteEnv", 600),
     "rnhql/DiffDrive-v0": ("sim.physics.envs:DiffDriveEnv", 2000),
 }

@@ -1,13 +1,13 @@
 """The full scenario check: start and goal free for the inflated robot, and joined.
 
 Separate from :func:`sim.scenario.validate_shape` (pure data checks) because it
-rasterises the scenario (:mod:`sim.raster`), which needs the scenario's types.
+rasterises the scenario (:mod:`sim.grid.raster`), which needs the scenario's types.
 """
 
 from __future__ import annotations
 
 from sim.errors import ScenarioError
-from sim.raster import rasterise
+from sim.grid.raster import rasterise
 from sim.scenario import Scenario, validate_shape
 
 

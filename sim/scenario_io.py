@@ -1,7 +1,7 @@
 """Loading scenarios: TOML files, Moving AI ``.map`` files and the built-ins by name.
 
 Every error names the file, the field and the fix (:class:`sim.errors.ScenarioError`).
-The built-in scenarios are data shipped in ``scenarios/builtin``, found by path.
+The built-in scenarios are ``sim``'s own package data, in ``sim/builtin``.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ class _Table:
     def __init__(self, data: dict[str, Any], path: str, source: str) -> None:
         if not isinstance(data, dict):
             raise ScenarioError(source, path or "<top>", f"expected a table, got {data!r}",
-                                "see scenarios/builtin/paper-50.toml for the layout")
+                                "see sim/builtin/paper-50.toml for the layout")
         self.data, self.path, self.source, self.used = data, path, source, set()
 
     def _fld(self, key: str) -> str:
@@ -48,7 +48,7 @@ class _Table:
         if key not in self.data:
             if required:
                 raise ScenarioError(self.source, self._fld(key), "is missing",
-                                    f"add '{key} = ...' (see scenarios/builtin/paper-50.toml)")
+                                    f"add '{key} = ...' (see sim/builtin/paper-50.toml)")
             return default
         value = self.data[key]
         if kind is float and isinstance(value, int) and not isinstance(value, bool):
@@ -122,7 +122,7 @@ def _physics_from_table(table: dict | None, source: str) -> str | None:
 
 
 def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenario:
-    """Build and validate a Scenario from parsed TOML (see scenarios/builtin/paper-50.toml)."""
+    """Build and validate a Scenario from parsed TOML (see sim/builtin/paper-50.toml)."""
     top = _Table(data, "", source)
     name = top.get("name", str, Path(source).stem)
     description = top.get("description", str, "")
@@ -249,12 +249,9 @@ def scenario_from_map(path: str | Path, start_xy: Cell, goal_xy: Cell,
 
 
 def builtin_dir() -> Path:
-    """Directory of the built-in scenario TOMLs, shipped as data in ``scenarios/builtin``.
-
-    Found by path beside this package (installed or editable alike), so ``sim``
-    reads the data without importing any code of the layer above it.
-    """
-    return Path(__file__).resolve().parent.parent / "scenarios" / "builtin"
+    """Directory of the built-in scenario TOMLs and their maps: the package data
+    ``sim/builtin`` (``pyproject.toml`` ships it; tests check every file is shipped)."""
+    return Path(__file__).resolve().parent / "builtin"
 
 
 SCENARIO_PATH_ENV = "RNHQL_SCENARIO_PATH"

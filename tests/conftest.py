@@ -10,7 +10,7 @@ from sim.grid import build_model
 from sim.scenario_io import resolve_scenario
 
 REPO = Path(__file__).resolve().parent.parent
-MAPS = REPO / "scenarios" / "builtin" / "maps"
+MAPS = REPO / "sim" / "builtin" / "maps"
 
 
 @pytest.fixture(scope="session")

@@ -1,4 +1,4 @@
-"""The dense O(cells x circles) rasteriser that sim.raster replaced: the reference it must match.
+"""The dense O(cells x circles) rasteriser sim.grid.raster replaced: the reference it must match.
 
 Kept only for tests (``tests/test_raster.py``): every cell against every circle,
 no bounding boxes, no cleverness.
@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from sim.discretiser import Discretiser
-from sim.planning import ACTION_DELTAS
+from sim.grid.actions import ACTION_DELTAS
+from sim.grid.discretiser import Discretiser
 
 
 def dense_occupancy(sc) -> np.ndarray:

@@ -192,7 +192,7 @@ def test_resume_with_other_rewards_is_refused(tmp_path, capsys):
 def test_scen_rows_that_do_not_fit_their_map_are_refused(tmp_path, capsys):
     import shutil
 
-    shutil.copy(Path(__file__).parent.parent / "scenarios/builtin/maps/arena.map", tmp_path)
+    shutil.copy(Path(__file__).parent.parent / "sim/builtin/maps/arena.map", tmp_path)
     size = tmp_path / "size.scen"
     size.write_text("version 1\n0\tarena.map\t50\t49\t19\t26\t19\t29\t3.0\n")
     assert main(["train", "--scen", str(size), "--index", "0", "--episodes", "2"]) == 2

@@ -9,7 +9,7 @@ import pytest
 from scenarios.experiments.compare import PARTIAL, make_specs, run_sweep
 from scenarios.runs.backends import SweepError, run_local
 from scenarios.runs.results import summarise
-from scenarios.runs.spec import RunSpec, run_one
+from scenarios.runs.spec import RecordOptions, RunSpec, run_one
 
 RUN_KEYS = {"method", "seed", "world", "episodes_to_stable_optimal", "episodes_to_optimal",
             "optimal_test_fraction", "final_route_length", "epsilon_route_length",
@@ -110,8 +110,8 @@ def test_atomic_writes_get_the_usual_file_mode(tmp_path):
 
     from learning.checkpoint import Checkpoint, save_checkpoint
     from learning.train import train_tabular
-    from scenarios.runs.results import atomic_write_text
     from scenarios.runs.spec import load, make_config
+    from sim.files import atomic_write_text
 
     umask = os.umask(0)
     os.umask(umask)
@@ -137,9 +137,9 @@ def test_run_key_covers_everything_that_changes_a_run(tmp_path):
     keys = {base.key, *(v.key for v in variants)}
     assert len(keys) == 1 + len(variants)
     # recording options do not change the run, so they do not change the key
-    assert dataclasses.replace(base, record_path="x.rrd", record_every=3).key == base.key
+    assert dataclasses.replace(base, recording=RecordOptions("x.rrd", every=3)).key == base.key
     # the same name with other content (an edited TOML) is another run
-    toml = (REPO / "scenarios" / "builtin" / "paper-40.toml").read_text()
+    toml = (REPO / "sim" / "builtin" / "paper-40.toml").read_text()
     a, b = tmp_path / "a" / "s.toml", tmp_path / "b" / "s.toml"
     edited = toml.replace("steps_per_episode = 600", "steps_per_episode = 500")
     for path, text in ((a, toml), (b, edited)):

@@ -6,8 +6,8 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from sim.discretiser import Discretiser
-from sim.raster import occupancy
+from sim.grid.discretiser import Discretiser
+from sim.grid.raster import occupancy
 from sim.scenario import Circle, Scenario
 
 sizes = st.tuples(st.integers(2, 60), st.integers(2, 60),

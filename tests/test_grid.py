@@ -50,3 +50,22 @@ def test_model_arrays_are_read_only(paper50_model):
     assert not paper50_model.next_state.flags.writeable
     assert paper50_model.next_state.dtype == np.int32
     assert paper50_model.n_states == 2500
+
+
+def test_the_action_table_agrees_with_itself():
+    """sim.grid.actions is the one action table: names, moves, headings and reverses agree."""
+    import math
+
+    from sim.grid.actions import (
+        ACTION_DELTAS,
+        ACTION_HEADINGS,
+        ACTION_NAMES,
+        N_ACTIONS,
+        OPPOSITE,
+    )
+
+    assert ACTION_NAMES == ("up", "down", "left", "right") and N_ACTIONS == 4
+    assert ACTION_DELTAS == ((0, 1), (0, -1), (-1, 0), (1, 0))  # the learners' order
+    for a, (dx, dy) in enumerate(ACTION_DELTAS):
+        assert ACTION_HEADINGS[a] == math.atan2(dy, dx)
+        assert ACTION_DELTAS[OPPOSITE[a]] == (-dx, -dy) and OPPOSITE[OPPOSITE[a]] == a

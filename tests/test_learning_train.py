@@ -10,7 +10,7 @@ import pytest
 
 from learning import HAQL, METHODS, RNHQL, STQL, geometry_of, init_state, train_tabular
 from learning.train import greedy_test, shortest_fraction
-from sim.planning import value_iteration
+from sim.grid.planning import value_iteration
 
 
 def tiny_grid():

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from sim.grid.actions import ACTION_HEADINGS
 from sim.physics.controller import (
-    CARDINAL_HEADINGS,
     DriveLimits,
     PrimitiveController,
     ProfileTable,
@@ -93,7 +93,7 @@ def test_plan_respects_wheel_limits_and_stops(action, heading):
     ctl = PrimitiveController(EMPTY, cfg)
     rb = EMPTY.robot
     target = (2.5 + (action == 3) - (action == 2), 2.5 + (action == 0) - (action == 1))
-    cmds, dist = ctl.plan_leg((2.5, 2.5, heading), target, CARDINAL_HEADINGS[action])
+    cmds, dist = ctl.plan_leg((2.5, 2.5, heading), target, ACTION_HEADINGS[action])
     assert dist == pytest.approx(1.0)
     assert cmds[-1] == (0.0, 0.0, 0.0)
     wheels = wheel_commands(cmds, rb.wheel_base_m)
@@ -116,7 +116,7 @@ def test_primitive_lands_on_the_neighbouring_centre(action):
     dx, dy = [(0, 1), (0, -1), (-1, 0), (1, 0)][action]
     x, y, th = world.pose
     assert (x, y) == pytest.approx((2.5 + dx, 2.5 + dy), abs=1e-9)
-    assert wrap_angle(th - CARDINAL_HEADINGS[action]) == pytest.approx(0.0, abs=1e-9)
+    assert wrap_angle(th - ACTION_HEADINGS[action]) == pytest.approx(0.0, abs=1e-9)
     assert res.reached and not res.bumped and not res.timeout
     assert res.state == (2 + dy) * EMPTY.nx + 2 + dx
     assert len(res.trajectory) == res.steps + 1 and res.trajectory[0] == (2.5, 2.5, 0.0)

@@ -146,7 +146,7 @@ def test_respawn_replays_like_a_fresh_world():
     import numpy as np
 
     from scenarios.runs.spec import load
-    from sim.discretiser import Discretiser
+    from sim.grid.discretiser import Discretiser
 
     sc, m = load("paper-50")
     cfg = PhysicsConfig()

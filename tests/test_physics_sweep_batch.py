@@ -6,7 +6,7 @@ import pytest
 
 from learning.registry import METHODS
 from scenarios.runs.physics_batch import MAX_BATCH, plan_tasks, run_physics_batch
-from scenarios.runs.spec import RunSpec, run_one
+from scenarios.runs.spec import RecordOptions, RunSpec, run_one
 
 WALL = ("wall_time_s", "wall_time_per_episode_s")
 
@@ -31,7 +31,8 @@ def test_plan_tasks_batches_physics_and_balances_jobs():
     grid = [RunSpec("paper-40", "st-ql", s, 10) for s in range(3)]
     phys = [RunSpec("paper-40", m, s, 10, world="physics")
             for m in ("st-ql", "haql") for s in range(5)]
-    recorded = RunSpec("paper-40", "st-ql", 9, 10, world="physics", record_path="x.rrd")
+    recorded = RunSpec("paper-40", "st-ql", 9, 10, world="physics",
+                       recording=RecordOptions("x.rrd"))
     specs = [*grid, *phys, recorded]
     tasks = plan_tasks(specs, jobs=2)
     flat = sorted(i for t in tasks for i in t)

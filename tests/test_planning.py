@@ -4,8 +4,15 @@ import numpy as np
 import pytest
 
 from sim.grid import build_model
+from sim.grid.planning import (
+    astar,
+    bfs_route,
+    breadth_first,
+    distances_to,
+    grid_distances,
+    value_iteration,
+)
 from sim.maps import load_map, load_scen, movingai_to_cell
-from sim.planning import astar, bfs_route, value_iteration
 from sim.scenario_io import scenario_from_map
 from tests.conftest import MAPS
 
@@ -60,3 +67,30 @@ def test_astar_reports_unreachable():
     blocked[:, 1] = True
     length, path = astar(blocked, (0, 0), (2, 2), connectivity=8)
     assert length == np.inf and path == []
+
+
+def test_one_bfs_serves_grids_transition_tables_and_free_cell_maps(paper50_model):
+    """distances_to (directed transitions) and grid_distances (a free-cell map) are the
+    same BFS as the model's distances where they describe the same moves."""
+    m = paper50_model
+    np.testing.assert_array_equal(distances_to(m.next_state, m.goal), m.distance_to_goal)
+    free = np.ones((3, 4), dtype=bool)
+    free[1, 1:3] = False  # a wall in the middle row
+    d = grid_distances(free, (0, 1))
+    assert d.dtype == np.int32 and d[1, 0] == 0 and d[1, 3] == 5 and d[1, 1] == -1
+    # a one-way door: 0 -> 1 -> 2 and 2 -> 0; nothing leads back from 2 to 1
+    nxt = np.array([[1, 0], [2, 1], [0, 2]])
+    np.testing.assert_array_equal(distances_to(nxt, 1), [1, 0, 2])
+
+
+def test_breadth_first_expands_each_layer_in_discovery_order():
+    """A caller that acts per state (the physics model drives each one) sees FIFO order."""
+    succ = {0: [3, 1, 3], 1: [2], 3: [4, 2], 2: [], 4: []}
+    seen = []
+
+    def expand(frontier):
+        seen.extend(frontier.tolist())
+        return np.array([t for s in frontier.tolist() for t in succ[s]], dtype=np.int64)
+
+    np.testing.assert_array_equal(breadth_first(5, 0, expand), [0, 1, 2, 1, 2])
+    assert seen == [0, 3, 1, 4, 2]

@@ -1,4 +1,4 @@
-"""sim.raster stamps circles onto their bounding boxes: it must equal the dense reference.
+"""sim.grid.raster stamps circles onto their bounding boxes: it must equal the dense reference.
 
 The reference (tests/reference_raster.py) is the O(cells x circles) code it
 replaced; on random scenarios (cell sizes, robot sizes, circles on and over the
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from sim.grid import build_model
-from sim.planning import bfs_distances
-from sim.raster import occupancy, passable_moves
+from sim.grid.planning import bfs_distances
+from sim.grid.raster import occupancy, passable_moves
 from sim.scenario import Circle, Robot, Scenario
 from sim.scenario_io import builtin_names, resolve_scenario
 from tests.reference_raster import dense_occupancy, dense_passable_moves

@@ -19,7 +19,7 @@ from scenarios.recording.comparison import gather_comparison
 from scenarios.recording.demo import record_synthetic
 from scenarios.recording.recorder import Recorder, RecordingFile, run_prefix, verify_recording
 from scenarios.recording.scene import git_commit
-from sim.planning import bfs_route
+from sim.grid.planning import bfs_route
 
 REPO = Path(__file__).resolve().parent.parent
 

@@ -6,13 +6,13 @@ import json
 
 from scenarios.cli import main
 from scenarios.recording.recorder import verify_recording
-from scenarios.runs.spec import RunSpec, run_one
+from scenarios.runs.spec import RecordOptions, RunSpec, run_one
 
 
 def test_recorded_run_equals_unrecorded_run(tmp_path):
     plain = run_one(RunSpec("paper-40", "rnh-ql", 2, 40))
-    recorded = run_one(RunSpec("paper-40", "rnh-ql", 2, 40, record_path=str(tmp_path / "r.rrd"),
-                               record_every=3))
+    recorded = run_one(RunSpec("paper-40", "rnh-ql", 2, 40,
+                               recording=RecordOptions(str(tmp_path / "r.rrd"), every=3)))
     for rec in (plain, recorded):
         rec.pop("wall_time_s")
         rec.pop("wall_time_per_episode_s")
@@ -48,15 +48,17 @@ def test_bad_record_path_exits_2(capsys):
 
 
 def test_comparison_records_first_seeds_in_full_and_the_rest_as_curves(tmp_path):
-    from scenarios.experiments.compare import make_specs, with_recording
+    from scenarios.experiments.compare import SweepRecording, make_specs, with_recording
 
     specs = make_specs("paper-40", ["st-ql", "rnh-ql"], [0, 1, 2], 5, ["grid"])
-    rec = with_recording(specs, str(tmp_path / "c.rrd"), every=10, detail_seeds=2)
-    assert {(s.seed, s.record_detail) for s in rec} == {(0, True), (1, True), (2, False)}
-    assert len({s.recording_id for s in rec}) == 1
-    assert {s.record_prefix for s in rec if s.method == "st-ql"} == {
+    rec = with_recording(specs, SweepRecording(str(tmp_path / "c.rrd"), every=10,
+                                               detail_seeds=2))
+    assert {(s.seed, s.recording.detail) for s in rec} == {(0, True), (1, True), (2, False)}
+    assert len({s.recording.recording_id for s in rec}) == 1
+    assert {s.recording.prefix for s in rec if s.method == "st-ql"} == {
         "runs/st-ql/s0", "runs/st-ql/s1", "runs/st-ql/s2"}
+    assert [s.key for s in rec] == [s.key for s in specs]  # recording is not part of a run
     out = run_one(rec[2])  # a curves-only part still verifies
     assert out["seed"] == 2
-    ok, msg = verify_recording(rec[2].record_path)
+    ok, msg = verify_recording(rec[2].recording.path)
     assert ok, msg

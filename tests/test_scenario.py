@@ -13,7 +13,7 @@ from sim.scenario import Circle, Robot, Scenario
 from sim.scenario_io import builtin_names, load_scenario, resolve_scenario
 from tests.conftest import MAPS, REPO
 
-REPO_BUILTIN = REPO / "scenarios" / "builtin"
+REPO_BUILTIN = REPO / "sim" / "builtin"
 
 BASE = """\
 name = "t"

@@ -19,7 +19,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-MAPS = Path(__file__).resolve().parent.parent / "builtin" / "maps"
+from sim.scenario_io import builtin_dir
+
+MAPS = builtin_dir() / "maps"
 DENSITY = 28 / 2500  # circles per m^2, as paper-50
 SIZES = (50, 100, 200, 512, 1024)
 

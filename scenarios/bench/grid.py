@@ -16,7 +16,7 @@ import numpy as np
 
 import sim.envs  # noqa: F401  (registers the ids)
 from sim.grid import build_model
-from sim.raster import rasterise
+from sim.grid.raster import rasterise
 from sim.scenario_io import resolve_scenario
 
 

@@ -4,9 +4,7 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
-from collections.abc import Iterator
 from pathlib import Path
 
 from scenarios.cli.args import (
@@ -28,7 +26,12 @@ from sim.errors import InputError
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    from scenarios.experiments.compare import ALL_METHODS, make_specs, run_sweep
+    from scenarios.experiments.compare import (
+        ALL_METHODS,
+        SweepRecording,
+        make_specs,
+        run_sweep,
+    )
 
     name, start, goal = scenario_key(args)
     load(name, start, goal, args.rewards)  # validate the scenario before any work
@@ -48,29 +51,20 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from scenarios.runs.backends import Progress
 
     record = record_path(args, name.rsplit("/", 1)[-1].removesuffix(".toml"), "compare")
+    recording = None
     if record is not None:
-        from scenarios.experiments.compare import with_recording
-
-        specs = with_recording(specs, record,
-                               positive(100 if args.record_every is None else args.record_every,
-                                         "--record-every"),
-                               positive(args.record_values_every, "--record-values-every"),
-                               positive(args.record_seeds, "--record-seeds"))
+        recording = SweepRecording(
+            record, every=positive(100 if args.record_every is None else args.record_every,
+                                   "--record-every"),
+            values_every=positive(args.record_values_every, "--record-values-every"),
+            detail_seeds=positive(args.record_seeds, "--record-seeds"))
     compile_notice(len(methods))
-    try:
-        results = run_sweep(specs, Path(args.out), execute, resume=args.resume,
-                            progress=Progress(len(specs)), **kwargs)
-    except KeyboardInterrupt:
-        _interrupted(specs, args, record)
-        raise
-    if record is not None:
-        from scenarios.experiments.compare import gather_parts
-
-        with _finishing(record):  # every run is done: the recording must hold them all
-            gather_parts(specs, record, records=results["runs"])
-        print(f"recording: {record}  (open: rnhql view {record})")
-    print((Path(args.out) / "summary.md").read_text())
     out = Path(args.out)
+    run_sweep(specs, out, execute, resume=args.resume, recording=recording,
+              progress=Progress(len(specs)), **kwargs)
+    if record is not None:
+        print(f"recording: {record}  (open: rnhql view {record})")
+    print((out / "summary.md").read_text())
     print(f"wrote {out / 'results.json'}, summary.md and figures")
     return 0
 
@@ -116,54 +110,3 @@ def _backend(args: argparse.Namespace):
         return run_ray, {"address": args.address, "num_cpus": args.jobs}
     raise InputError("command line", "--backend", f"unknown backend {args.backend!r}",
                      "use local or ray")
-
-
-@contextlib.contextmanager
-def _finishing(record: str) -> Iterator[None]:
-    """While the finished runs are merged into the recording (seconds), a first Ctrl-C only
-    says so; a second one abandons the recording (its partial file removed) with 130."""
-    import signal
-    import sys
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    pressed = [False]
-
-    def on_sigint(_sig: int, _frame: object) -> None:
-        if pressed[0]:
-            Path(record + ".part").unlink(missing_ok=True)
-            os._exit(130)
-        pressed[0] = True
-        print("\nrnhql: all runs are finished; writing the recording (a few seconds). Ctrl-C "
-              "again abandons it", file=sys.stderr)
-
-    old = signal.signal(signal.SIGINT, on_sigint)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
-
-
-def _interrupted(specs: list, args: argparse.Namespace, record: str | None) -> None:
-    """After Ctrl-C: say what was kept, and finish the recording with the runs done so far.
-
-    A second Ctrl-C while this runs exits at once (status 130).
-    """
-    import signal
-    import sys
-
-    from scenarios.experiments.compare import read_partial
-
-    signal.signal(signal.SIGINT, lambda *_: os._exit(130))
-    done = read_partial(Path(args.out))
-    finished = [s for s in specs if s.key in done]
-    print(f"\ninterrupted: {len(finished)} of {len(specs)} runs finished, kept in "
-          f"{args.out}/runs.partial.jsonl; finish with the same command and --resume",
-          file=sys.stderr)
-    if record is not None and finished:
-        from scenarios.experiments.compare import gather_parts
-
-        gather_parts(finished, record, keep_parts=True, records=list(done.values()))
-        print(f"recording of the finished runs: {record}", file=sys.stderr)

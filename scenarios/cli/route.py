@@ -23,7 +23,7 @@ def cmd_route(args: argparse.Namespace) -> int:
     from learning.geometry import geometry_of
     from learning.train import greedy_test
     from scenarios.figures.routes import ascii_routes, route_png
-    from sim.planning import bfs_route
+    from sim.grid.planning import bfs_route
 
     name, start, goal = scenario_key(args)
     sc, model = load(name, start, goal, args.rewards)

@@ -28,7 +28,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from learning.checkpoint import Checkpoint, load_checkpoint, save_checkpoint
     from learning.geometry import geometry_of
     from learning.train import train_tabular
-    from scenarios.runs.spec import RunSpec, run_record, scenario_digest
+    from scenarios.runs.spec import RunOutcome, RunSpec, run_record, scenario_digest
 
     name, start, goal = scenario_key(args)
     sc, model = load(name, start, goal, args.rewards)
@@ -97,12 +97,18 @@ def cmd_train(args: argparse.Namespace) -> int:
             recorder.close()  # also on Ctrl-C: the recording keeps what was logged
     if record is not None:
         print(f"  recording             {record}  (open: rnhql view {record})")
-    rec = run_record(spec, cfg, result, model)
+    from learning.train import epsilon_route_lengths
+
+    # the paper's epsilon-greedy test on the evaluation stream, as `rnhql compare` runs it
+    graded = model if args.world == "grid" else result.graded
+    state = result.state if args.world == "grid" else result.agent.state
+    rec = run_record(spec, cfg, RunOutcome.of(
+        result, epsilon_route_lengths(state, graded, cfg.eps, rs.evaluation)))
     print_run(rec, model.optimal_route_length)
     if args.save:
         print(f"  saved agent           {args.save}")
     if args.json:
-        from scenarios.runs.results import atomic_write_text
+        from sim.files import atomic_write_text
 
         try:
             atomic_write_text(args.json, json.dumps(rec, indent=1))

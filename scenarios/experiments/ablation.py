@@ -262,7 +262,7 @@ def main(argv: list[str] | None = None) -> int:
             if ep == a.episodes and lab in labels and s < a.seeds
             and mp in {m["name"] for m in maps}]
     summary = summarise(runs, maps, labels)
-    from scenarios.runs.results import atomic_write_text
+    from sim.files import atomic_write_text
 
     md = (f"Rewards `{a.rewards}`, {a.seeds} seeds x {a.episodes} episodes. Cell: seeds whose "
           "final greedy route is optimal · median [q25, q75] episodes to stable optimal "

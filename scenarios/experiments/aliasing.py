@@ -32,8 +32,8 @@ from typing import Any
 
 import numpy as np
 
-from scenarios.runs.results import atomic_write_text
 from scenarios.runs.spec import load
+from sim.files import atomic_write_text
 from sim.grid import TabularModel
 from sim.physics.batch import RouteBatch
 from sim.physics.fidelity import Fidelity, parse_fidelity

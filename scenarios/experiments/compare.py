@@ -1,23 +1,34 @@
-"""``rnhql compare``: methods x seeds (x worlds) on one scenario -> results, summary, figures.
+"""``rnhql compare``: methods x seeds (x worlds) on one scenario -> results, summary, figures,
+and a comparison recording.
+
+:func:`run_sweep` is the one owner of a sweep's outputs: it runs the specs, writes
+``results.json``, ``summary.md`` and the figures, and (given a
+:class:`SweepRecording`) merges the runs' recordings into one ``.rrd``; every
+experiment and the CLI make this one call.
 
 Partial progress survives: every finished run is appended to
-``DIR/runs.partial.jsonl`` as it arrives, and ``--resume DIR`` skips the runs
+``DIR/runs.partial.jsonl`` as it arrives, and ``--resume --out DIR`` skips the runs
 whose key is already there. ``results.json`` is written (atomically) only
-when the sweep is complete.
+when the sweep is complete; after Ctrl-C the recording holds the runs finished so far.
 """
 
 from __future__ import annotations
 
 import contextlib
 import json
-from collections.abc import Callable, Sequence
+import os
+import signal
+import sys
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 from scenarios.runs.outdir import check_out_dir, sweep_lock
 from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
-from scenarios.runs.spec import RunSpec, load
+from scenarios.runs.spec import RecordOptions, RunSpec, load
 
 ALL_METHODS = ("rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt",
                "q-lambda", "dyna-q")
@@ -53,8 +64,18 @@ def run_label(spec: RunSpec, worlds: set[str]) -> str:
     return spec.method if len(worlds) == 1 else f"{spec.method}-{spec.world}"
 
 
-def with_recording(specs: Sequence[RunSpec], record: str, every: int,
-                   values_every: int = 300, detail_seeds: int = 1) -> list[RunSpec]:
+@dataclass(frozen=True)
+class SweepRecording:
+    """A sweep's comparison recording: every run records a part file, merged at the end
+    into one ``.rrd`` with a comparison blueprint."""
+
+    path: str  # the .rrd to write
+    every: int = 100  # episodes recorded in full per run: the first, every N-th, the last
+    values_every: int = 300  # value heat maps every K episodes [episodes]
+    detail_seeds: int = 1  # seeds per method and world recorded in full (others: curves)
+
+
+def with_recording(specs: Sequence[RunSpec], recording: SweepRecording) -> list[RunSpec]:
     """Each run records a part file under ``<record>.parts/`` in its own subtree.
 
     The first ``detail_seeds`` seeds of each method and world are recorded in
@@ -67,6 +88,7 @@ def with_recording(specs: Sequence[RunSpec], record: str, every: int,
 
     from scenarios.recording.recorder import run_prefix
 
+    record = recording.path
     parts = Path(record + ".parts")
     parts.mkdir(parents=True, exist_ok=True)
     # the same sweep gets the same id, so the parts of an interrupted run and of its
@@ -74,14 +96,14 @@ def with_recording(specs: Sequence[RunSpec], record: str, every: int,
     rid = str(uuid.uuid5(uuid.NAMESPACE_URL,
                          f"rnhql:{Path(record).resolve()}|{'|'.join(s.key for s in specs)}"))
     worlds = {s.world for s in specs}
-    first_seeds = sorted({s.seed for s in specs})[:detail_seeds]
+    first_seeds = sorted({s.seed for s in specs})[:recording.detail_seeds]
     out = []
     for s in specs:
         label = run_label(s, worlds)
-        out.append(dataclasses.replace(
-            s, record_path=str(parts / f"{label}-s{s.seed}.rrd"), record_every=every,
-            record_values_every=values_every, record_detail=s.seed in first_seeds,
-            record_prefix=run_prefix(label, s.seed), recording_id=rid))
+        out.append(dataclasses.replace(s, recording=RecordOptions(
+            str(parts / f"{label}-s{s.seed}.rrd"), every=recording.every,
+            values_every=recording.values_every, detail=s.seed in first_seeds,
+            prefix=run_prefix(label, s.seed), recording_id=rid)))
     return out
 
 
@@ -98,7 +120,8 @@ def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False
 
     worlds = {s.world for s in specs}
     sc, _ = load(*specs[0].problem)
-    parts = [Path(s.record_path) for s in specs if s.record_path and Path(s.record_path).exists()]
+    parts = [Path(s.recording.path) for s in specs
+             if s.recording is not None and Path(s.recording.path).exists()]
     runs = [(run_label(s, worlds), s.seed) for s in specs]
     curves = None
     if records:
@@ -107,8 +130,8 @@ def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False
         by_key = {s.key: s for s in specs}
         curves = summary_curves([r for r in records if r["key"] in by_key],
                                 lambda r: run_label(by_key[r["key"]], worlds))
-    out = gather_comparison(record, parts, sc, runs, recording_id=specs[0].recording_id,
-                            curves=curves)
+    rid = specs[0].recording.recording_id if specs[0].recording is not None else None
+    out = gather_comparison(record, parts, sc, runs, recording_id=rid, curves=curves)
     if not keep_parts:
         shutil.rmtree(record + ".parts", ignore_errors=True)
     return out
@@ -155,16 +178,75 @@ def read_partial(out_dir: Path) -> dict[str, dict[str, Any]]:
 
 def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
               execute: Callable[..., list[dict[str, Any]]], resume: bool = False,
-              figures: bool = True, **execute_kwargs: Any) -> dict[str, Any]:
-    """Run the specs not finished yet with ``execute`` (a backend), then write everything.
+              figures: bool = True, recording: SweepRecording | None = None,
+              **execute_kwargs: Any) -> dict[str, Any]:
+    """Run the specs not finished yet with ``execute`` (a backend), then write everything:
+    ``results.json``, ``summary.md``, the figures (``figures``) and the comparison
+    recording (``recording``).
 
-    On Ctrl-C the runs finished so far are in ``runs.partial.jsonl`` and the
-    ``KeyboardInterrupt`` propagates; ``resume=True`` later runs only the rest
-    and writes the same ``results.json`` as an uninterrupted sweep.
+    On Ctrl-C the runs finished so far are in ``runs.partial.jsonl``, the recording
+    holds them (its parts are kept for ``--resume``), a line on stderr says so, and the
+    ``KeyboardInterrupt`` propagates; ``resume=True`` later runs only the rest and
+    writes the same ``results.json`` as an uninterrupted sweep.
     """
     check_out_dir(out_dir)
+    if recording is not None:
+        specs = with_recording(specs, recording)
     with sweep_lock(out_dir):
-        return _run_sweep(specs, out_dir, execute, resume, figures, **execute_kwargs)
+        try:
+            results = _run_sweep(specs, out_dir, execute, resume, figures, **execute_kwargs)
+        except KeyboardInterrupt:
+            _keep_finished(specs, out_dir, recording)
+            raise
+        if recording is not None:
+            with _finishing(recording.path):  # every run is done: the recording holds them all
+                gather_parts(specs, recording.path, records=results["runs"])
+    return results
+
+
+@contextlib.contextmanager
+def _finishing(record: str) -> Iterator[None]:
+    """While the finished runs are merged into the recording (seconds), a first Ctrl-C only
+    says so; a second one abandons the recording (its partial file removed) with 130."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pressed = [False]
+
+    def on_sigint(_sig: int, _frame: object) -> None:
+        if pressed[0]:
+            Path(record + ".part").unlink(missing_ok=True)
+            os._exit(130)
+        pressed[0] = True
+        print("\nrnhql: all runs are finished; writing the recording (a few seconds). Ctrl-C "
+              "again abandons it", file=sys.stderr)
+
+    old = signal.signal(signal.SIGINT, on_sigint)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _keep_finished(specs: Sequence[RunSpec], out_dir: Path,
+                   recording: SweepRecording | None) -> None:
+    """After Ctrl-C: say what was kept, and write the recording of the runs done so far.
+    A second Ctrl-C while this runs exits at once (status 130)."""
+    main = threading.current_thread() is threading.main_thread()
+    old = signal.signal(signal.SIGINT, lambda *_: os._exit(130)) if main else None
+    try:
+        done = read_partial(out_dir)
+        finished = [s for s in specs if s.key in done]
+        print(f"\ninterrupted: {len(finished)} of {len(specs)} runs finished, kept in "
+              f"{out_dir / PARTIAL}; finish with the same command and --resume",
+              file=sys.stderr)
+        if recording is not None and finished:
+            gather_parts(finished, recording.path, keep_parts=True,
+                         records=list(done.values()))
+            print(f"recording of the finished runs: {recording.path}", file=sys.stderr)
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, old)
 
 
 def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,

@@ -25,8 +25,8 @@ import numpy as np
 from scenarios.experiments.compare import run_sweep
 from scenarios.figures.save import save_figure
 from scenarios.runs.backends import Progress, run_local
-from scenarios.runs.results import atomic_write_text
 from scenarios.runs.spec import load
+from sim.files import atomic_write_text
 
 
 def overlay_method(results: dict[str, Any], methods: list[str]) -> str:
@@ -46,7 +46,7 @@ def overlay(results: dict[str, Any], scenario: str, method: str, path: Path) -> 
     import matplotlib.pyplot as plt
 
     from scenarios.figures.plots import draw_map
-    from sim.planning import bfs_route
+    from sim.grid.planning import bfs_route
 
     sc, model = load(scenario)
     fig, ax = plt.subplots(figsize=(6.5, 6.5), dpi=110)

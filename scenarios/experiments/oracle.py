@@ -29,9 +29,10 @@ from learning.rbf import rbf_features
 from learning.state import init_state
 from learning.streams import streams
 from learning.train import KERNEL_OUT, greedy_test
-from scenarios.runs.results import atomic_write_text, quantile
+from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
-from sim.planning import value_iteration
+from sim.files import atomic_write_text
+from sim.grid.planning import value_iteration
 
 
 def fitted(v_star: np.ndarray, phi: np.ndarray, free: np.ndarray) -> np.ndarray:

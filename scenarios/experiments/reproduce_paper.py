@@ -23,7 +23,7 @@ from typing import Any
 
 from scenarios.experiments.compare import ALL_METHODS, make_specs, run_sweep
 from scenarios.runs.backends import Progress, run_local, run_ray
-from scenarios.runs.results import atomic_write_text
+from sim.files import atomic_write_text
 
 PAPER_FIVE = ("st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql")
 ALPHAS = (0.05, 0.1, 0.2, 0.3, 0.5)

@@ -22,8 +22,8 @@ from typing import Any
 from scenarios.experiments.compare import ALL_METHODS, make_specs, run_sweep
 from scenarios.experiments.reward_facts import RewardFacts, facts_markdown, reward_facts
 from scenarios.runs.backends import Progress, run_local
-from scenarios.runs.results import atomic_write_text
 from scenarios.runs.spec import load
+from sim.files import atomic_write_text
 from sim.scenario import REWARD_SCHEMES, Rewards
 
 GAMMAS = (0.95, 0.99)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.grid import TabularModel, build_model
-from sim.planning import bfs_route, value_iteration
+from sim.grid.planning import bfs_route, value_iteration
 from sim.scenario import Rewards, Scenario
 
 

@@ -30,7 +30,7 @@ import numpy as np
 from scenarios.experiments.compare import make_specs, run_sweep
 from scenarios.figures.save import save_figure
 from scenarios.runs.backends import Progress, run_local
-from scenarios.runs.results import atomic_write_text
+from sim.files import atomic_write_text
 
 DENSITY = 28 / 2500  # circles per m^2, as paper-50
 METHODS = ("rnh-ql", "rnh-ql+", "st-ql", "q-lambda", "dyna-q")

@@ -17,14 +17,16 @@ from __future__ import annotations
 
 import argparse
 import json
-from collections import deque
 from pathlib import Path
 
 import numpy as np
 
-SCHEMES = {"paper": (100.0, -1.0, 1.0), "goal-only": (100.0, -1.0, 0.0),
-           "step-cost": (100.0, -1.0, -1.0)}
-MAPS_DIR = Path(__file__).resolve().parent.parent / "builtin" / "maps"  # shipped copies
+from sim.grid.planning import grid_distances
+from sim.maps import load_map, movingai_to_cell
+from sim.scenario import REWARD_SCHEMES
+from sim.scenario_io import builtin_dir
+
+MAPS_DIR = builtin_dir() / "maps"  # shipped copies
 BUILTIN = ("paper-40", "paper-50", "zigzag-50", "arena")
 MOVINGAI = ("room-32-32-8", "random-64-64-20", "lak307d", "ost003d")
 TUNE_SEEDS = (1, 2)
@@ -97,10 +99,9 @@ def rooms(seed: int) -> np.ndarray:
 
 
 def read_map(path: Path) -> np.ndarray:
-    lines = path.read_text().splitlines()
-    h = int(lines[1].split()[1])
-    rows = lines[4:4 + h]
-    return np.array([[ch in ".GS" for ch in row] for row in rows], dtype=bool)
+    """free[row, col] of a Moving AI map, row 0 at the top as in the file (and as the
+    generators draw): sim's reader, flipped back from rnhql's y-up frame."""
+    return ~load_map(path).blocked[::-1]
 
 
 def write_map(free: np.ndarray, path: Path) -> None:
@@ -109,32 +110,17 @@ def write_map(free: np.ndarray, path: Path) -> None:
     path.write_text(f"type octile\nheight {h}\nwidth {w}\nmap\n" + "\n".join(rows) + "\n")
 
 
-def bfs(free: np.ndarray, src: tuple[int, int]) -> np.ndarray:
-    """Moves from src (row, col) to every cell, 4-connected; -1 unreachable."""
-    d = np.full(free.shape, -1, dtype=np.int64)
-    d[src] = 0
-    q = deque([src])
-    while q:
-        r, c = q.popleft()
-        for nr, nc in ((r + 1, c), (r - 1, c), (r, c + 1), (r, c - 1)):
-            if 0 <= nr < free.shape[0] and 0 <= nc < free.shape[1] and free[nr, nc] \
-                    and d[nr, nc] < 0:
-                d[nr, nc] = d[r, c] + 1
-                q.append((nr, nc))
-    return d
-
-
 def far_pair(free: np.ndarray) -> tuple[tuple[int, int], tuple[int, int], int]:
     """(start, goal, moves) as (row, col) in the map's frame: a double BFS sweep from a cell
     of the largest component."""
     cells = np.argwhere(free)
     best = None
     for r, c in cells[np.linspace(0, len(cells) - 1, 8).astype(int)]:
-        d = bfs(free, (int(r), int(c)))
+        d = grid_distances(free, (int(c), int(r)))  # BFS moves from (row r, col c)
         if best is None or (d >= 0).sum() > (best >= 0).sum():
             best = d
     a = tuple(int(x) for x in np.unravel_index(np.argmax(best), best.shape))
-    da = bfs(free, a)
+    da = grid_distances(free, a[::-1])
     b = tuple(int(x) for x in np.unravel_index(np.argmax(da), da.shape))
     return b, a, int(da[b])
 
@@ -142,10 +128,9 @@ def far_pair(free: np.ndarray) -> tuple[tuple[int, int], tuple[int, int], int]:
 def _toml(name: str, desc: str, map_path: Path, start, goal, steps: int,
           rewards: tuple[float, float, float], scheme: str) -> str:
     g, b, s = rewards
-    h = read_map(map_path).shape[0]
-    # rnhql frame: y up; a Moving AI row r is y = h - 1 - r
-    sx, sy = start[1], h - 1 - start[0]
-    gx, gy = goal[1], h - 1 - goal[0]
+    h = load_map(map_path).height
+    sx, sy = movingai_to_cell(start[1], start[0], h)  # (row, col) -> rnhql's y-up cell
+    gx, gy = movingai_to_cell(goal[1], goal[0], h)
     return (f'name = "{name}"\ndescription = "{desc}"\nstart = [{sx}, {sy}]\n'
             f'goal = [{gx}, {gy}]\nsteps_per_episode = {steps}\n\n[arena]\n'
             f'map = "{map_path.resolve()}"\ncell_size_m = 1.0\n\n'
@@ -153,8 +138,6 @@ def _toml(name: str, desc: str, map_path: Path, start, goal, steps: int,
 
 
 def _builtin_toml(name: str, rewards: tuple[float, float, float], scheme: str) -> str:
-    from sim.scenario_io import builtin_dir
-
     text = (builtin_dir() / f"{name}.toml").read_text()
     text = text.replace('map = "maps/', f'map = "{builtin_dir()}/maps/')
     out, skip = [], False
@@ -178,7 +161,7 @@ def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True,
     from sim.grid import build_model
     from sim.scenario_io import load_scenario
 
-    rewards = SCHEMES[scheme]
+    rewards = REWARD_SCHEMES[scheme]
     out.mkdir(parents=True, exist_ok=True)
     (out / "maps").mkdir(exist_ok=True)
     entries: list[dict] = []
@@ -224,7 +207,7 @@ def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True,
 
 
 def shipped_suite_tomls() -> dict[str, tuple[str, np.ndarray | None]]:
-    """The suite's maps as named scenarios, as shipped in ``scenarios/builtin`` (so
+    """The suite's maps as named scenarios, as shipped in ``sim/builtin`` (so
     ``rnhql train maze-1`` works): name -> (TOML text, generated map or None for a
     Moving AI map already shipped). The scenario's own rewards are the built-ins'
     default (pick a scheme with ``--rewards``); map paths are relative to the TOML."""
@@ -233,11 +216,12 @@ def shipped_suite_tomls() -> dict[str, tuple[str, np.ndarray | None]]:
     def toml(name: str, desc: str, free: np.ndarray) -> str:
         s, g, d = far_pair(free)
         h = free.shape[0]
+        (sx, sy), (gx, gy) = (movingai_to_cell(c, r, h) for r, c in (s, g))
         steps = max(600, 4 * int(d))
         return (f"# {desc}; written by scenarios.experiments.suite.shipped_suite_tomls.\n"
                 f"# Cells in rnhql's frame (y up): S is Moving AI {s[::-1]}, G {g[::-1]}.\n"
                 f'name = "{name}"\ndescription = "{desc}, start and goal far apart"\n'
-                f"start = [{s[1]}, {h - 1 - s[0]}]\ngoal = [{g[1]}, {h - 1 - g[0]}]\n"
+                f"start = [{sx}, {sy}]\ngoal = [{gx}, {gy}]\n"
                 f"steps_per_episode = {steps}\n\n[arena]\n"
                 f'map = "maps/{name}.map"\ncell_size_m = 1.0\n')
 
@@ -256,7 +240,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
                                  formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     ap.add_argument("--out", default="results/suite", help="directory for maps and TOMLs")
-    ap.add_argument("--rewards", default="goal-only", choices=sorted(SCHEMES))
+    ap.add_argument("--rewards", default="goal-only", choices=sorted(REWARD_SCHEMES))
     ap.add_argument("--no-moving-ai", action="store_true", help="skip the Moving AI maps")
     a = ap.parse_args(argv)
     for e in build_suite(Path(a.out), a.rewards, not a.no_moving_ai):

@@ -19,7 +19,7 @@ from matplotlib.patches import Circle as CirclePatch
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 from sim.grid import TabularModel
-from sim.planning import bfs_route
+from sim.grid.planning import bfs_route
 from sim.scenario import Scenario
 
 

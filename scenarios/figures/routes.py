@@ -9,7 +9,7 @@ import numpy as np
 
 from scenarios.figures.save import save_figure
 from sim.grid import TabularModel
-from sim.planning import bfs_route
+from sim.grid.planning import bfs_route
 from sim.scenario import Scenario
 
 LEGEND = "S start, G goal, * learned route, o optimum, @ both, # blocked, . free"

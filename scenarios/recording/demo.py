@@ -18,7 +18,7 @@ import numpy as np
 
 from scenarios.recording.recorder import Recorder
 from sim.grid import TabularModel
-from sim.planning import bfs_route, value_iteration
+from sim.grid.planning import bfs_route, value_iteration
 from sim.scenario import Scenario
 
 

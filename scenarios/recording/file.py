@@ -22,6 +22,8 @@ from typing import Protocol
 
 import rerun as rr
 
+from sim.files import move_into_place
+
 
 class _Flushable(Protocol):
     prefix: str
@@ -107,7 +109,7 @@ class RecordingFile:
                 self.stream.disconnect()
                 if not self.part.exists():
                     raise OSError(errno.EIO, "the recording's file is gone", str(self.part))
-                os.replace(self.part, self.path)
+                move_into_place(self.part, self.path)
             except (OSError, RuntimeError) as exc:  # e.g. a full disk: Rerun's writer stops
                 with contextlib.suppress(Exception):
                     self.stream.disconnect()

@@ -57,7 +57,7 @@ from scenarios.recording import scene
 from scenarios.recording.batch import EpisodeRecord, ValueFrame, send_episodes, send_values
 from scenarios.recording.file import RecordingFile, rerun_cli, verify_recording
 from sim.grid import TabularModel
-from sim.planning import ACTION_DELTAS
+from sim.grid.actions import ACTION_DELTAS
 from sim.scenario import Scenario
 
 __all__ = ["Recorder", "RecordingFile", "rerun_cli", "run_prefix", "verify_recording"]

@@ -23,7 +23,7 @@ import rerun.blueprint as rrb
 
 from scenarios.palette import method_colour  # noqa: F401  (one colour per method, PNGs too)
 from sim.grid import TabularModel
-from sim.planning import bfs_route
+from sim.grid.planning import bfs_route
 from sim.scenario import Scenario
 
 # ---- colours (RGB / RGBA); obstacles dark, free light, route and robot distinct

@@ -233,7 +233,7 @@ MAX_BATCH = 64  # robots per batch: beyond this a batched step gains little, and
 
 def batchable(spec: Any) -> bool:
     """Physics runs without a recording train in batches (a recording taps one env)."""
-    return spec.world == "physics" and spec.record_path is None
+    return spec.world == "physics" and spec.recording is None
 
 
 def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
@@ -260,7 +260,7 @@ def run_physics_batch(specs: Sequence[Any]) -> list[dict[str, Any]]:
     results.json records, in spec order."""
     from learning.streams import streams
     from learning.train import epsilon_route_lengths
-    from scenarios.runs.spec import load, make_config, run_record
+    from scenarios.runs.spec import RunOutcome, load, make_config, run_record
 
     first = specs[0]
     if any((sp.problem, sp.episodes, sp.test_every, sp.fidelity_spec) !=
@@ -286,9 +286,9 @@ def run_physics_batch(specs: Sequence[Any]) -> list[dict[str, Any]]:
     records: list[dict[str, Any] | None] = [None] * len(specs)
     for idx, cfg, group_results in zip(members, cfgs, results, strict=True):
         for i, res in zip(idx, group_results, strict=True):
-            res.epsilon_route_lengths = epsilon_route_lengths(res.agent.state, res.graded,
-                                                              cfg.eps, evaluation[i])
-            records[i] = run_record(specs[i], cfg, res, model)
+            eps_routes = epsilon_route_lengths(res.agent.state, res.graded, cfg.eps,
+                                               evaluation[i])
+            records[i] = run_record(specs[i], cfg, RunOutcome.of(res, eps_routes))
     return [r for r in records if r is not None]
 
 

@@ -1,4 +1,4 @@
-"""The ``results.json`` contract, its summary statistics, ``summary.md`` and atomic writes.
+"""The ``results.json`` contract, its summary statistics and ``summary.md``.
 
 ``results.json`` (a contract for scripts; ``version`` 2)::
 
@@ -34,42 +34,19 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from sim.files import atomic_write_text
+
 RESULTS_VERSION = 2
 SUMMARY_FIGURES = ("episodes_to_stable_optimal", "episodes_to_optimal", "optimal_test_fraction",
                    "final_route_length", "epsilon_route_length", "success_rate",
                    "reward_per_step", "reward_per_step_last_10pct", "wall_time_s", "env_steps",
                    "optimal_action_fraction")
-
-_UMASK = os.umask(0)
-os.umask(_UMASK)
-_FILE_MODE = 0o666 & ~_UMASK  # what open() would have given the file
-
-
-def atomic_write_text(path: str | Path, text: str) -> None:
-    """Write via a temp file in the same directory and ``os.replace``: never half a file."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.chmod(tmp, _FILE_MODE)  # mkstemp makes 0600; give the usual mode
-        os.replace(tmp, path)
-    except OSError as exc:  # name the file the user asked for, not the temp file
-        Path(tmp).unlink(missing_ok=True)
-        raise OSError(exc.errno, exc.strerror, str(path)) from None
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
 
 def quantile(values: list[float | None], q: float) -> float:
     """The q-quantile of ``values`` by one definition used everywhere in rnhql.

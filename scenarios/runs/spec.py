@@ -30,6 +30,19 @@ class ExperimentError(InputError):
 
 
 @dataclass(frozen=True)
+class RecordOptions:
+    """How one run is recorded for Rerun. Not part of the run's key: a recorded run equals
+    an unrecorded one (the recorder draws no random numbers)."""
+
+    path: str  # the .rrd to write
+    every: int = 10  # episodes recorded in full: the first, every N-th, the last [episodes]
+    values_every: int = 300  # value heat maps every K episodes [episodes]
+    detail: bool = True  # False: curves only (comparisons, beyond the first seeds)
+    prefix: str = ""  # entity subtree (comparisons: runs/<label>/s<seed>)
+    recording_id: str | None = None  # shared by the parts of one comparison
+
+
+@dataclass(frozen=True)
 class RunSpec:
     """One training run: everything needed to reproduce it."""
 
@@ -46,13 +59,7 @@ class RunSpec:
     #                             scenario's own)
     drive_final: bool = False  # grid runs: also drive the final greedy policy in physics
     fidelity: str | None = None  # --fidelity of the physics world (None: exact)
-    # recording (not part of the key: a recorded run equals an unrecorded one)
-    record_path: str | None = None  # .rrd to write; None = no recording
-    record_every: int = 10  # episodes recorded in full: first, every N-th, last
-    record_values_every: int = 300  # value heat maps every K episodes
-    record_detail: bool = True  # False: curves only (comparisons, beyond the first seeds)
-    record_prefix: str = ""  # entity subtree (comparisons: runs/<label>/s<seed>)
-    recording_id: str | None = None  # shared by the parts of one comparison
+    recording: RecordOptions | None = None  # None: not recorded (never part of the key)
 
     @property
     def problem(self) -> tuple[str, Cell | None, Cell | None, str | None]:
@@ -139,8 +146,42 @@ def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
         raise ExperimentError("command line", "--set", str(exc), "pick a valid value") from None
 
 
-def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dict[str, Any]:
-    """One ``runs[]`` entry of results.json from a finished training result.
+@dataclass(frozen=True)
+class RunOutcome:
+    """What a finished run measured, the same for both worlds: what :func:`run_record`
+    turns into a ``runs[]`` entry. Arrays are per episode unless named ``test_*``."""
+
+    steps: np.ndarray  # int[n]; env steps of each episode
+    returns: np.ndarray  # float[n]; sum of env rewards (no shaping)
+    success: np.ndarray  # bool[n]; reached G
+    wall_time_s: np.ndarray  # float[n]; seconds
+    test_episodes: np.ndarray  # int[m]; episodes trained when each greedy test ran
+    test_route_length: np.ndarray  # int[m]; greedy route S->G [moves], -1: G not reached
+    optimal_length: int  # the optimum S->G on the model the tests ran on [moves]
+    final_route: list[int]  # the final greedy route's states, S first
+    final_route_length: int  # [moves], -1: G not reached
+    optimal_action_fraction: float  # free cells whose greedy move is on a shortest route
+    epsilon_route_lengths: np.ndarray  # int[k]; the paper's test: epsilon-greedy rollouts
+    world_extras: dict[str, Any]  # world-specific fields of the record (physics, drives)
+
+    @classmethod
+    def of(cls, result: Any, epsilon_route_lengths: np.ndarray,
+           world_extras: dict[str, Any] | None = None) -> RunOutcome:
+        """From a grid :class:`learning.train.TrainResult` or a physics
+        :class:`scenarios.runs.physics.PhysicsTrainResult` (which carries its own extras)."""
+        extras = dict(getattr(result, "world_extras", {}))
+        extras.update(world_extras or {})
+        return cls(np.asarray(result.steps), np.asarray(result.returns),
+                   np.asarray(result.success), np.asarray(result.wall_time_s),
+                   np.asarray(result.test_episodes).astype(int),
+                   np.asarray(result.test_route_length).astype(int),
+                   int(result.optimal_length), [int(s) for s in result.final_route],
+                   int(result.final_route_length), float(result.optimal_action_fraction),
+                   np.asarray(epsilon_route_lengths), extras)
+
+
+def run_record(spec: RunSpec, cfg: Any, result: RunOutcome) -> dict[str, Any]:
+    """One ``runs[]`` entry of results.json from a finished run.
 
     The figures come from :mod:`learning.metrics` (one definition each); the
     per-episode arrays (steps, return) let a script compute any window's reward
@@ -153,14 +194,13 @@ def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dic
         reward_per_step,
     )
 
-    steps = np.asarray(result.steps)
-    returns = np.asarray(result.returns)
-    optimal = int(getattr(result, "optimal_length", model.optimal_route_length))
-    final_len = int(result.final_route_length)
-    test_e = np.asarray(result.test_episodes).astype(int)
-    test_l = np.asarray(result.test_route_length).astype(int)
+    steps = result.steps
+    returns = result.returns
+    optimal = result.optimal_length
+    final_len = result.final_route_length
+    test_e = result.test_episodes
+    test_l = result.test_route_length
     tail = max(1, steps.size // 10)
-    eps_routes = getattr(result, "epsilon_route_lengths", None)
     return {
         "key": spec.key,
         "method": spec.method,
@@ -178,9 +218,8 @@ def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dic
         "final_route_length": final_len,
         "final_route_optimal": final_len == optimal,
         "final_route_excess": None if final_len < 0 else final_len - optimal,
-        "final_route": [int(s) for s in result.final_route],
-        "epsilon_route_length": (None if eps_routes is None
-                                 else _median_route(np.asarray(eps_routes))),
+        "final_route": result.final_route,
+        "epsilon_route_length": _median_route(result.epsilon_route_lengths),
         "success_rate": float(np.mean(result.success)),
         "reward_per_step": reward_per_step(returns, steps),
         "reward_per_step_last_10pct": reward_per_step(returns[-tail:], steps[-tail:]),
@@ -193,7 +232,7 @@ def run_record(spec: RunSpec, cfg: Any, result: Any, model: TabularModel) -> dic
         "wall_time_per_episode_s": np.round(np.asarray(result.wall_time_s), 9).tolist(),
         "test_episodes": test_e.tolist(),
         "test_route_length": test_l.tolist(),
-        **getattr(result, "world_extras", {}),
+        **result.world_extras,
     }
 
 
@@ -212,29 +251,28 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     if spec.world not in WORLDS:
         raise ExperimentError("command line", "--world", f"unknown world {spec.world!r}",
                               f"use one of: {', '.join(WORLDS)}")
-    if spec.record_path is None:
-        return run_record(spec, cfg, _train(spec, sc, model, cfg), model)
+    opts = spec.recording
+    if opts is None:
+        return run_record(spec, cfg, _train(spec, sc, model, cfg))
     from scenarios.recording.hooks import RecordPlan
     from scenarios.recording.recorder import Recorder
 
-    plan = RecordPlan(spec.episodes, every=max(1, spec.record_every),
-                      values_every=max(1, spec.record_values_every),
-                      detail=spec.record_detail)
-    with Recorder.create(spec.record_path, sc, model, method=spec.method, config=cfg,
-                         seed=spec.seed, world=spec.world, prefix=spec.record_prefix,
-                         recording_id=spec.recording_id,
-                         blueprint=not spec.record_prefix,
-                         with_scene=spec.record_detail,
+    plan = RecordPlan(spec.episodes, every=max(1, opts.every),
+                      values_every=max(1, opts.values_every), detail=opts.detail)
+    with Recorder.create(opts.path, sc, model, method=spec.method, config=cfg,
+                         seed=spec.seed, world=spec.world, prefix=opts.prefix,
+                         recording_id=opts.recording_id, blueprint=not opts.prefix,
+                         with_scene=opts.detail,
                          fidelity=(spec.fidelity_spec.label if spec.world == "physics"
                                    else None)) as rec:
-        result = _train(spec, sc, model, cfg, rec, plan)
-        if spec.record_detail:
-            rec.log_route("final route", result.final_route)
-        return run_record(spec, cfg, result, model)
+        outcome = _train(spec, sc, model, cfg, rec, plan)
+        if opts.detail:
+            rec.log_route("final route", outcome.final_route)
+        return run_record(spec, cfg, outcome)
 
 
 def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder: Any = None,
-           plan: Any = None) -> Any:
+           plan: Any = None) -> RunOutcome:
     from learning.streams import streams
     from learning.train import epsilon_route_lengths
 
@@ -246,9 +284,8 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
         result = train_physics(cfg, sc, model, spec.episodes, rng, test_every=spec.test_every,
                                recorder=recorder, plan=plan, start_rng=rs.starts,
                                fidelity=spec.fidelity_spec, noise_rng=rs.physics)
-        result.epsilon_route_lengths = epsilon_route_lengths(result.agent.state, result.graded,
-                                                             cfg.eps, rs.evaluation)
-        return result
+        return RunOutcome.of(result, epsilon_route_lengths(result.agent.state, result.graded,
+                                                           cfg.eps, rs.evaluation))
     from learning.train import train_tabular
 
     observer = None
@@ -259,13 +296,13 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
     result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every,
                            observer=observer, start_rng=rs.starts)
     # the paper's test, on its own stream so it never changes the training run
-    result.epsilon_route_lengths = epsilon_route_lengths(result.state, model, cfg.eps,
-                                                         rs.evaluation)
+    eps_routes = epsilon_route_lengths(result.state, model, cfg.eps, rs.evaluation)
+    extras = None
     if spec.drive_final:
         from learning.agent import StepAgent
         from learning.geometry import geometry_of
         from scenarios.runs.physics import drive_greedy
 
         agent = StepAgent(cfg, geometry_of(model), rng, result.state)
-        result.world_extras = drive_greedy(agent, sc, fidelity=spec.fidelity_spec).extras()
-    return result
+        extras = drive_greedy(agent, sc, fidelity=spec.fidelity_spec).extras()
+    return RunOutcome.of(result, eps_routes, extras)

@@ -32,10 +32,11 @@ from dataclasses import dataclass
 import numpy as np
 import pymunk
 
-from sim.discretiser import Discretiser
+from sim.grid.actions import ACTION_DELTAS, ACTION_HEADINGS
+from sim.grid.discretiser import Discretiser
 from sim.physics import kernel as K
 from sim.physics import sigint
-from sim.physics.controller import CARDINAL_HEADINGS, DriveLimits, ProfileTable
+from sim.physics.controller import DriveLimits, ProfileTable
 from sim.physics.fidelity import Fidelity
 from sim.physics.static import (
     STATIC_CATEGORY,
@@ -46,12 +47,11 @@ from sim.physics.static import (
 )
 from sim.physics.sweep import static_geometry
 from sim.physics.world import new_space, robot_bodies
-from sim.planning import ACTION_DELTAS
 from sim.scenario import Scenario
 
 NOISE_BLOCK = 4096  # normals drawn per refill of a robot's wheel-noise buffer
 _DELTAS = np.array(ACTION_DELTAS, dtype=np.int64)
-_HEADINGS = np.array(CARDINAL_HEADINGS, dtype=np.float64)
+_HEADINGS = np.array(ACTION_HEADINGS, dtype=np.float64)
 
 
 @dataclass(frozen=True)

@@ -38,15 +38,13 @@ from bisect import bisect_left
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, NamedTuple
 
-from sim.discretiser import Discretiser
-from sim.planning import ACTION_DELTAS
+from sim.grid.actions import ACTION_DELTAS, ACTION_HEADINGS
+from sim.grid.discretiser import Discretiser
 
 if TYPE_CHECKING:
     from sim.physics.world import Contact, PhysicsConfig, PhysicsWorld
     from sim.scenario import Robot, Scenario
 
-# Heading [rad] of each grid action: 0 up (+y), 1 down (-y), 2 left (-x), 3 right (+x).
-CARDINAL_HEADINGS = (math.pi / 2, -math.pi / 2, math.pi, 0.0)
 _STOP = (0.0, 0.0, 0.0)
 # Turns smaller than this are skipped [rad]: after a drive the heading equals the
 # bearing up to rounding (~1e-13 rad), and a "turn" of that size would still cost
@@ -215,7 +213,7 @@ class PrimitiveController:
         ix, iy = disc.cell_of(pose[0], pose[1])
         dx, dy = ACTION_DELTAS[action]
         target = disc.cell_centre(ix + dx, iy + dy)
-        heading = CARDINAL_HEADINGS[action]
+        heading = ACTION_HEADINGS[action]
         traj = [pose]
         steps0 = world.steps
         n_contacts0 = len(world.contacts)

@@ -1,7 +1,7 @@
 """Gymnasium envs over the Pymunk world: ``rnhql/PhysicsRoute-v0`` and ``rnhql/DiffDrive-v0``.
 
 ``PhysicsRouteEnv`` is the grid route problem driven for real: same spaces,
-same reward scheme, same ``reset`` options as :class:`sim.grid_env.GridRouteEnv`,
+same reward scheme, same ``reset`` options as :class:`sim.grid.env.GridRouteEnv`,
 but every action is a motion primitive (:mod:`sim.physics.controller`) and the next state is
 the cell the robot's measured pose lies in. ``DiffDriveEnv`` hands the wheels to
 the agent. Both keep one :class:`sim.physics.PhysicsWorld` and respawn the robot
@@ -17,10 +17,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from sim.discretiser import Discretiser
 from sim.feasibility import validate
 from sim.grid import build_model
-from sim.grid_env import start_state_from_options
+from sim.grid.discretiser import Discretiser
+from sim.grid.env import start_state_from_options
 from sim.physics.batch import RobotView, RouteBatch
 from sim.physics.controller import DriveLimits, rate_limit, wheels_to_twist, wrap_angle
 from sim.physics.fidelity import Fidelity, parse_fidelity

@@ -14,6 +14,8 @@ import hashlib
 import os
 from pathlib import Path
 
+from sim.files import atomic_write_text
+
 PACKAGE = Path(__file__).resolve().parent
 STAMP = "physics-sources.sha256"
 
@@ -38,9 +40,7 @@ def drop_stale_cache(package: Path = PACKAGE) -> bool:
         cache.mkdir(exist_ok=True)
         for f in [*cache.glob("*.nbi"), *cache.glob("*.nbc")]:
             f.unlink(missing_ok=True)
-        tmp = cache / f".{STAMP}.{os.getpid()}"
-        tmp.write_text(digest)
-        os.replace(tmp, stamp)
+        atomic_write_text(stamp, digest)
     except OSError:  # read-only install: numba falls back to its own cache locations
         return False
     return True

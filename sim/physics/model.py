@@ -9,7 +9,7 @@ from S outward (breadth first over the cells the robot actually reaches), every
 action is driven as a primitive from rest at the cell centre in a fresh world
 (the env's reset), and the cell the discretiser reports is the next state; a
 contact is a bump (the robot stays). The arrays have the grid model's shapes and
-meaning (:class:`sim.grid.TabularModel`), so greedy tests and BFS distances work
+meaning (:class:`sim.grid.model.TabularModel`), so greedy tests and BFS distances work
 on it unchanged. Cells never reached from S keep "stay" for every action.
 
 Building it drives 4 primitives per reachable cell (paper-50: ~10k primitives,
@@ -25,17 +25,17 @@ import dataclasses
 import hashlib
 import json
 import os
-import tempfile
-from collections import deque
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import pymunk
 
-from sim.grid import TabularModel, build_model
+from sim.files import atomic_path
+from sim.grid.actions import N_ACTIONS
+from sim.grid.model import TabularModel, build_model
+from sim.grid.planning import breadth_first, distances_to
 from sim.physics.static import PhysicsConfig
-from sim.planning import ACTION_DELTAS
 from sim.scenario import Scenario
 
 FORMAT = "rnhql-physics-graph-1"
@@ -57,7 +57,7 @@ def digest(sc: Scenario, config: PhysicsConfig) -> str:
 
 def drive_transitions(sc: Scenario, config: PhysicsConfig) -> np.ndarray:
     """int32[nS, 4]: the state each primitive reaches from each cell reachable from S."""
-    from sim.discretiser import Discretiser
+    from sim.grid.discretiser import Discretiser
     from sim.physics.controller import PrimitiveController
     from sim.physics.world import PhysicsWorld
 
@@ -67,48 +67,29 @@ def drive_transitions(sc: Scenario, config: PhysicsConfig) -> np.ndarray:
     cast_cache: dict = {}
     n = model.n_states
     nxt = np.repeat(np.arange(n, dtype=np.int32)[:, None], 4, axis=1)
-    seen = np.zeros(n, dtype=bool)
-    seen[model.start] = True
-    queue = deque([model.start])
     world = None
-    while queue:
-        s = queue.popleft()
-        if s == model.goal:
-            continue
-        x, y = disc.state_centre(int(s))
-        for a in range(len(ACTION_DELTAS)):
-            # the robot at rest on the cell centre, as the env's reset puts it
-            if world is None:
-                world = PhysicsWorld(sc, config, (x, y, 0.0), cast_cache=cast_cache)
-            else:
-                world.respawn((x, y, 0.0))
-            res = controller.run(world, a)
-            t = int(s) if res.bumped else int(res.state)
-            nxt[s, a] = t
-            if not seen[t]:
-                seen[t] = True
-                queue.append(t)
+
+    def drive(frontier: np.ndarray) -> np.ndarray:
+        nonlocal world
+        reached = []
+        for s in frontier.tolist():
+            if s == model.goal:
+                continue
+            x, y = disc.state_centre(s)
+            for a in range(N_ACTIONS):
+                # the robot at rest on the cell centre, as the env's reset puts it
+                if world is None:
+                    world = PhysicsWorld(sc, config, (x, y, 0.0), cast_cache=cast_cache)
+                else:
+                    world.respawn((x, y, 0.0))
+                res = controller.run(world, a)
+                t = s if res.bumped else int(res.state)
+                nxt[s, a] = t
+                reached.append(t)
+        return np.array(reached, dtype=np.int64)
+
+    breadth_first(n, model.start, drive)
     return nxt
-
-
-def _reverse_bfs(nxt: np.ndarray, goal: int) -> np.ndarray:
-    """int32[nS]: moves to ``goal`` along the (directed) transitions, -1 where none."""
-    n = nxt.shape[0]
-    preds: list[list[int]] = [[] for _ in range(n)]
-    for s, row in enumerate(nxt.tolist()):
-        for t in row:
-            if t != s:
-                preds[t].append(s)
-    dist = np.full(n, -1, dtype=np.int32)
-    dist[goal] = 0
-    queue = deque([goal])
-    while queue:
-        v = queue.popleft()
-        for u in preds[v]:
-            if dist[u] < 0:
-                dist[u] = dist[v] + 1
-                queue.append(u)
-    return dist
 
 
 def model_from_transitions(sc: Scenario, nxt: np.ndarray) -> TabularModel:
@@ -122,7 +103,7 @@ def model_from_transitions(sc: Scenario, nxt: np.ndarray) -> TabularModel:
     reward = np.where(nxt == states, rw.bump, rw.step).astype(np.float64)
     reward[nxt == goal] = rw.goal
     reward[goal] = 0.0
-    dist = _reverse_bfs(nxt, goal)
+    dist = distances_to(nxt, goal)
     start_states = np.flatnonzero(dist > 0).astype(np.int32)
     for arr in (nxt, reward, dist, start_states):
         arr.setflags(write=False)
@@ -144,15 +125,8 @@ def _load(path: Path, n: int) -> np.ndarray | None:
 
 
 def _save(path: Path, nxt: np.ndarray) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, format=np.array(FORMAT), next_state=nxt)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        np.savez(f, format=np.array(FORMAT), next_state=nxt)
 
 
 @lru_cache(maxsize=8)

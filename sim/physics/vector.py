@@ -33,7 +33,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from sim.grid import build_model
-from sim.grid_env import start_state_from_options
+from sim.grid.env import start_state_from_options
 from sim.physics import kernel as K
 from sim.physics.batch import RouteBatch
 from sim.physics.envs import DIFFDRIVE_CONFIG, DiffDriveEnv, _scenario

@@ -1,7 +1,7 @@
 """Rasterising a scenario: which cells the robot fits in, which moves it can drive, how far G is.
 
 The one place where circles meet cells, used by validation (:mod:`sim.scenario_io`)
-and by the grid model (:mod:`sim.grid`). Cost grows with the map, never with
+and by the grid model (:mod:`sim.grid.model`). Cost grows with the map, never with
 cells x obstacles: each circle is stamped onto the cells of its bounding box
 (grown by the robot's inflation, plus one cell for swept moves), so a 512 x 512
 arena with 3,000 circles builds in well under a second.
@@ -23,8 +23,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from sim.discretiser import Discretiser
-from sim.planning import ACTION_DELTAS, bfs_distances
+from sim.grid.actions import ACTION_DELTAS
+from sim.grid.discretiser import Discretiser
+from sim.grid.planning import bfs_distances, free_moves
 from sim.scenario import Scenario
 
 
@@ -117,15 +118,8 @@ def occupancy(sc: Scenario) -> np.ndarray:
 
 def passable_moves(sc: Scenario, blocked: np.ndarray) -> np.ndarray:
     """bool[nS, 4]: which moves succeed, given the inflated occupancy ``blocked[ny, nx]``."""
-    nx, ny = sc.nx, sc.ny
-    iy, ix = np.divmod(np.arange(nx * ny), nx)
-    free = ~blocked.ravel()
-    ok = np.zeros((nx * ny, 4), dtype=bool)
-    for a, (dx, dy) in enumerate(ACTION_DELTAS):
-        tx, ty = ix + dx, iy + dy
-        inside = (tx >= 0) & (tx < nx) & (ty >= 0) & (ty < ny)
-        t = np.where(inside, ty * nx + tx, 0)
-        ok[:, a] = inside & free & free[t]
+    nx = sc.nx
+    ok = free_moves(~blocked.reshape(sc.ny, nx))
     circ = circle_array(sc)
     if circ.shape[0]:
         # a segment of length c from a centre can only come within `reach` of a

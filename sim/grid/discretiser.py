@@ -5,7 +5,7 @@ Cell ``(ix, iy)`` covers ``[ix*c, (ix+1)*c) x [iy*c, (iy+1)*c)``: a pose exactly
 on a border belongs to the cell above/right of it (``floor``), and poses on the
 far walls (x == width or y == height) are clamped into the last cell, so every
 pose inside the closed arena maps to exactly one cell. The state index of a
-cell is ``s = iy * nx + ix``, so ``sim.raster.occupancy(...).ravel()[s]`` is that state.
+cell is ``s = iy * nx + ix``, so ``sim.grid.raster.occupancy(...).ravel()[s]`` is that state.
 """
 
 from __future__ import annotations

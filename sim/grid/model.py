@@ -2,7 +2,8 @@
 
 Every cell of the arena is a state (``s = iy * nx + ix``); blocked cells are
 states that nothing reaches, which keeps the index a pure function of the pose
-for the physics world. Actions: 0 up (+y), 1 down (-y), 2 left (-x), 3 right (+x).
+for the physics world. Actions: 0 up (+y), 1 down (-y), 2 left (-x), 3 right (+x)
+(:mod:`sim.grid.actions`).
 
 A move succeeds when the target cell is in the arena, free for the inflated
 robot, and the robot's swept disc along the straight segment between the two
@@ -17,12 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.discretiser import Discretiser
-from sim.planning import ACTION_DELTAS
-from sim.raster import rasterise
+from sim.grid.actions import ACTION_DELTAS
+from sim.grid.discretiser import Discretiser
+from sim.grid.raster import rasterise
 from sim.scenario import Scenario
-
-ACTION_NAMES = ("up", "down", "left", "right")
 
 
 @dataclass(frozen=True, eq=False)

@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from sim.grid import build_model
+from sim.grid.model import build_model
 from sim.render import AGENT, PATH, MapCanvas
 from sim.scenario import Scenario
 from sim.scenario_io import resolve_scenario

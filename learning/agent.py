@@ -25,7 +25,6 @@ from learning.named_state import episodes_done
 from learning.state import init_state
 from learning.state_box import box_of
 
-
 # Each takes the state's box (learning.state_box): one reference to unbox per call.
 
 

@@ -184,30 +184,44 @@ def _tiny_geometry() -> Geometry:
                     n_states=9, n_actions=4)
 
 
-def _state(data, cfg: MethodConfig, path: Path, geometry: Geometry | None):
+def _state(data, cfg: MethodConfig, path: Path, geometry: Geometry | None,
+           n_states: int | None = None):
     """The state stored in ``data``, checked field by field against a fresh one's dtypes and
-    ranks; the derived arrays from ``geometry``."""
+    ranks; the derived arrays from ``geometry``. Without a geometry a method with derived
+    arrays cannot be loaded: the stored fields (and ``n_states``) are checked first, so
+    the error names what is wrong with the file before what is missing from the call."""
     derived = set(getattr(family_of(cfg), "DERIVED", ()))
     if derived and geometry is None:
+        template = init_state(cfg, _tiny_geometry(), np.random.default_rng(0))
+        rebuild(template, lambda name, want: want if name in derived
+                else _stored(data, path, name, want))
+        if n_states is not None and "state_q" in data.files:
+            got = int(data["state_q"].shape[0])
+            if got != n_states:
+                raise CheckpointError(f"{path}: field 'n_states' is {got} but the scenario "
+                                      f"has {n_states}; resume on the scenario the checkpoint "
+                                      "was trained on or start without --resume")
         raise CheckpointError(f"{path}: field 'state_{sorted(derived)[0]}' is rebuilt from the "
                               f"scenario for {cfg.cli}; load it with the scenario's geometry")
     fresh = init_state(cfg, geometry if geometry is not None else _tiny_geometry(),
                        np.random.default_rng(0))
 
-    def stored(name: str, want: np.ndarray) -> np.ndarray:
-        if name in derived:
-            return want
-        arr = _field(data, f"state_{name}", path)
-        if arr.dtype != want.dtype or arr.ndim != want.ndim:
-            raise CheckpointError(f"{path}: field 'state_{name}' is {arr.dtype}[{arr.ndim}d], "
-                                  f"expected {want.dtype}[{want.ndim}d]; the file is corrupt, "
-                                  "delete it and train again")
-        return np.ascontiguousarray(arr).copy()
-
-    return rebuild(fresh, stored)
+    return rebuild(fresh, lambda name, want: want if name in derived
+                   else _stored(data, path, name, want))
 
 
-def _read(data, path: Path, method: str | None, geometry: Geometry | None):
+def _stored(data, path: Path, name: str, want: np.ndarray) -> np.ndarray:
+    """The stored array ``state_<name>``, of ``want``'s dtype and rank."""
+    arr = _field(data, f"state_{name}", path)
+    if arr.dtype != want.dtype or arr.ndim != want.ndim:
+        raise CheckpointError(f"{path}: field 'state_{name}' is {arr.dtype}[{arr.ndim}d], "
+                              f"expected {want.dtype}[{want.ndim}d]; the file is corrupt, "
+                              "delete it and train again")
+    return np.ascontiguousarray(arr).copy()
+
+
+def _read(data, path: Path, method: str | None, geometry: Geometry | None,
+          n_states: int | None = None):
     """Every field of an open npz, checked; raises CheckpointError naming the field."""
     fmt = str(_field(data, "format", path))
     if fmt != FORMAT:
@@ -233,7 +247,7 @@ def _read(data, path: Path, method: str | None, geometry: Geometry | None):
     except (ValueError, TypeError) as exc:
         raise CheckpointError(f"{path}: field 'config' or 'rng_state' is invalid ({exc}); "
                               "the file is corrupt, delete it and train again") from None
-    state = _state(data, cfg, path, geometry)
+    state = _state(data, cfg, path, geometry, n_states)
     metrics = {k: _field(data, f"metric_{k}", path).copy() for k in METRIC_FIELDS
                if f"metric_{k}" in data.files}
     env_steps = int(_field(data, "env_steps", path))
@@ -264,7 +278,7 @@ def load_checkpoint(path: str | os.PathLike, method: str | None = None,
                                   "(.npz); check the path")
         with data:
             cfg, state, rng_state, env_steps, metrics, start_state, problem = _read(
-                data, path, method, geometry)
+                data, path, method, geometry, n_states)
     ckpt = Checkpoint(cfg, state, rng_state, env_steps, metrics, str(path), start_state,
                       problem)
     if n_states is not None:

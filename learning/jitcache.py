@@ -5,8 +5,9 @@ inline rules from other modules, so after an edit of, say, ``rules.py`` the
 cached kernels in ``kernels.py`` would silently run the old rule. On import,
 :func:`drop_stale_cache` hashes every ``.py`` file of the package (subpackages
 included) and, if the hash differs from the one stamped in ``__pycache__``, deletes
-the package's ``.nbi``/``.nbc`` files (numba recompiles on demand). With ``NUMBA_CACHE_DIR`` set the cache
-lives elsewhere and is left alone (use a fresh directory per source version).
+the package's ``.nbi``/``.nbc`` files (numba recompiles on demand). With
+``NUMBA_CACHE_DIR`` set the cache lives elsewhere and is left alone (use a fresh
+directory per source version).
 """
 
 from __future__ import annotations

@@ -40,8 +40,6 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from learning.tabular import draw_below
-
 INLINE = dict(cache=True, inline="always")
 COUNT_CAP = 1 << 30  # a pair's two counts are halved when their sum reaches this (int32)
 
@@ -112,23 +110,12 @@ def pair_of(j, n_a):
 
 
 @njit(**INLINE)
-def draw_seen(m, rng):
-    """A seen pair (s, a), uniform over the pairs seen (one ``rng.random()``)."""
-    return pair_of(m.seen[draw_below(rng, m.n_seen[0])], m.successor.shape[1])
-
-
-@njit(**INLINE)
 def replay_draws_failure(n_ok, n_fail, rng):
-    """:func:`replay_fails` on the pair's two counts."""
+    """Whether a planned replay of a seen pair (its counts of works and failures) draws the
+    failure outcome (stay put, ``r_fail``) instead of the stored one. Only a pair seen both
+    to work and to fail draws (one ``rng.random()``), with the frequency failures were seen;
+    a pair that never worked replays its stored failure, one that never failed its
+    success."""
     if n_ok == 0 or n_fail == 0:
         return False
     return rng.random() * (n_ok + n_fail) < n_fail
-
-
-@njit(**INLINE)
-def replay_fails(m, s, a, rng):
-    """Whether a planned replay of the seen pair (s, a) draws the failure outcome (stay
-    put, ``r_fail``) instead of the stored one. Only a pair seen both to work and to fail
-    draws (one ``rng.random()``), with the frequency failures were seen; a pair that
-    never worked replays its stored failure, one that never failed its success."""
-    return replay_draws_failure(m.works[s, a], m.fails[s, a], rng)

@@ -23,7 +23,7 @@ def _is_tree(x) -> bool:
 
 def arrays(st, prefix: str = "") -> Iterator[tuple[str, np.ndarray]]:
     """(dotted name, array) of every array in the state, in field order."""
-    for name, v in zip(st._fields, st):
+    for name, v in zip(st._fields, st, strict=True):
         if name == PARAMS and not prefix:
             continue
         if _is_tree(v):
@@ -36,7 +36,7 @@ def rebuild(st, fn):
     """The same tree with every array ``a`` replaced by ``fn(name, a)``."""
     def go(node, prefix):
         out = []
-        for name, v in zip(node._fields, node):
+        for name, v in zip(node._fields, node, strict=True):
             if name == PARAMS and not prefix:
                 out.append(v)
             elif _is_tree(v):
@@ -78,7 +78,7 @@ def _row(st, i):
     if not isinstance(st, types.BaseNamedTuple):
         return None
     parts = []
-    for name, t in zip(st.fields, st.types):
+    for name, t in zip(st.fields, st.types, strict=True):
         if isinstance(t, types.Array):
             parts.append(f"st.{name}[i]")
         elif isinstance(t, types.BaseNamedTuple) and name != PARAMS:
@@ -87,5 +87,5 @@ def _row(st, i):
             parts.append(f"st.{name}")
     src = f"def impl(st, i):\n    return cls({', '.join(parts)})\n"
     ns = {"cls": st.instance_class, "row": row}
-    exec(src, ns)  # noqa: S102 - generated from the state's field names only
+    exec(src, ns)
     return ns["impl"]

@@ -10,7 +10,17 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from learning import dyna_q, haql, pfh_rl, q_lambda, q_learning, rn_ql, rnh_ql, rnh_ql_plus, sarsa_rs
+from learning import (
+    dyna_q,
+    haql,
+    pfh_rl,
+    q_lambda,
+    q_learning,
+    rn_ql,
+    rnh_ql,
+    rnh_ql_plus,
+    sarsa_rs,
+)
 from learning.config import MethodConfig
 from learning.dyna_q import DynaQ
 from learning.haql import HAQL

@@ -22,7 +22,6 @@ from __future__ import annotations
 from numba import njit
 
 
-
 @njit(cache=True, inline="always")
 def row_max(q, s):
     m = q[s, 0]

@@ -16,9 +16,9 @@ from typing import Protocol
 import numpy as np
 
 from learning.checkpoint import Checkpoint, CheckpointError
+from learning.config import MethodConfig
 from learning.geometry import TabularMDP, geometry_of
 from learning.kernels import NO_TRACE, greedy_route, on_shortest_fraction, run_episodes
-from learning.config import MethodConfig
 from learning.metrics import (
     episodes_to_first_optimal,
     episodes_to_stable_optimal,

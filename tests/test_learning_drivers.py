@@ -15,6 +15,7 @@ import pytest
 import sim.envs  # noqa: F401  (registers rnhql/GridRoute-v0)
 from learning import METHODS, RNHQL, geometry_of, init_state, make_agent, run_env_episodes
 from learning.kernels import run_episodes
+from learning.named_state import arrays
 from learning.rnh_ql_plus import RNHQLPlus
 
 EPISODES = 50
@@ -52,8 +53,9 @@ def test_kernel_equals_step_agent(env, cfg):
     agent = make_agent(cfg, geom, rng_a)
     log = run_env_episodes(agent, env, EPISODES)
 
-    for name, a, b in zip(st._fields, st, agent.state, strict=True):
-        assert np.array_equal(a, b), f"{cfg.cli}: state slot {name} differs"
+    assert st.par == agent.state.par
+    for (name, a), (_, b) in zip(arrays(st), arrays(agent.state), strict=True):
+        assert np.array_equal(a, b), f"{cfg.cli}: state array {name} differs"
     np.testing.assert_array_equal(out[0], log.steps)
     np.testing.assert_array_equal(out[1], log.returns)
     np.testing.assert_array_equal(out[2], log.success)

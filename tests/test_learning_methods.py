@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from learning import METHODS, RNHQL, STQL, config_from_fields
-from learning import kinds as K
+from learning.registry import FAMILY_OF_CONFIG
 
 
 def test_registry_names():
@@ -17,7 +17,7 @@ def test_registry_names():
                              "q-lambda", "dyna-q", "rnh-ql+"]
     assert METHODS["rnh-ql"].name == "RNH-QL" and METHODS["st-ql"].name == "ST-QL"
     for cli, cls in METHODS.items():
-        assert cls.cli == cli and cls.kind >= 0
+        assert cls.cli == cli and cls in FAMILY_OF_CONFIG
 
 
 @pytest.mark.parametrize("cls", list(METHODS.values()), ids=list(METHODS))
@@ -27,9 +27,8 @@ def test_paper_defaults_and_round_trip(cls):
     if hasattr(cfg, "lam"):
         assert cfg.lam == 0.85
     assert config_from_fields(cls.cli, cfg.fields()) == cfg
-    p = cfg.params()
-    assert p.shape[0] in (K.N_PARAMS, K.N_PARAMS_PLUS)
-    assert p[K.P_EPS] == 0.1 and p[K.P_GAMMA] == 0.95
+    p = cfg.params()  # a named tuple of scalars, what the compiled rules read
+    assert p.eps == 0.1 and p.gamma == 0.95
     with pytest.raises(dataclasses.FrozenInstanceError):
         cfg.eps = 0.2
 
@@ -38,8 +37,8 @@ def test_rnh_ql_defaults_and_packing():
     cfg = RNHQL()
     assert (cfg.k, cfg.warmup_episodes, cfg.freeze_after_episodes) == (10, 300, None)
     p = cfg.params()
-    assert p[K.P_WARMUP] == 300 and math.isinf(p[K.P_FREEZE])
-    assert RNHQL(freeze_after_episodes=500).params()[K.P_FREEZE] == 500
+    assert p.warmup == 300 and math.isinf(p.freeze)
+    assert RNHQL(freeze_after_episodes=500).params().freeze == 500
 
 
 @pytest.mark.parametrize("bad", [dict(eps=1.5), dict(alpha=0.0), dict(gamma=1.2)])
@@ -61,15 +60,19 @@ def test_unknown_method():
 
 
 def test_rnh_ql_plus_defaults_packing_and_validation():
-    from learning.methods import RNHQLPlus
+    from learning.rnh_ql_plus import LeanParams, Params, Potential, RNHQLPlus
 
     cfg = RNHQLPlus()
-    assert cfg.cli == "rnh-ql+" and cfg.kind == K.RNHQLP
+    assert cfg.cli == "rnh-ql+"
     p = cfg.params()
-    assert p.shape == (K.N_PARAMS_PLUS,)
-    assert p[K.PP_NPLAN] == cfg.n_planning and p[K.PP_SCALE] == cfg.shaping_scale
-    assert math.isinf(p[K.PP_FREEZE]) and p[K.PP_REBASE] == 0 and p[K.PP_LOOKAHEAD] == 1
-    assert p[K.PP_VTARGET] == 4 and p[K.PP_NFIT] == cfg.n_fit
+    assert p.n_planning == cfg.n_planning and p.scale == cfg.shaping_scale
+    assert math.isinf(p.freeze) and p.rebase is False and p.lookahead is True
+    assert p.v_target == Potential.OPTIMISTIC and p.n_fit == cfg.n_fit
+    # the default compiles the lean kernel; any switch it leaves off compiles the general one
+    assert type(p) is LeanParams
+    for variant in (dict(rebase=1), dict(leak_free=1), dict(lam_q=0.5), dict(v_target=0)):
+        q = RNHQLPlus(**variant).params()
+        assert type(q) is Params and q._fields == p._fields
     assert config_from_fields("rnh-ql+", cfg.fields()) == cfg
     for bad in (dict(v_target=6), dict(lookahead=2), dict(leak_free=2), dict(sigma=0.0),
                 dict(lam_q=1.5)):
@@ -81,8 +84,8 @@ def test_haql_route_follows_what_it_learned_about_the_walls():
     """HAQL's heuristic from exploration: before training its greedy route runs into the
     first wall of zigzag-50 (G not reached); after training it is the optimal 212-move
     route. The static Manhattan heuristic never changes, so its route never reaches G."""
+    from learning import HAQL
     from learning.geometry import geometry_of
-    from learning.methods import HAQL
     from learning.state import init_state
     from learning.streams import streams
     from learning.train import greedy_test, train_tabular
@@ -94,9 +97,9 @@ def test_haql_route_follows_what_it_learned_about_the_walls():
     rs = streams(0)
     learned = train_tabular(HAQL(), model, 300, rs.learner, start_rng=rs.starts)
     assert learned.final_route_length == model.optimal_route_length == 212
-    assert int((learned.state.imap[:, 1:5] > 0).sum()) > 0  # it has seen walls
+    assert learned.state.free.blocked.any()  # it has seen walls
     rs = streams(0)
     static = train_tabular(HAQL(explored=0), model, 300, rs.learner, start_rng=rs.starts)
     assert static.final_route_length == -1
     untrained_static = init_state(HAQL(explored=0), geometry_of(model), np.random.default_rng(0))
-    np.testing.assert_array_equal(static.state.imap[:, 0], untrained_static.imap[:, 0])
+    np.testing.assert_array_equal(static.state.pi_h, untrained_static.pi_h)

@@ -5,9 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from learning import METHODS, geometry_of, train_tabular
-from learning.methods import RNHQLPlus
-from learning.plus_features import sparse_features
+from learning import METHODS, RNHQLPlus, geometry_of, train_tabular
+from learning.rnh_ql_plus.features import sparse_features
 
 
 def test_sparse_features_match_dense_within_cutoff(paper50_model):
@@ -35,13 +34,13 @@ def test_scale_zero_is_dyna_q(paper50_model):
 def test_leak_free_supports_only_grow_along_seen_moves(paper50_model):
     r = train_tabular(RNHQLPlus(leak_free=1), paper50_model, 20, np.random.default_rng(0))
     feat = r.state.feat
-    m = feat.shape[1] // 2
-    on = feat[:, :m] > 0
-    assert on.any() and np.all(feat[:, :m][on] == feat[:, m:][on])
-    visited = (r.state.imap[:, :4] >= 0).any(axis=1)
+    on = feat.on > 0
+    assert on.any() and np.all(feat.on[on] == feat.base[on])
+    successor = r.state.model.successor
+    visited = (successor >= 0).any(axis=1)
     # a cell with a switched-on feature has been visited or is the end of a seen move
     ends = np.zeros_like(visited)
-    seen = r.state.imap[:, :4][r.state.imap[:, :4] >= 0]
+    seen = successor[successor >= 0]
     ends[seen] = True
     assert np.all((visited | ends)[on.any(axis=1)])
 
@@ -50,14 +49,14 @@ def test_readout_potential_is_the_potential_the_rules_shape_with():
     """The recorder's potential heat map for rnh-ql+ is Phi as the rules compute it, for the
     default (the optimistic model's value) and for a network potential."""
     from learning.readout import potential
-    from learning.rules_plus import potential as rule_potential
+    from learning.rnh_ql_plus.rules import potential as rule_potential
     from scenarios.runs.spec import load
 
     _, m = load("paper-40", None, None, "goal-only")
     refs = []
     for cfg in (RNHQLPlus(), RNHQLPlus(v_target=1, shaping_scale=0.25, rebase=1)):
         st = train_tabular(cfg, m, 100, np.random.default_rng(0)).state
-        ref = np.array([rule_potential(st.fvar, st.par, st.w, st.e, st.feat, st.imap, st.ilist, s)
+        ref = np.array([rule_potential(st.par, st.w, st.feat.on, st.feat.centre, st.opt.y, s)
                         for s in range(m.n_states)])
         np.testing.assert_allclose(potential(st), ref, atol=1e-12)
         assert np.abs(ref).max() > 0
@@ -69,24 +68,21 @@ def test_readout_potential_is_the_potential_the_rules_shape_with():
 def test_optimistic_distances_are_free_space_bfs_then_go_round_a_seen_bump():
     """Before any move the optimistic model is the empty arena: BFS distance = Manhattan
     distance to G; after a bump on the way, the BFS goes round it."""
-    from learning import kinds as K
-    from learning.plus_optimism import neighbour_base, optimistic_bfs
+    from learning.free_space import bfs_to_goal
     from learning.state import init_state
     from scenarios.runs.spec import load
 
     _, m = load("paper-40", None, None, "goal-only")
     geom = geometry_of(m)
     st = init_state(RNHQLPlus(), geom, np.random.default_rng(0))
-    n_s, n_a, n_c = geom.n_states, 4, st.w.shape[0]
-    d0 = neighbour_base(n_s, n_a, n_c) + n_s * n_a
-    dist = st.ilist[d0:d0 + n_s]
+    dist = st.free.distance
     g = geom.cells[geom.goal]
     manhattan = np.abs(geom.cells - g).sum(axis=1)
     np.testing.assert_array_equal(dist, manhattan)
     # mark the move "right" from the cell left of G as failed: that cell must go round
     left = int(np.flatnonzero((geom.cells == g - [1, 0]).all(axis=1))[0])
-    st.imap[left, 3] = left
-    optimistic_bfs(st.imap, st.ilist, n_s, n_a, n_c, int(st.ivar[K.I_GOAL]))
+    st.free.blocked[left, 3] = True
+    bfs_to_goal(st.free)
     assert dist[left] == 3 and dist[geom.goal] == 0
 
 
@@ -94,45 +90,40 @@ def test_bfs_skipped_only_where_no_distance_changes_and_values_match_the_formula
     """Walls of zigzag-50 revealed in a random order: where distances_change says a new wall
     changes nothing, a full BFS agrees bit for bit; the cache of y filled in BFS order
     equals the closed form state by state. Both branches are taken."""
-    from learning import kinds as K
-    from learning.plus_optimism import (
-        distances_change,
-        goal_reward,
-        neighbour_base,
-        optimistic_bfs,
-        refresh_values,
-    )
+    from learning.free_space import bfs_to_goal, distances_change
+    from learning.rnh_ql_plus.optimism import goal_reward, refresh_values
     from learning.state import init_state
     from scenarios.runs.spec import load
 
     _, m = load("zigzag-50", None, None, "goal-only")
     geom = geometry_of(m)
     st = init_state(RNHQLPlus(), geom, np.random.default_rng(0))
-    n_s, n_a, n_c = geom.n_states, 4, st.w.shape[0]
-    d0 = neighbour_base(n_s, n_a, n_c) + n_s * n_a
-    goal = int(st.ivar[K.I_GOAL])
+    n_s, n_a = geom.n_states, 4
+    fs = st.free
     walls = [(s, a) for s in range(n_s) for a in range(n_a)
              if m.next_state[s, a] == s and not m.terminal[s]]
     order = np.random.default_rng(1).permutation(len(walls))
     skipped = rerun = 0
     for i in order:
         s, a = walls[i]
-        st.imap[s, a] = s
-        if distances_change(st.imap, st.ilist, n_s, n_a, n_c, s, a):
-            optimistic_bfs(st.imap, st.ilist, n_s, n_a, n_c, goal)
+        fs.blocked[s, a] = True
+        if distances_change(fs.neighbour, fs.distance, fs.blocked, s, a):
+            bfs_to_goal(fs)
             rerun += 1
         else:
-            before = st.ilist.copy()
-            optimistic_bfs(st.imap, st.ilist, n_s, n_a, n_c, goal)
-            np.testing.assert_array_equal(st.ilist[d0:d0 + n_s], before[d0:d0 + n_s])
+            before = fs.distance.copy()
+            bfs_to_goal(fs)
+            np.testing.assert_array_equal(fs.distance, before)
             skipped += 1
     assert skipped > 0 and rerun > 0
-    st.fvar[K.F_RGOAL] = 100.0
-    refresh_values(st.fvar, st.par, st.ilist, st.e, n_s, n_a, n_c)
-    g, r_goal = float(st.par[K.P_GAMMA]), goal_reward(st.fvar, st.par)
-    d = st.ilist[d0:d0 + n_s]
+    opt = st.opt
+    opt.r_goal[0] = 100.0
+    g = st.par.gamma
+    refresh_values(opt.y, opt.stamp, opt.r_goal, opt.r_free, fs.distance, fs.queue, g)
+    r_goal = goal_reward(opt.r_goal, opt.r_free, g)
+    d = fs.distance
     want = np.array([0.0 if k <= 0 else g ** (k - 1) * r_goal for k in d])
-    np.testing.assert_allclose(st.e[n_c + n_s:n_c + 2 * n_s], want, rtol=1e-12)
+    np.testing.assert_allclose(opt.y, want, rtol=1e-12)
     assert (d < 0).any() or d.max() > 1
 
 
@@ -151,23 +142,22 @@ def test_rnh_ql_plus_learns_zigzag_where_rnh_ql_does_not():
 def test_potential_falls_toward_an_unseen_goal_under_the_paper_rewards():
     """With +1 per free move and G not reached yet, Phi must still fall with the distance to
     G (the stand-in goal reward beats wandering forever); a stand-in of 1 made it rise."""
-    from learning import kinds as K
-    from learning.plus_optimism import goal_reward
     from learning.readout import potential
+    from learning.rnh_ql_plus.optimism import goal_reward
     from learning.state import init_state
     from scenarios.runs.spec import load
 
     _, m = load("paper-40", None, None, "paper")
     geom = geometry_of(m)
     st = init_state(RNHQLPlus(), geom, np.random.default_rng(0))
-    st.fvar[K.F_RFREE] = 1.0  # a free move seen, G not yet
-    assert goal_reward(st.fvar, st.par) == 1.0 / (1.0 - 0.95) + 1.0
+    st.opt.r_free[0] = 1.0  # a free move seen, G not yet
+    assert goal_reward(st.opt.r_goal, st.opt.r_free, 0.95) == 1.0 / (1.0 - 0.95) + 1.0
     phi = potential(st)
     dist = np.abs(geom.cells - geom.cells[geom.goal]).sum(axis=1)
     near, far = np.argmin(np.where(dist > 0, dist, 99)), np.argmax(dist)
     assert phi[near] > phi[far] > 1.0 / (1.0 - 0.95)  # both above wandering forever
-    st.fvar[K.F_RFREE] = 0.0  # goal-only: the stand-in is 1, as before
-    assert goal_reward(st.fvar, st.par) == 1.0 and potential(st)[near] == 1.0
+    st.opt.r_free[0] = 0.0  # goal-only: the stand-in is 1, as before
+    assert goal_reward(st.opt.r_goal, st.opt.r_free, 0.95) == 1.0 and potential(st)[near] == 1.0
 
 
 def test_rnh_ql_plus_learns_paper_50_under_the_paper_rewards():

@@ -12,14 +12,15 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from learning import kinds as K
+from learning import HAQL, PFHRL, RNHQL, RNQL, STQL, DynaQ, QLambda, QOpt, SarsaRS
 from learning.agent import make_agent
 from learning.geometry import Geometry
-from learning.methods import HAQL, PFHRL, RNHQL, RNQL, STQL, DynaQ, QLambda, QOpt, SarsaRS
+from learning.haql import heuristic_actions
 from learning.mlp import add_gradient, net, normalised_inputs
+from learning.pfh_rl import pfh_potential
 from learning.rbf import rbf_features, td_lambda
-from learning.rules import argmax_first, argmax_random, eps_greedy, sarsa
-from learning.shaping import abstract_states, heuristic_actions, pfh_potential
+from learning.sarsa_rs import abstract_states
+from learning.tabular import argmax_first, argmax_random, eps_greedy, sarsa
 
 G, A = 0.95, 0.1
 UP, DOWN, LEFT, RIGHT = 0, 1, 2, 3
@@ -123,15 +124,15 @@ def test_dyna_plans_on_the_learned_model():
     ag = agent(DynaQ())
     ag.update(0, RIGHT, 1.0, 1, False, False)  # 1 real + 5 simulated updates of one pair
     assert ag.state.q[0, RIGHT] == pytest.approx(1 - 0.9 ** 6)
-    assert ag.state.imap[0, RIGHT] == 1 and ag.state.fmap[0, RIGHT] == 1.0
-    assert ag.state.ivar[K.I_NSEEN] == 1
+    assert ag.state.model.successor[0, RIGHT] == 1 and ag.state.model.reward[0, RIGHT] == 1.0
+    assert ag.state.model.n_seen[0] == 1
 
 
 # ---------------------------------------------------------------- heuristics and shaping
 def test_heuristic_actions_and_haql_choice():
     g3 = Geometry(np.array([[x + 0.5, y + 0.5] for y in range(3) for x in range(3)]), 5,
                   (0.0, 0.0, 3.0, 3.0), 9, 4)
-    pi = heuristic_actions(g3)[:, 0]
+    pi = heuristic_actions(g3)
     assert pi[0] == RIGHT  # (0,0) -> G (2,1): 2 cells in x, 1 in y
     assert pi[2] == UP  # (2,0): straight up
     assert pi[8] == DOWN  # (2,2)
@@ -144,7 +145,7 @@ def test_heuristic_actions_and_haql_choice():
 
 
 def test_pfh_static_shaping():
-    phi = pfh_potential(geom(), 2.0)[:, 0]
+    phi = pfh_potential(geom(), 2.0)
     assert phi.tolist() == [-4.0, -2.0, 0.0]
     ag = agent(PFHRL(scale=2.0))
     ag.update(0, RIGHT, 1.0, 1, False, False)
@@ -155,19 +156,19 @@ def test_pfh_static_shaping():
 
 def test_sarsa_rs_smdp_update():
     z, n_z = abstract_states(geom(), 2)
-    assert z[:, 0].tolist() == [0, 0, 1] and n_z == 2
+    assert z.tolist() == [0, 0, 1] and n_z == 2
     ag = agent(SarsaRS(block=2, eps=0.0))
     ag.begin_episode(0)
     assert ag.act(0) in (0, 1, 2, 3)
     ag.update(0, RIGHT, 1.0, 1, False, False)  # same abstract state: no V update yet
-    assert ag.state.w.tolist() == [0.0, 0.0]
+    assert ag.state.v.tolist() == [0.0, 0.0]
     ag.update(1, RIGHT, 100.0, 2, True, False)  # left z=0 after 2 steps, R = 1 + 0.95*100
-    assert ag.state.w[0] == pytest.approx(0.1 * (1 + G * 100))
+    assert ag.state.v[0] == pytest.approx(0.1 * (1 + G * 100))
     ag.end_episode()
     ag.begin_episode(0)
     q_before = ag.state.q.copy()
     ag.update(0, RIGHT, 1.0, 1, False, False)  # F = gamma*Phi(z0) - Phi(z0)
-    a2 = ag.state.ivar[K.I_PENDING]
+    a2 = ag.state.pending[0]
     f = (G - 1) * 0.1 * (1 + G * 100)  # omega = 1, V(z0) after the first episode
     want = q_before[0, RIGHT] + A * (1 + f + G * q_before[1, a2] - q_before[0, RIGHT])
     assert ag.state.q[0, RIGHT] == pytest.approx(want)
@@ -198,7 +199,7 @@ def test_rnh_ql_caches_potential_on_entry():
     ag = make_agent(RNHQL(k=3, warmup_episodes=0), g, np.random.default_rng(0))
     st = ag.state
     st.w[:] = np.linspace(1.0, 9.0, 9)
-    phi, step = st.feat, st.fvar[K.F_STEP_V]
+    phi, step = st.phi, st.step_v[0]
     w0 = st.w.copy()
     v0 = phi @ w0
     ag.begin_episode(0)
@@ -225,7 +226,7 @@ def test_rnh_ql_warmup_and_freeze():
     ag.end_episode()
     assert ag.last_shaping == (0.0, 0.0)  # episode 0 had no shaping term
     w = ag.state.w.copy()
-    phi = ag.state.feat @ w  # Phi = V_NN, frozen from here on
+    phi = ag.state.phi @ w  # Phi = V_NN, frozen from here on
     f = G * phi[1] - phi[0]
     assert abs(f) > 1e-6  # a real shaping term, not a vacuous check
     q_before = ag.state.q[0, RIGHT]
@@ -235,7 +236,7 @@ def test_rnh_ql_warmup_and_freeze():
     # episode 1 is past the warm-up: the Q update adds F = gamma Phi(s') - Phi(s)
     assert ag.state.q[0, RIGHT] == pytest.approx(q_before + A * (1.0 + f + G * 0.0 - q_before))
     ag.end_episode()
-    assert ag.state.ivar[K.I_NF] == 1
+    assert ag.state.tally.n_shaped[0] == 1
     assert ag.last_shaping == pytest.approx((f, 0.0))
 
 
@@ -278,4 +279,4 @@ def test_rbf_lattice_by_spacing_follows_the_map():
     assert lattice_size((0.0, 0.0, 512.0, 256.0), 10, spacing_m=8.0) == (64, 32)
     cfg = RNHQL(spacing_m=1.0)
     ag = make_agent(cfg, geom(), np.random.default_rng(0))  # a 3 x 1 m corridor
-    assert ag.state.feat.shape == (3, 3 * 1)
+    assert ag.state.phi.shape == (3, 3 * 1)

@@ -1,5 +1,5 @@
 """Model learners in a world where a free move fails now and then (issue: learners that
-survive a stochastic world; :mod:`learning.move_model`, :mod:`learning.explored`).
+survive a stochastic world; :mod:`learning.move_model`, :mod:`learning.haql`).
 
 The hand-made case: a 7 x 5 grid, a wall at x = 3 with a door at (3, 1). S = (0, 1),
 G = (6, 1): 6 moves through the door, 12 around the wall's top end. The move into
@@ -20,8 +20,12 @@ import pytest
 
 from learning import METHODS, geometry_of
 from learning.agent import make_agent
-from learning.move_model import never_worked, observe_outcome, replay_fails
-from learning.plus_optimism import counts_base, known_to_fail
+from learning.move_model import (
+    never_worked,
+    new_move_model,
+    observe_outcome,
+    replay_draws_failure,
+)
 from learning.train import greedy_test
 
 NX, NY = 7, 5
@@ -98,59 +102,62 @@ def test_model_learners_keep_the_route_through_a_move_that_sometimes_fails(metho
 
 def test_optimistic_model_keeps_a_door_that_failed_free_and_a_wall_a_wall():
     agent, _m, fails = train("rnh-ql+", 0)
-    st = agent.state
-    n_s, n_a = st.q.shape
-    n_c = st.w.shape[0]
+    model = agent.state.model
     s, a = DOOR
     assert fails > 0
-    assert not known_to_fail(st.imap, st.ilist, n_s, n_a, n_c, s, a)
-    c0 = counts_base(n_s, n_a, n_c)
-    works, failures = st.ilist[c0 + 2 * (s * n_a + a)], st.ilist[c0 + 2 * (s * n_a + a) + 1]
-    assert works > 0 and failures > 0
-    assert st.imap[s, a] == sid(3, 1)  # the successor stays the door cell through failures
+    assert not never_worked(model.successor, model.works, s, a)
+    assert model.works[s, a] > 0 and model.fails[s, a] > 0
+    assert model.successor[s, a] == sid(3, 1)  # the successor stays the door cell through failures
     wall = (sid(2, 2), 3)  # (2, 2) -> (3, 2) is a wall
-    if st.imap[wall] >= 0:  # tried
-        assert known_to_fail(st.imap, st.ilist, n_s, n_a, n_c, *wall)
+    if model.successor[wall] >= 0:  # tried
+        assert never_worked(model.successor, model.works, *wall)
 
 
 def test_haql_blocks_a_move_while_bumps_are_its_most_likely_outcome():
-    from learning.explored import COL_BLOCKED, init_explored, observe
+    from learning.haql import HAQL, observe
+    from learning.state import init_state
 
-    geom = geometry_of(door_world())
-    imap, ilist = init_explored(geom, True)
+    st = init_state(HAQL(), geometry_of(door_world()), np.random.default_rng(0))
+    fs = st.free
+
+    def see(s, a, s2):
+        observe(st.balance, st.pi_h, fs.neighbour, fs.blocked, fs.distance, fs.queue,
+                fs.goal[0], s, a, s2, False)
+
     s, a = DOOR
     door = sid(3, 1)
-    assert imap[s, 0] == a  # the free-space heuristic heads through the door
-    observe(imap, ilist, s, a, s, False, True)  # a bump: blocked, pi_H goes round
-    assert imap[s, COL_BLOCKED + a] > 0 and imap[s, 0] != a
-    observe(imap, ilist, s, a, sid(2, 0), False, True)  # drifted elsewhere: no news
-    assert imap[s, COL_BLOCKED + a] > 0
-    observe(imap, ilist, s, a, door, False, True)  # got through: as often as it bumped
-    assert imap[s, COL_BLOCKED + a] <= 0 and imap[s, 0] == a
-    observe(imap, ilist, s, a, s, False, True)  # one more bump: blocked again
-    assert imap[s, 0] != a
+    assert st.pi_h[s] == a  # the free-space heuristic heads through the door
+    see(s, a, s)  # a bump: blocked, pi_H goes round
+    assert fs.blocked[s, a] and st.pi_h[s] != a
+    see(s, a, sid(2, 0))  # drifted elsewhere: no news
+    assert fs.blocked[s, a]
+    see(s, a, door)  # got through: as often as it bumped
+    assert not fs.blocked[s, a] and st.pi_h[s] == a
+    see(s, a, s)  # one more bump: blocked again
+    assert st.pi_h[s] != a
 
 
 def test_move_model_replays_failures_at_the_rate_seen():
-    n_s, n_a = 3, 4
-    imap = np.full((n_s, 2 * n_a), -1, np.int32)
-    imap[:, n_a:] = 0
-    fmap = np.zeros((n_s, n_a))
-    counts = np.zeros(2 * n_s * n_a, np.int32)
-    fvar = np.zeros(16)
+    m = new_move_model(3, 4)
+
+    def see(s, a, r, s2, worked):
+        observe_outcome(m.successor, m.to_goal, m.reward, m.works, m.fails, m.r_fail, s, a, r,
+                        s2, False, worked)
+
     s, a, s2 = 0, 3, 1
-    observe_outcome(imap, fmap, counts, 0, fvar, n_a, s, a, BUMP_R, s, False, False)
-    assert never_worked(imap, counts, 0, n_a, s, a) and imap[s, a] == s
+    see(s, a, BUMP_R, s, False)
+    assert never_worked(m.successor, m.works, s, a) and m.successor[s, a] == s
     for _ in range(3):
-        observe_outcome(imap, fmap, counts, 0, fvar, n_a, s, a, 0.0, s2, False, True)
-    observe_outcome(imap, fmap, counts, 0, fvar, n_a, s, a, BUMP_R, s, False, False)
-    assert not never_worked(imap, counts, 0, n_a, s, a)
-    assert imap[s, a] == s2 and fmap[s, a] == 0.0  # the successor survives the failure
+        see(s, a, 0.0, s2, True)
+    see(s, a, BUMP_R, s, False)
+    assert not never_worked(m.successor, m.works, s, a)
+    assert m.successor[s, a] == s2 and m.reward[s, a] == 0.0  # the successor survives failure
     rng = np.random.default_rng(0)
-    rate = np.mean([replay_fails(counts, 0, n_a, s, a, rng) for _ in range(20000)])
+    rate = np.mean([replay_draws_failure(m.works[s, a], m.fails[s, a], rng)
+                    for _ in range(20000)])
     assert rate == pytest.approx(2 / 5, abs=0.015)  # 2 failures, 3 works
     # a pair seen only to work never draws (deterministic worlds: the draws of before)
-    observe_outcome(imap, fmap, counts, 0, fvar, n_a, 1, 0, 0.0, 2, False, True)
+    see(1, 0, 0.0, 2, True)
     rng_a, rng_b = np.random.default_rng(5), np.random.default_rng(5)
-    assert not replay_fails(counts, 0, n_a, 1, 0, rng_a)
+    assert not replay_draws_failure(m.works[1, 0], m.fails[1, 0], rng_a)
     assert rng_a.random() == rng_b.random()

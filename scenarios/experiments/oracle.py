@@ -23,8 +23,8 @@ import numpy as np
 
 from learning.geometry import geometry_of
 from learning.kernels import run_episodes
-from learning.pfh_rl import PFHRL
 from learning.metrics import episodes_to_stable_optimal
+from learning.pfh_rl import PFHRL
 from learning.rbf import rbf_features
 from learning.state import init_state
 from learning.streams import streams

@@ -115,3 +115,35 @@ def test_no_import_cycles():
 def test_the_checker_sees_a_cycle():
     assert find_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
     assert find_cycle({"a": {"b"}, "b": set()}) is None
+
+
+METHOD_MODULES = ("q_learning", "q_lambda", "dyna_q", "pfh_rl", "sarsa_rs", "haql", "rn_ql",
+                  "rnh_ql", "rnh_ql_plus")
+
+
+def test_each_method_module_imports_no_other_method():
+    """A method is one module (or package): it may use the shared pieces of ``learning``
+    (tabular rules, traces, tally, move model, free space, features of its own), never
+    another method's module."""
+    bad = []
+    for mod, deps in graph().items():
+        parts = mod.split(".")
+        if parts[0] != "learning" or len(parts) < 2 or parts[1] not in METHOD_MODULES:
+            continue
+        for dep in deps:
+            dparts = dep.split(".")
+            if dparts[0] == "learning" and len(dparts) > 1 and dparts[1] in METHOD_MODULES \
+                    and dparts[1] != parts[1]:
+                bad.append(f"{mod} imports {dep}")
+    assert bad == [], "\n".join(sorted(bad))
+
+
+def test_every_registered_method_declares_config_state_and_hooks():
+    from learning.registry import FAMILY_OF_CONFIG
+
+    names = {m.__name__.split(".")[1] for m in FAMILY_OF_CONFIG.values()}
+    assert names == set(METHOD_MODULES)  # the registry and this list agree
+    for module in set(FAMILY_OF_CONFIG.values()):
+        for attr in ("State", "init_state", "act", "update", "begin", "exploit"):
+            assert hasattr(module, attr), f"{module.__name__} has no {attr}"
+        assert tuple(module.State._fields[:2]) == ("par", "tally"), module.__name__

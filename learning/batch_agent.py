@@ -23,6 +23,7 @@ from learning.generator_handle import generator_from, handles
 from learning.geometry import Geometry
 from learning.named_state import copy_state, row, row_view, stack
 from learning.state import init_state
+from learning.state_box import box_of
 
 
 @njit(cache=True)
@@ -32,22 +33,28 @@ def _draw_starts(start_handles, starts, active, out):
             out[i] = hooks.draw_start(generator_from(start_handles[i]), starts)
 
 
+# Each takes the stacked state's box (learning.state_box): one reference to unbox per call.
+
+
 @njit(cache=True)
-def _begin(st, active, s0):
+def _begin(box, active, s0):
+    st = box.state
     for i in range(s0.shape[0]):
         if active[i]:
             hooks.begin_row(row(st, i), s0[i])
 
 
 @njit(cache=True)
-def _act(st, rng_handles, active, s, out):
+def _act(box, rng_handles, active, s, out):
+    st = box.state
     for i in range(s.shape[0]):
         if active[i]:
             out[i] = hooks.act_h(row(st, i), s[i], rng_handles[i])
 
 
 @njit(cache=True)
-def _update(st, rng_handles, active, s, a, r, s2, terminated):
+def _update(box, rng_handles, active, s, a, r, s2, terminated):
+    st = box.state
     for i in range(s.shape[0]):
         if active[i]:
             hooks.update_h(row(st, i), s[i], a[i], r[i], s2[i], terminated[i],
@@ -55,7 +62,8 @@ def _update(st, rng_handles, active, s, a, r, s2, terminated):
 
 
 @njit(cache=True)
-def _end(st, active):
+def _end(box, active):
+    st = box.state
     for i in range(active.shape[0]):
         if active[i]:
             hooks.end(row(st, i))
@@ -74,6 +82,7 @@ class BatchAgent:
         self.cfg, self.geometry, self.rngs = cfg, geometry, list(rngs)
         self.n = len(self.rngs)
         self.states = stack([init_state(cfg, geometry, r) for r in self.rngs])
+        self._box = box_of(self.states)  # the same arrays, one reference for compiled calls
         self._handles = handles(self.rngs)
         self._out = np.zeros(self.n, dtype=np.int64)
 
@@ -99,17 +108,17 @@ class BatchAgent:
         return out
 
     def begin_episode(self, active: np.ndarray, s0: np.ndarray) -> None:
-        _begin(self.states, active, s0)
+        _begin(self._box, active, s0)
 
     def act(self, active: np.ndarray, s: np.ndarray) -> np.ndarray:
         out = self._out
-        _act(self.states, self._handles, active, s, out)
+        _act(self._box, self._handles, active, s, out)
         return out
 
     def update(self, active: np.ndarray, s: np.ndarray, a: np.ndarray, r: np.ndarray,
                s2: np.ndarray, terminated: np.ndarray, truncated: np.ndarray) -> None:
         """``truncated`` steps bootstrap like any other (kept for the env's signature)."""
-        _update(self.states, self._handles, active, s, a, r, s2, terminated)
+        _update(self._box, self._handles, active, s, a, r, s2, terminated)
 
     def end_episode(self, active: np.ndarray) -> None:
-        _end(self.states, active)
+        _end(self._box, active)

@@ -61,16 +61,33 @@ def exploit(st, s):
     raise NotImplementedError("compiled code only")
 
 
+def _is_lean(st, fam) -> bool:
+    lean = getattr(fam, "LEAN_PARAMS", None)
+    par = st.types[st.fields.index("par")]
+    return lean is not None and getattr(par, "instance_class", None) is lean
+
+
 def _hook(st, name: str):
     """The hook's own body (its Python function), to be inlined: no call between. A family
     with a lean configuration (``LEAN_PARAMS``, ``LEAN_HOOKS``) gets its lean copy when the
     state's ``par`` is of that type (see :mod:`learning.rnh_ql_plus.rules`)."""
     fam = _family(st)
-    lean = getattr(fam, "LEAN_PARAMS", None)
-    par = st.types[st.fields.index("par")]
-    if lean is not None and getattr(par, "instance_class", None) is lean:
-        return fam.LEAN_HOOKS[name]
-    return getattr(fam, name).py_func
+    return fam.LEAN_HOOKS[name] if _is_lean(st, fam) else getattr(fam, name).py_func
+
+
+_LEAN_JIT: dict[tuple[str, str], object] = {}
+
+
+def _compiled_hook(st, name: str):
+    """The hook as a compiled function (lean copy or the family's own), for callers that
+    call it rather than inline it."""
+    fam = _family(st)
+    if not _is_lean(st, fam):
+        return getattr(fam, name)
+    key = (fam.__name__, name)
+    if key not in _LEAN_JIT:
+        _LEAN_JIT[key] = njit(inline="always")(fam.LEAN_HOOKS[name])
+    return _LEAN_JIT[key]
 
 
 @overload(act, inline="always")
@@ -116,13 +133,13 @@ def update_h(st, s, a, r, s2, terminated, h):
 
 @overload(act_h)
 def _act_h(st, s, h):
-    f = _family(st).act
+    f = _compiled_hook(st, "act")
     return lambda st, s, h: f(st, s, generator_from(h))
 
 
 @overload(update_h)
 def _update_h(st, s, a, r, s2, terminated, h):
-    f = _family(st).update
+    f = _compiled_hook(st, "update")
     return lambda st, s, a, r, s2, terminated, h: f(st, s, a, r, s2, terminated,
                                                     generator_from(h))
 
@@ -133,5 +150,5 @@ def begin_row(st, s0):
 
 @overload(begin_row)
 def _begin_row(st, s0):
-    f = _family(st).begin
+    f = _compiled_hook(st, "begin")
     return lambda st, s0: f(st, s0)

@@ -183,10 +183,20 @@ def test_resume_with_other_rewards_is_refused(tmp_path, capsys):
     assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "10",
                  "--save", ck]) == 0
     assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "20", "--resume", ck,
-                 "--rewards", "goal-only"]) == 2
+                 "--rewards", "paper"]) == 2
     assert "field 'problem.rewards'" in capsys.readouterr().err
     assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "20",
                  "--resume", ck]) == 0
+
+
+def test_train_defaults_to_goal_only_and_says_how_to_get_the_papers_rewards(capsys):
+    assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "5"]) == 0
+    out = capsys.readouterr().out
+    assert "rewards goal-only" in out and "--rewards paper" in out
+    assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "5",
+                 "--rewards", "scenario"]) == 0  # the file's own: the built-ins' paper rewards
+    out = capsys.readouterr().out
+    assert "rewards paper" in out and "--rewards paper" not in out
 
 
 def test_scen_rows_that_do_not_fit_their_map_are_refused(tmp_path, capsys):

@@ -12,10 +12,12 @@ in brackets (``[--web]``) are taken.
 from __future__ import annotations
 
 import argparse
+import importlib
 import re
 import runpy
 import shlex
 import sys
+import warnings
 
 import pytest
 
@@ -89,9 +91,14 @@ def test_readme_command_parses(command, monkeypatch, capsys):
 
             main(argv[1:])
         else:
-            module = argv[2]
-            monkeypatch.setattr(sys, "argv", [module, *argv[3:]])
-            runpy.run_module(module, run_name="__main__")
+            module = importlib.import_module(argv[2])
+            if hasattr(module, "main"):
+                module.main(argv[3:])
+            else:  # a module that parses in its __main__ block
+                monkeypatch.setattr(sys, "argv", [argv[2], *argv[3:]])
+                with warnings.catch_warnings():  # it may be imported already: that is fine
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    runpy.run_module(argv[2], run_name="__main__")
     except Parsed:
         return
     except SystemExit as exc:

@@ -55,7 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=catalog.cmd_scenarios)
 
     p = sub.add_parser("train", help="train one method on one scenario")
-    add_scenario_args(p)
+    add_scenario_args(p, learning=True)
     p.add_argument("--method", default="rnh-ql", help="method (default rnh-ql)")
     p.add_argument("--seed", type=int, default=0, help="the run's seed")
     p.add_argument("--episodes", type=int, default=3000, help="training episodes")
@@ -70,7 +70,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=train.cmd_train)
 
     p = sub.add_parser("route", help="print and draw a saved agent's greedy route from S")
-    add_scenario_args(p)
+    add_scenario_args(p, learning=True)
     p.add_argument("--agent", required=True, metavar="AGENT.npz",
                    help="an agent saved with rnhql train --save")
     p.add_argument("--world", default="grid", help="grid (default) or physics (drive it)")
@@ -81,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=route.cmd_route)
 
     p = sub.add_parser("compare", help="methods x seeds (x worlds): results, summary, figures")
-    add_scenario_args(p)
+    add_scenario_args(p, learning=True)
     p.add_argument("--methods", help="comma-separated (default: all ten)")
     p.add_argument("--seeds", type=int, default=10, help="number of seeds (default 10)")
     p.add_argument("--seed-base", type=int, default=0, help="first seed (default 0)")

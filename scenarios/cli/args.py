@@ -29,7 +29,14 @@ def parse_cell(text: str, flag: str) -> tuple[int, int]:
     return x, y
 
 
-def add_scenario_args(p: argparse.ArgumentParser, positional: bool = True) -> None:
+DEFAULT_REWARDS = "goal-only"  # what train, route and compare use without --rewards
+
+
+def add_scenario_args(p: argparse.ArgumentParser, positional: bool = True,
+                      learning: bool = False) -> None:
+    """The scenario's name or file, S and G, a Moving AI problem, and ``--rewards``.
+    ``learning``: a command that trains or grades (train, route, compare), whose rewards
+    default to goal-only (see :func:`rewards_arg`)."""
     if positional:
         p.add_argument("scenario", nargs="?",
                        help="built-in name (see `rnhql scenarios`), a .toml, or a .map "
@@ -42,10 +49,28 @@ def add_scenario_args(p: argparse.ArgumentParser, positional: bool = True) -> No
     p.add_argument("--index", type=int, metavar="N", help="with --scen: the N-th problem (from 0)")
     p.add_argument("--bucket", type=int, metavar="B",
                    help="with --scen: the last (longest) problem of bucket B")
+    own = ("default: goal-only, under which every method's learning shows; 'scenario': the "
+           "scenario's own, e.g. the built-ins' paper rewards" if learning
+           else "default: the scenario's own")
     p.add_argument("--rewards", metavar="SCHEME",
                    help="reward scheme: paper (+100 goal, -1 bump, +1 free step), goal-only "
-                        "(free step 0), step-cost (free step -1), or goal=..,bump=..,step=.. "
-                        "(default: the scenario's own)")
+                        f"(free step 0), step-cost (free step -1), or goal=..,bump=..,step=.. "
+                        f"({own})")
+
+
+def rewards_arg(args: argparse.Namespace) -> str | None:
+    """The reward scheme a training command uses: ``--rewards``, else goal-only; None for
+    ``--rewards scenario`` (the scenario file's own scheme)."""
+    if args.rewards is None:
+        return DEFAULT_REWARDS
+    return None if args.rewards == "scenario" else args.rewards
+
+
+def rewards_note(args: argparse.Namespace) -> str:
+    """What the output says about a default reward scheme (empty when one was given)."""
+    if args.rewards is not None:
+        return ""
+    return ", the default (the paper's: --rewards paper)"
 
 
 def add_fidelity_arg(p: argparse.ArgumentParser) -> None:

@@ -17,6 +17,8 @@ from scenarios.cli.args import (
     parse_overrides,
     positive,
     record_path,
+    rewards_arg,
+    rewards_note,
     scenario_key,
     seed_value,
     unique,
@@ -34,7 +36,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     )
 
     name, start, goal = scenario_key(args)
-    load(name, start, goal, args.rewards)  # validate the scenario before any work
+    sc, _ = load(name, start, goal, rewards_arg(args))  # validate the scenario before any work
     methods = (unique(parse_list(args.methods, "--methods"), "--methods") if args.methods
                else list(ALL_METHODS))
     worlds = [check_world(w) for w in unique(parse_list(args.world, "--world"), "--world")]
@@ -45,7 +47,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     seeds = list(range(seed_base, seed_base + n_seeds))
     episodes = positive(args.episodes, "--episodes", MAX_EPISODES)
     specs = make_specs(name, methods, seeds, episodes, worlds,
-                       per_method, start, goal, rewards=args.rewards,
+                       per_method, start, goal, rewards=rewards_arg(args),
                        fidelity=fidelity_arg(args))
     execute, kwargs = _backend(args)
     from scenarios.runs.backends import Progress
@@ -58,6 +60,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                    "--record-every"),
             values_every=positive(args.record_values_every, "--record-values-every"),
             detail_seeds=positive(args.record_seeds, "--record-seeds"))
+    print(f"{len(specs)} runs on {sc.name}, rewards {sc.rewards.label()}{rewards_note(args)}")
     compile_notice(len(methods))
     out = Path(args.out)
     run_sweep(specs, out, execute, resume=args.resume, recording=recording,

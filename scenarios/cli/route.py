@@ -13,6 +13,7 @@ from scenarios.cli.args import (
     check_world,
     fidelity_arg,
     record_path,
+    rewards_arg,
     scenario_key,
 )
 from scenarios.runs.spec import load
@@ -26,7 +27,7 @@ def cmd_route(args: argparse.Namespace) -> int:
     from sim.grid.planning import bfs_route
 
     name, start, goal = scenario_key(args)
-    sc, model = load(name, start, goal, args.rewards)
+    sc, model = load(name, start, goal, rewards_arg(args))
     check_world(args.world)
     fidelity_arg(args)
     if args.png:

@@ -298,10 +298,18 @@ def value_view(prefix: str, sc: Scenario, which: str, name: str) -> rrb.Spatial2
                   *extra], visual_bounds=_bounds(sc))
 
 
+def whole_run() -> rrb.TimeAxis:
+    """A curve panel's x axis over the whole run: without it the viewer, which plays the
+    recording on open, follows the time cursor and shows only the last ~1000 episodes,
+    hiding the early learning where methods differ."""
+    every = rrb.TimeRangeBoundary.infinite()
+    return rrb.TimeAxis(view_range=rrb.TimeRange(start=every, end=every))
+
+
 def plot(prefix: str, which: str, name: str) -> rrb.TimeSeriesView:
     m = path(prefix, "metrics")
     ents = [f"+ /{m}/{e}" for e, (_, p) in METRICS.items() if p == which]
-    return rrb.TimeSeriesView(name=name, contents=ents,
+    return rrb.TimeSeriesView(name=name, contents=ents, axis_x=whole_run(),
                               plot_legend=rrb.PlotLegend(corner="LeftTop"))
 
 
@@ -372,6 +380,7 @@ def comparison_blueprint(runs: Sequence[tuple[str, int]], sc: Scenario,
             for m in methods]
     curves = rrb.Horizontal(*[
         rrb.TimeSeriesView(name=f"{title}: median, IQR over seeds", origin=f"/summary/{fig}",
+                           axis_x=whole_run(),
                            plot_legend=rrb.PlotLegend(corner="RightTop", visible=i == 0))
         for i, (fig, title) in enumerate(SUMMARY_FIGURES.items())])
     return rrb.Blueprint(rrb.Vertical(rrb.Grid(*maps), curves, row_shares=[3, 2]),

@@ -239,15 +239,23 @@ def batchable(spec: Any) -> bool:
 def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
     """Spec indices per task: each grid or recorded run alone; physics runs that share a
     problem, budget and test cadence together, dealt round-robin (by seed, then method)
-    into at least ``jobs`` tasks of at most :data:`MAX_BATCH` runs."""
+    into at least ``jobs`` tasks of at most :data:`MAX_BATCH` runs.
+
+    Single runs go seed by seed (every method's first seed, then every method's second):
+    on a cold numba cache the workers then compile different methods' kernels side by
+    side instead of each compiling the same one (measured on the main command: see
+    README). Results do not depend on the order: each run has its own seeds, and
+    results.json lists runs in spec order."""
     tasks: list[list[int]] = []
     groups: dict[tuple[Any, ...], list[int]] = {}
+    singles: list[int] = []
     for i, sp in enumerate(specs):
         if batchable(sp):
             groups.setdefault((sp.problem, sp.episodes, sp.test_every, sp.fidelity_spec),
                               []).append(i)
         else:
-            tasks.append([i])
+            singles.append(i)
+    tasks += [[i] for i in sorted(singles, key=lambda i: (specs[i].seed, i))]
     for idx in groups.values():
         idx = sorted(idx, key=lambda i: (specs[i].seed, i))
         n_tasks = max(min(jobs, len(idx)), -(-len(idx) // MAX_BATCH))

@@ -23,8 +23,8 @@ from learning.move_model import (
     pair_of,
     replay_draws_failure,
 )
-from learning.tabular import argmax_first, draw_below, eps_greedy, q_learning
-from learning.tally import Tally, begin_tally, new_tally
+from learning.tabular import begin_plain, draw_below, eps_greedy, exploit_q, q_learning
+from learning.tally import Tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
 
@@ -98,11 +98,5 @@ def update(st, s, a, r, s2, terminated, rng):
                        0.0)
 
 
-@njit(**HOOK)
-def begin(st, s0):
-    begin_tally(st.tally)
-
-
-@njit(**HOOK)
-def exploit(st, s):
-    return argmax_first(st.q, s)
+begin = begin_plain
+exploit = exploit_q

@@ -15,8 +15,8 @@ from numba import njit
 
 from learning.config import BaseParams, MethodConfig
 from learning.geometry import Geometry
-from learning.tabular import argmax_first, eps_greedy, q_learning
-from learning.tally import Tally, begin_tally, new_tally, record_shaping
+from learning.tabular import begin_plain, eps_greedy, exploit_q, q_learning
+from learning.tally import Tally, new_tally, record_shaping
 
 HOOK = dict(cache=True, inline="always")
 
@@ -71,12 +71,6 @@ def update(st, s, a, r, s2, terminated, rng):
     q_learning(st.q, s, a, r, s2, terminated, st.par.alpha, gamma, f)
 
 
-@njit(**HOOK)
-def begin(st, s0):
-    begin_tally(st.tally)
-
-
-@njit(**HOOK)
-def exploit(st, s):
-    return argmax_first(st.q, s)
+begin = begin_plain
+exploit = exploit_q
 

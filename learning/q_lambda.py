@@ -10,7 +10,7 @@ from numba import njit
 
 from learning.config import MethodConfig
 from learning.geometry import Geometry
-from learning.tabular import argmax_first, eps_greedy
+from learning.tabular import eps_greedy, exploit_q
 from learning.tally import Tally, begin_tally, new_tally
 from learning.traces import QTraces, clear_traces, new_traces, q_lambda
 
@@ -73,6 +73,4 @@ def begin(st, s0):
     clear_traces(st.traces.e, st.traces.pairs, st.traces.n)
 
 
-@njit(**HOOK)
-def exploit(st, s):
-    return argmax_first(st.q, s)
+exploit = exploit_q

@@ -15,8 +15,8 @@ from numba import njit
 
 from learning.config import BaseParams, MethodConfig
 from learning.geometry import Geometry
-from learning.tabular import argmax_first, eps_greedy, q_learning
-from learning.tally import Tally, begin_tally, new_tally
+from learning.tabular import begin_plain, eps_greedy, exploit_q, q_learning
+from learning.tally import Tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
 
@@ -59,11 +59,5 @@ def update(st, s, a, r, s2, terminated, rng):
     q_learning(st.q, s, a, r, s2, terminated, st.par.alpha, st.par.gamma, 0.0)
 
 
-@njit(**HOOK)
-def begin(st, s0):
-    begin_tally(st.tally)
-
-
-@njit(**HOOK)
-def exploit(st, s):
-    return argmax_first(st.q, s)
+begin = begin_plain
+exploit = exploit_q

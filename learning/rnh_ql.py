@@ -17,7 +17,7 @@ from numba import njit
 from learning import rbf
 from learning.config import MethodConfig
 from learning.geometry import Geometry
-from learning.tabular import argmax_first, eps_greedy, is_greedy, q_learning
+from learning.tabular import eps_greedy, exploit_q, is_greedy, q_learning
 from learning.tally import Tally, begin_tally, new_tally, record_shaping
 
 HOOK = dict(cache=True, inline="always")
@@ -138,9 +138,7 @@ def begin(st, s0):
     st.phi_here[0] = rbf.value(st.phi, s0, st.w)
 
 
-@njit(**HOOK)
-def exploit(st, s):
-    return argmax_first(st.q, s)
+exploit = exploit_q
 
 
 def potential(st: State) -> np.ndarray:

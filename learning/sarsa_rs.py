@@ -17,7 +17,7 @@ from numba import njit
 
 from learning.config import MethodConfig
 from learning.geometry import Geometry
-from learning.tabular import argmax_first, eps_greedy, sarsa
+from learning.tabular import eps_greedy, exploit_q, sarsa
 from learning.tally import Tally, begin_tally, new_tally, record_shaping
 
 HOOK = dict(cache=True, inline="always")
@@ -137,7 +137,5 @@ def begin(st, s0):
     st.g_since[0] = 1.0
 
 
-@njit(**HOOK)
-def exploit(st, s):
-    return argmax_first(st.q, s)
+exploit = exploit_q
 

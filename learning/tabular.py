@@ -21,6 +21,8 @@ from __future__ import annotations
 
 from numba import njit
 
+from learning.tally import begin_tally
+
 
 @njit(cache=True, inline="always")
 def row_max(q, s):
@@ -42,31 +44,6 @@ def argmax_first(q, s):
 
 
 @njit(cache=True, inline="always")
-def argmax_random(q, s, rng):
-    """Greedy action at s; draws ``rng.integers(0, n_ties)`` only when there is a tie."""
-    best = q[s, 0]
-    a = 0
-    ties = 1
-    for b in range(1, q.shape[1]):
-        v = q[s, b]
-        if v > best:
-            best = v
-            a = b
-            ties = 1
-        elif v == best:
-            ties += 1
-    if ties == 1:
-        return a
-    k = rng.integers(0, ties)
-    for b in range(q.shape[1]):
-        if q[s, b] == best:
-            if k == 0:
-                return b
-            k -= 1
-    return a
-
-
-@njit(cache=True, inline="always")
 def draw_below(rng, n):
     """A uniform index in [0, n) from one ``rng.random()``: ~15x cheaper than numba's
     ``rng.integers`` (which re-draws bounded integers), for hot loops that draw per update."""
@@ -75,8 +52,9 @@ def draw_below(rng, n):
 
 
 @njit(cache=True, inline="always")
-def argmax_drawn(q, s, rng):
-    """:func:`argmax_random` with its tie drawn by :func:`draw_below`."""
+def argmax_tied(q, s, rng, cheap_draw):
+    """Greedy action at s, a tie broken at random: ``rng.integers(0, n_ties)``, or with
+    ``cheap_draw`` :func:`draw_below`; nothing is drawn without a tie."""
     best = q[s, 0]
     a = 0
     ties = 1
@@ -90,13 +68,25 @@ def argmax_drawn(q, s, rng):
             ties += 1
     if ties == 1:
         return a
-    k = draw_below(rng, ties)
+    k = draw_below(rng, ties) if cheap_draw else rng.integers(0, ties)
     for b in range(q.shape[1]):
         if q[s, b] == best:
             if k == 0:
                 return b
             k -= 1
     return a
+
+
+@njit(cache=True, inline="always")
+def argmax_random(q, s, rng):
+    """Greedy action at s; draws ``rng.integers(0, n_ties)`` only when there is a tie."""
+    return argmax_tied(q, s, rng, False)
+
+
+@njit(cache=True, inline="always")
+def argmax_drawn(q, s, rng):
+    """:func:`argmax_random` with its tie drawn by :func:`draw_below` (hot loops)."""
+    return argmax_tied(q, s, rng, True)
 
 
 @njit(cache=True, inline="always")
@@ -132,3 +122,18 @@ def sarsa(q, s, a, r, s2, a2, terminated, alpha, gamma, f):
     if not terminated:
         target += gamma * q[s2, a2]
     q[s, a] += alpha * (target - q[s, a])
+
+
+# ---------------------------------------------------------------- hooks several methods share
+
+
+@njit(cache=True, inline="always")
+def begin_plain(st, s0):
+    """The ``begin`` hook of a method with nothing to reset per episode but its tally."""
+    begin_tally(st.tally)
+
+
+@njit(cache=True, inline="always")
+def exploit_q(st, s):
+    """The ``exploit`` hook of a method whose policy is its Q-table's greedy action."""
+    return argmax_first(st.q, s)

@@ -132,6 +132,8 @@ class Scenario:
     robot: Robot = field(default_factory=Robot)
     rewards: Rewards = field(default_factory=Rewards)
     steps_per_episode: int = 600  # episode length limit [steps]
+    s_start_share: float = 0.0  # share of training episodes that start at S [fraction]; the
+    #                             rest start on a uniformly drawn free cell (the paper: 0)
     physics: str | None = None  # [physics] table as a --fidelity text (None: exact)
     description: str = ""
     source: str = "<python>"  # where it was loaded from, for error messages
@@ -214,6 +216,11 @@ def validate_shape(sc: Scenario) -> None:
         raise ScenarioError(src, "steps_per_episode", f"must be an integer in 1.."
                             f"{MAX_STEPS_PER_EPISODE:,}, got {sc.steps_per_episode!r}",
                             "use e.g. 600")
+    share = sc.s_start_share
+    if not (isinstance(share, int | float) and not isinstance(share, bool)
+            and 0.0 <= share < 1.0):
+        raise ScenarioError(src, "s_start_share", f"must be a number in [0, 1), got {share!r}",
+                            "use e.g. 0.1 (one episode in ten starts at S) or 0 (the paper)")
     for name in ("goal", "bump", "step"):
         if not math.isfinite(getattr(sc.rewards, name)):
             raise ScenarioError(src, f"rewards.{name}", "must be finite", "use a number")

@@ -127,6 +127,7 @@ def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenari
     name = top.get("name", str, Path(source).stem)
     description = top.get("description", str, "")
     steps = top.get("steps_per_episode", int, 600)
+    s_share = top.get("s_start_share", (int, float), 0.0)
     start, goal = top.cell("start"), top.cell("goal")
 
     arena = top.table("arena")
@@ -178,6 +179,7 @@ def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenari
     sc = Scenario(name=name, width_m=width, height_m=height, start=start, goal=goal,
                   cell_size_m=cell_size, obstacles=tuple(circles), blocked_cells=blocked_cells,
                   robot=robot, rewards=rewards, steps_per_episode=steps, physics=physics,
+                  s_start_share=float(s_share),
                   description=description, source=source)
     if rnd is not None:
         rt = _Table(rnd, "obstacles.random", source)

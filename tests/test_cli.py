@@ -33,6 +33,9 @@ def test_check_a_good_map(capsys):
      "expected X,Y"),
     (["scenarios", "--check", str(MAPS / "arena.map"), "--start", "0,0", "--goal", "45,5"],
      "blocked"),
+    (["train", "paper-40", "--s-starts", "1"], "--s-starts: must be in [0, 1)"),
+    (["train", "paper-40", "--rewards", "foo"], "paper, goal-only, step-cost, scenario"),
+    (["compare", "paper-40", "--s-starts", "-0.5", "--out", "x"], "--s-starts: must be in"),
 ])
 def test_bad_input_prints_one_line_and_exits_2(capsys, argv, words):
     assert main(argv) == 2

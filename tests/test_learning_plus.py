@@ -173,3 +173,54 @@ def test_optimistic_model_needs_a_discount():
     with pytest.raises(ValueError, match=r"RNHQLPlus\.gamma = 1\.0 must be < 1 with v_target = 4"):
         RNHQLPlus(gamma=1.0)
     assert RNHQLPlus(gamma=1.0, v_target=0).gamma == 1.0
+
+
+def test_known_routes_are_bfs_over_moves_seen_to_work():
+    from learning.known_routes import known_distances, known_move, new_known_routes
+
+    # a 1 x 4 corridor 0-1-2-3, G = 3; actions: 0 up, 1 down, 2 left, 3 right
+    nb = np.full((4, 4), -1, np.int32)
+    for s in range(4):
+        nb[s, 2] = s - 1 if s > 0 else -1
+        nb[s, 3] = s + 1 if s < 3 else -1
+    works = np.zeros((4, 4), np.int32)
+    kr = new_known_routes(4)
+    works[1, 3] = works[2, 3] = 1  # 1 -> 2 -> 3 seen to work, 0 -> 1 not yet
+    known_distances(nb, works, kr.distance, kr.queue, 3)
+    assert kr.distance.tolist() == [-1, 2, 1, 0]
+    assert known_move(nb, works, kr.distance, 1) == 3
+    assert known_move(nb, works, kr.distance, 0) == -1
+    works[0, 3] = 1
+    known_distances(nb, works, kr.distance, kr.queue, 3)
+    assert kr.distance.tolist() == [3, 2, 1, 0]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_greedy_test_walks_moves_seen_to_work_once_s_has_a_known_route(paper50, seed):
+    """known_route: the test route from a cell with a known route is a shortest route of
+    moves that have worked, so its length is the known distance and never an untried wall
+    (a fifth of the episodes start at S, so that S has a known route after 100)."""
+    import dataclasses
+
+    from learning.known_routes import known_distances
+    from sim.grid import build_model
+
+    model = build_model(dataclasses.replace(paper50, s_start_share=0.2))
+    r = train_tabular(RNHQLPlus(), model, 100, np.random.default_rng(seed))
+    st = r.state
+    d = st.known.distance.copy()
+    known_distances(st.free.neighbour, st.model.works, d, st.known.queue.copy(), model.goal)
+    assert d[model.start] > 0, "S has a known route"
+    assert r.final_route_length == d[model.start]
+    works = st.model.works
+    nb = st.free.neighbour
+    for s, s2 in zip(r.final_route[:-1], r.final_route[1:], strict=True):
+        a = int(np.flatnonzero(nb[s] == s2)[0])
+        assert works[s, a] > 0
+
+
+def test_known_route_off_is_the_look_ahead_test_and_training_is_unchanged(paper50_model):
+    on = train_tabular(RNHQLPlus(), paper50_model, 40, np.random.default_rng(5))
+    off = train_tabular(RNHQLPlus(known_route=0), paper50_model, 40, np.random.default_rng(5))
+    np.testing.assert_array_equal(on.state.q, off.state.q)  # the test never changes training
+    np.testing.assert_array_equal(on.steps, off.steps)

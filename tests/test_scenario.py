@@ -84,6 +84,8 @@ BAD = [
     (BASE + "[obstacles]\ncircles = [[1.5, 1.5, 0.5]]\n[obstacles.random]\ncount = 3\n"
      "radius_min_m = 0.5\nradius_max_m = 1.0\nseed = 1\n", "start", "blocked"),
     ("name = \n", "TOML", "cannot be parsed"),
+    ("s_start_share = 1.0\n" + BASE, "s_start_share", "in [0, 1)"),
+    ("s_start_share = -0.1\n" + BASE, "s_start_share", "in [0, 1)"),
 ]
 
 
@@ -157,3 +159,14 @@ def test_rewards_reach_the_model():
     free = (paper.reward == 1.0)
     assert free.any() and (goal_only.reward[free] == 0.0).all()
     assert (goal_only.reward[paper.reward == 100.0] == 100.0).all()
+
+
+def test_s_start_share_puts_s_among_the_episode_starts_with_that_probability(tmp_path):
+    from sim.grid import build_model
+
+    plain = build_model(load_scenario(write(tmp_path, BASE)))
+    mixed = build_model(load_scenario(write(tmp_path, "s_start_share = 0.25\n" + BASE)))
+    free = plain.start_states
+    assert np.array_equal(mixed.start_states[:len(free)], free)  # the paper's starts, then S
+    share = float(np.mean(mixed.start_states == mixed.start))
+    assert abs(share - 0.25) < 1.0 / len(mixed.start_states) + 1.0 / len(free)

@@ -60,6 +60,10 @@ class RNHQLPlus(MethodConfig):
       tried yet (Wiewiora 2003: shaping = initialising Q with Phi). Off by default:
       values learned while the optimistic model was too optimistic would stay
       inflated after it learns of a wall (measured: no route on zigzag-50).
+    * ``known_route=1`` (default): the greedy test (never the behaviour) follows, from a
+      cell with one, the shortest route over moves seen to work
+      (:mod:`learning.known_routes`); elsewhere the greedy choice above. The moves seen
+      to work only grow, so once the optimal route is walked the test stays optimal.
     """
 
     name: ClassVar[str] = "RNH-QL+"
@@ -84,6 +88,7 @@ class RNHQLPlus(MethodConfig):
     rebase: int = 0  # 1: re-base a row's tried actions when Phi(s) changes (see above)
     lookahead: int = 1  # 1: untried actions valued by one step of look-ahead on Phi
     n_fit: int = 0  # v_target = 3: extra V_NN fits at random states per real step [fits]
+    known_route: int = 1  # 1: the greedy test follows the shortest route of moves seen to work
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -105,7 +110,7 @@ class RNHQLPlus(MethodConfig):
             float(self.warmup_episodes), float(freeze), int(self.n_planning),
             int(self.v_target), float(self.shaping_scale), float(self.lam_q),
             float(self.trace_min), bool(self.normalise), bool(self.leak_free),
-            bool(self.rebase), bool(self.lookahead), int(self.n_fit))
+            bool(self.rebase), bool(self.lookahead), int(self.n_fit), bool(self.known_route))
 
 
 
@@ -126,6 +131,7 @@ class Params(NamedTuple):
     rebase: bool
     lookahead: bool
     n_fit: int
+    known_route: bool
 
 
 # The same fields; a state holding these compiles the lean kernel (see RNHQLPlus.params).

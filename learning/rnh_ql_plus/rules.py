@@ -33,6 +33,7 @@ import numpy as np
 from numba import njit
 
 from learning.free_space import bfs_distances, distances_change
+from learning.known_routes import known_distances, known_move
 from learning.move_model import (
     never_worked,
     note_pair,
@@ -248,7 +249,8 @@ def act(st, s, rng):
 
 @njit(**HOOK)
 def exploit(st, s):
-    """Greedy test policy, ties to the lowest index: with look-ahead over
+    """Greedy test policy, ties to the lowest index: with ``known_route``, the first move of
+    a shortest route over moves seen to work, where s has one; else with look-ahead over
     :func:`action_values`; else over tried actions (re-based rows), or over Q."""
     par = st.par
     q = st.q
@@ -264,9 +266,21 @@ def exploit(st, s):
     succ = st.model.successor
     nb = st.free.neighbour
     goal = st.free.goal[0]
+    works = st.model.works
+    known_d = st.known.distance
+    known_q = st.known.queue
+    known_stale = st.known.stale
     direct = model_phi(par) if GENERAL else True
     based = par.rebase if GENERAL else False
-    if par.lookahead and shaping[0]:
+    a = -1
+    if par.known_route:
+        if known_stale[0]:
+            known_distances(nb, works, known_d, known_q, goal)
+            known_stale[0] = False
+        a = known_move(nb, works, known_d, s)
+    if a >= 0:
+        pass
+    elif par.lookahead and shaping[0]:
         if based:
             rebase(par, q, w, on, centre, y, phi_row, succ, s)
         action_values(par, q, values, y, phi_row, w, on, centre, succ, nb, goal,
@@ -386,6 +400,7 @@ def update(st, s, a, r, s2, terminated, rng):
     stamp = st.opt.stamp
     r_goal_seen = st.opt.r_goal
     r_free_seen = st.opt.r_free
+    known_stale = st.known.stale
     gamma = par.gamma
     shaping = shaping_on[0]
     based = (shaping and par.rebase) if GENERAL else False
@@ -401,11 +416,14 @@ def update(st, s, a, r, s2, terminated, rng):
     stale = observe_rewards(r_goal_seen, r_free_seen, s, r, s2, terminated)
     # model first: a new move may join s' to supports before Phi(s') is read
     was_fail = blocked[s, a]
+    first_work = works[s, a] == 0
     if note_pair(succ, seen, n_seen, s, a) and leak_free and s2 != s:
         leak_free_edge(on, base, centre, preds, anchor, stack, succ, s, s2, par.normalise)
     observe_outcome(succ, to_goal, reward, works, fails, r_fail, s, a, r, s2, terminated,
                     s2 == nb[s, a])
     now_fail = never_worked(succ, works, s, a)
+    if first_work and works[s, a] > 0:
+        known_stale[0] = True  # a move worked for the first time: known routes may shorten
     blocked[s, a] = now_fail
     # the optimistic model changed: a move now known to fail (BFS only if a distance
     # changes), or one known to fail that moved after all (noisy physics worlds; on the

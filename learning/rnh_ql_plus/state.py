@@ -8,6 +8,7 @@ import numpy as np
 
 from learning.free_space import FreeSpace, new_free_space
 from learning.geometry import Geometry
+from learning.known_routes import KnownRoutes, new_known_routes
 from learning.move_model import MoveModel, new_move_model
 from learning.rnh_ql_plus.config import Params, RNHQLPlus
 from learning.rnh_ql_plus.features import Features, new_features
@@ -33,9 +34,10 @@ class State(NamedTuple):
     phi_here: np.ndarray  # float64[1]; Phi cached when the current state was entered
     shaping: np.ndarray  # bool[1]; shaping on this episode
     train_v: np.ndarray  # bool[1]; V_NN learns this episode
+    known: KnownRoutes  # routes over moves seen to work (the greedy test's, known_route)
 
 
-DERIVED = ("feat.base", "feat.centre", "step_v")
+DERIVED = ("feat.base", "feat.centre", "step_v", "known.distance", "known.queue", "known.stale")
 
 
 def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> State:
@@ -46,4 +48,5 @@ def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> Stat
     return State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), np.zeros(n_c), np.zeros(n_c),
                  np.zeros(n_s), feat, new_move_model(n_s, n_a), new_free_space(geom),
                  new_optimism(n_s), new_traces(n_s, n_a), np.zeros((1, n_a)),
-                 np.array([step_v]), np.zeros(1), np.zeros(1, np.bool_), np.zeros(1, np.bool_))
+                 np.array([step_v]), np.zeros(1), np.zeros(1, np.bool_), np.zeros(1, np.bool_),
+                 new_known_routes(n_s))

@@ -56,14 +56,45 @@ def add_scenario_args(p: argparse.ArgumentParser, positional: bool = True,
                    help="reward scheme: paper (+100 goal, -1 bump, +1 free step), goal-only "
                         f"(free step 0), step-cost (free step -1), or goal=..,bump=..,step=.. "
                         f"({own})")
+    if learning:
+        p.add_argument("--s-starts", metavar="SHARE", type=float, default=None,
+                       help="share of training episodes that start at S, the rest on a "
+                            "uniformly drawn free cell (default: the scenario's s_start_share, "
+                            "0 for the built-ins: the paper's random starts; e.g. 0.1 on maps "
+                            "of 256 x 256 cells and more, where random starts rarely come near S)")
+
+
+def s_starts_arg(args: argparse.Namespace) -> float | None:
+    """``--s-starts`` checked now (exit 2 on a bad value); None: the scenario's own."""
+    share = getattr(args, "s_starts", None)
+    if share is None:
+        return None
+    if not (0.0 <= share < 1.0):
+        raise CliError("command line", "--s-starts", f"must be in [0, 1), got {share:g}",
+                       "pass e.g. --s-starts 0.1 (one episode in ten starts at S)")
+    return share
+
+
+def starts_note(sc) -> str:
+    """What the output says about episode starts (empty for the paper's random starts)."""
+    share = sc.s_start_share
+    return f"; {share:.0%} of episodes start at S" if share > 0 else ""
 
 
 def rewards_arg(args: argparse.Namespace) -> str | None:
     """The reward scheme a training command uses: ``--rewards``, else goal-only; None for
     ``--rewards scenario`` (the scenario file's own scheme)."""
+    from sim.scenario import REWARD_SCHEMES
+
     if args.rewards is None:
         return DEFAULT_REWARDS
-    return None if args.rewards == "scenario" else args.rewards
+    if args.rewards == "scenario":
+        return None
+    if "=" not in args.rewards and args.rewards.strip() not in REWARD_SCHEMES:
+        raise CliError("command line", "--rewards", f"unknown reward scheme {args.rewards!r}",
+                       f"use one of: {', '.join(REWARD_SCHEMES)}, scenario (the scenario "
+                       "file's own), or goal=..,bump=..,step=..")
+    return args.rewards
 
 
 def rewards_note(args: argparse.Namespace) -> str:

@@ -19,8 +19,10 @@ from scenarios.cli.args import (
     record_path,
     rewards_arg,
     rewards_note,
+    s_starts_arg,
     scenario_key,
     seed_value,
+    starts_note,
     unique,
 )
 from scenarios.runs.spec import ExperimentError, load, make_config
@@ -36,7 +38,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     )
 
     name, start, goal = scenario_key(args)
-    sc, _ = load(name, start, goal, rewards_arg(args))  # validate the scenario before any work
+    # validate the scenario before any work
+    sc, _ = load(name, start, goal, rewards_arg(args), s_starts_arg(args))
     methods = (unique(parse_list(args.methods, "--methods"), "--methods") if args.methods
                else list(ALL_METHODS))
     worlds = [check_world(w) for w in unique(parse_list(args.world, "--world"), "--world")]
@@ -48,7 +51,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     episodes = positive(args.episodes, "--episodes", MAX_EPISODES)
     specs = make_specs(name, methods, seeds, episodes, worlds,
                        per_method, start, goal, rewards=rewards_arg(args),
-                       fidelity=fidelity_arg(args))
+                       fidelity=fidelity_arg(args), s_starts=s_starts_arg(args))
     execute, kwargs = _backend(args)
     from scenarios.runs.backends import Progress
 
@@ -60,7 +63,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                    "--record-every"),
             values_every=positive(args.record_values_every, "--record-values-every"),
             detail_seeds=positive(args.record_seeds, "--record-seeds"))
-    print(f"{len(specs)} runs on {sc.name}, rewards {sc.rewards.label()}{rewards_note(args)}")
+    print(f"{len(specs)} runs on {sc.name}, rewards {sc.rewards.label()}{rewards_note(args)}"
+          f"{starts_note(sc)}")
     compile_notice(len(methods))
     out = Path(args.out)
     run_sweep(specs, out, execute, resume=args.resume, recording=recording,

@@ -14,6 +14,7 @@ from scenarios.cli.args import (
     fidelity_arg,
     record_path,
     rewards_arg,
+    s_starts_arg,
     scenario_key,
 )
 from scenarios.runs.spec import load
@@ -27,7 +28,7 @@ def cmd_route(args: argparse.Namespace) -> int:
     from sim.grid.planning import bfs_route
 
     name, start, goal = scenario_key(args)
-    sc, model = load(name, start, goal, rewards_arg(args))
+    sc, model = load(name, start, goal, rewards_arg(args), s_starts_arg(args))
     check_world(args.world)
     fidelity_arg(args)
     if args.png:

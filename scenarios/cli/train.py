@@ -20,8 +20,10 @@ from scenarios.cli.args import (
     record_path,
     rewards_arg,
     rewards_note,
+    s_starts_arg,
     scenario_key,
     seed_value,
+    starts_note,
 )
 from scenarios.runs.spec import ExperimentError, load, make_config
 
@@ -33,7 +35,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     from scenarios.runs.spec import RunOutcome, RunSpec, run_record, scenario_digest
 
     name, start, goal = scenario_key(args)
-    sc, model = load(name, start, goal, rewards_arg(args))
+    sc, model = load(name, start, goal, rewards_arg(args), s_starts_arg(args))
     check_world(args.world)
     positive(args.episodes, "--episodes", MAX_EPISODES)
     seed_value(args.seed, "--seed")
@@ -42,9 +44,11 @@ def cmd_train(args: argparse.Namespace) -> int:
     cfg = make_config(args.method, parse_overrides(args.set))
     fidelity = fidelity_arg(args)
     spec = RunSpec(name, args.method, args.seed, args.episodes, args.world, start=start,
-                   goal=goal, rewards=rewards_arg(args), fidelity=fidelity)
+                   goal=goal, rewards=rewards_arg(args), fidelity=fidelity,
+                   s_starts=s_starts_arg(args))
     record = record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
-    problem = {"scenario": scenario_digest(name, start, goal, rewards_arg(args)),
+    problem = {"scenario": scenario_digest(name, start, goal, rewards_arg(args),
+                                           s_starts_arg(args)),
                "rewards": sc.rewards.label()}
     rs = streams(args.seed)  # the same streams as a run of `rnhql compare`
     rng = rs.learner
@@ -55,7 +59,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         resume = load_checkpoint(args.resume, args.method, model.n_states, geometry_of(model))
         resume.check_problem(problem)
     print(f"{cfg.name} on {sc.name} ({args.world}), seed {args.seed}, {args.episodes} episodes, "
-          f"rewards {sc.rewards.label()}{rewards_note(args)}")
+          f"rewards {sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
     recorder = plan = observer = None
     if record is not None:
         from scenarios.recording.hooks import GridRecorder, RecordPlan

@@ -48,14 +48,16 @@ Overrides = tuple[tuple[str, float], ...]
 def make_specs(scenario: str, methods: Sequence[str], seeds: Sequence[int], episodes: int,
                worlds: Sequence[str], overrides: Overrides | dict[str, Overrides] = (),
                start=None, goal=None, drive_final: bool = False,
-               rewards: str | None = None, fidelity: str | None = None) -> list[RunSpec]:
+               rewards: str | None = None, fidelity: str | None = None,
+               s_starts: float | None = None) -> list[RunSpec]:
     """One spec per world x method x seed; ``overrides`` for all methods, or per method."""
     def of(m: str) -> Overrides:
         return overrides.get(m, ()) if isinstance(overrides, dict) else overrides
 
     return [RunSpec(scenario=scenario, method=m, seed=s, episodes=episodes, world=w,
                     overrides=of(m), start=start, goal=goal, drive_final=drive_final,
-                    rewards=rewards, fidelity=fidelity if w == "physics" else None)
+                    rewards=rewards, fidelity=fidelity if w == "physics" else None,
+                    s_starts=s_starts)
             for w in worlds for m in methods for s in seeds]
 
 
@@ -151,7 +153,8 @@ def assemble(specs: Sequence[RunSpec], runs: list[dict[str, Any]]) -> dict[str, 
         "scenario": {"name": sc.name, "source": sc.source, "size_cells": [sc.nx, sc.ny],
                      "start": list(sc.start), "goal": list(sc.goal),
                      "rewards": {"scheme": getattr(rw, "scheme", "custom"), "goal": rw.goal,
-                                 "bump": rw.bump, "step": rw.step}},
+                                 "bump": rw.bump, "step": rw.step},
+                     "s_start_share": sc.s_start_share},
         "world": ",".join(worlds),
         "fidelity": next((s.fidelity_spec.label for s in specs if s.world == "physics"), None),
         "episodes": spec0.episodes,

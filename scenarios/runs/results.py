@@ -118,8 +118,11 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
               f"{rw['step']:g})" if rw else "rewards as in the scenario")
     fid = results.get("fidelity")
     world = f"{results['world']}" + (f" (physics fidelity `{fid}`)" if fid else "")
+    share = results["scenario"].get("s_start_share") or 0.0
+    starts = (f", {share:.0%} of episodes start at S (the rest on random free cells)"
+              if share > 0 else "")
     lines = [f"# {results['scenario']['name']}: {results['episodes']} episodes, "
-             f"world {world}, {scheme}",
+             f"world {world}, {scheme}{starts}",
              "",
              f"Optimal route S -> G: {results['optimal_route_length']} moves (BFS). "
              "Figures are median [25th, 75th percentile] over seeds (type-7 quantiles). "

@@ -19,7 +19,7 @@ import numpy as np
 
 from sim.errors import InputError
 from sim.grid import TabularModel, build_model
-from sim.scenario import Cell, Scenario, rewards_from_text
+from sim.scenario import Cell, Scenario, rewards_from_text, validate_shape
 from sim.scenario_io import resolve_scenario
 
 WORLDS = ("grid", "physics")
@@ -59,12 +59,14 @@ class RunSpec:
     #                             scenario's own)
     drive_final: bool = False  # grid runs: also drive the final greedy policy in physics
     fidelity: str | None = None  # --fidelity of the physics world (None: exact)
+    s_starts: float | None = None  # --s-starts: share of episodes starting at S (None: the
+    #                                scenario's own s_start_share)
     recording: RecordOptions | None = None  # None: not recorded (never part of the key)
 
     @property
-    def problem(self) -> tuple[str, Cell | None, Cell | None, str | None]:
-        """What :func:`load` needs: (scenario, start, goal, rewards)."""
-        return self.scenario, self.start, self.goal, self.rewards
+    def problem(self) -> tuple[str, Cell | None, Cell | None, str | None, float | None]:
+        """What :func:`load` needs: (scenario, start, goal, rewards, s_starts)."""
+        return self.scenario, self.start, self.goal, self.rewards, self.s_starts
 
     @property
     def key(self) -> str:
@@ -94,26 +96,32 @@ class RunSpec:
 
 @lru_cache(maxsize=8)
 def load(scenario: str, start: Cell | None = None, goal: Cell | None = None,
-         rewards: str | None = None) -> tuple[Scenario, TabularModel]:
-    """The scenario (with ``rewards`` replacing its own scheme, if given) and its grid model."""
+         rewards: str | None = None, s_starts: float | None = None
+         ) -> tuple[Scenario, TabularModel]:
+    """The scenario (with ``rewards`` replacing its own scheme and ``s_starts`` its share of
+    episodes starting at S, if given) and its grid model."""
     sc = resolve_scenario(scenario, start, goal)
     if rewards is not None:
         sc = dataclasses.replace(sc, rewards=rewards_from_text(rewards))
+    if s_starts is not None:
+        sc = dataclasses.replace(sc, s_start_share=float(s_starts))
+        validate_shape(sc)
     return sc, build_model(sc)
 
 
 @lru_cache(maxsize=64)
 def scenario_digest(scenario: str, start: Cell | None = None, goal: Cell | None = None,
-                    rewards: str | None = None) -> str:
+                    rewards: str | None = None, s_starts: float | None = None) -> str:
     """12 hex digits of a hash of what the scenario *is*: its resolved content (geometry,
     robot, rewards, episode length, S, G), not the file it came from."""
     import hashlib
     import json
 
-    sc, _ = load(scenario, start, goal, rewards)
+    sc, _ = load(scenario, start, goal, rewards, s_starts)
     fields = {k: v for k, v in dataclasses.asdict(sc).items()
               if k not in ("name", "source", "description")
-              and not (k == "physics" and v is None)}  # (digests from before [physics] hold)
+              and not (k == "physics" and v is None)  # (digests from before these fields hold)
+              and not (k == "s_start_share" and v == 0.0)}
     blob = json.dumps(fields, sort_keys=True, default=repr).encode()
     return hashlib.sha256(blob).hexdigest()[:12]
 

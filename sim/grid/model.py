@@ -57,6 +57,17 @@ class TabularModel:
         return int(self.distance_to_goal[self.start])
 
 
+def episode_starts(free: np.ndarray, start: int, s_share: float) -> np.ndarray:
+    """int32: the states an episode's start is drawn from, uniformly. The free cells that
+    reach G, and with ``s_share`` > 0 the start S repeated so that it is drawn with that
+    probability (the draw stays one uniform index, in every world and learner)."""
+    free = free.astype(np.int32)
+    if s_share <= 0.0:
+        return free
+    extra = round(s_share * len(free) / (1.0 - s_share))
+    return np.concatenate([free, np.full(extra, start, np.int32)])
+
+
 def build_model(sc: Scenario) -> TabularModel:
     """Rasterise ``sc`` and export its grid dynamics. Assumes ``sc`` is validated."""
     disc = Discretiser.from_scenario(sc)
@@ -74,7 +85,8 @@ def build_model(sc: Scenario) -> TabularModel:
     terminal = np.zeros(n, dtype=bool)
     terminal[goal] = True
     next_state[goal] = goal
-    start_states = np.flatnonzero(dist > 0).astype(np.int32)
+    start_states = episode_starts(np.flatnonzero(dist > 0), disc.index(*sc.start),
+                                  sc.s_start_share)
     for arr in (next_state, reward, terminal, start_states):
         arr.setflags(write=False)
     coords = disc.centres()

@@ -33,7 +33,7 @@ import pymunk
 
 from sim.files import atomic_path
 from sim.grid.actions import N_ACTIONS
-from sim.grid.model import TabularModel, build_model
+from sim.grid.model import TabularModel, build_model, episode_starts
 from sim.grid.planning import breadth_first, distances_to
 from sim.physics.static import PhysicsConfig
 from sim.scenario import Scenario
@@ -49,7 +49,8 @@ def cache_dir() -> Path:
 def digest(sc: Scenario, config: PhysicsConfig) -> str:
     """What the graph depends on: the scenario's content, the physics config, pymunk."""
     fields = {k: v for k, v in dataclasses.asdict(sc).items()
-              if k not in ("name", "source", "description", "rewards", "physics")}
+              if k not in ("name", "source", "description", "rewards", "physics",
+                           "s_start_share")}
     blob = json.dumps([FORMAT, pymunk.version, fields, dataclasses.asdict(config)],
                       sort_keys=True, default=repr)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
@@ -104,7 +105,7 @@ def model_from_transitions(sc: Scenario, nxt: np.ndarray) -> TabularModel:
     reward[nxt == goal] = rw.goal
     reward[goal] = 0.0
     dist = distances_to(nxt, goal)
-    start_states = np.flatnonzero(dist > 0).astype(np.int32)
+    start_states = episode_starts(np.flatnonzero(dist > 0), grid.start, sc.s_start_share)
     for arr in (nxt, reward, dist, start_states):
         arr.setflags(write=False)
     return dataclasses.replace(grid, next_state=nxt, reward=reward, distance_to_goal=dist,

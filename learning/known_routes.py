@@ -1,0 +1,76 @@
+"""Known routes: every cell's shortest route to G over the moves the agent has seen work.
+
+An optimistic agent acts on the free-space assumption (a move it has not tried
+is free), which is what makes it explore; but a greedy test that trusts the same
+assumption walks into the first untried move that is a wall. On a 256 x 256 city
+map (``Berlin_1_256``, a 516-move optimum) RNH-QL+'s greedy route flipped between
+the optimum and "no G" for over a thousand episodes after first finding it: the
+route's cells had untried moves valued by look-ahead, and its tried moves were
+ranked by Q values still catching up with a potential that moved under them.
+
+A route over moves *seen to work* has neither problem. The moves seen to work
+only grow, so the known distance of a cell only falls, and once the optimal
+route has been walked the known route from S is optimal and stays so. This is
+what a model-based agent exploits (certainty equivalence over what it knows),
+while it keeps acting optimistically. Cells with no known route fall back to
+the method's own greedy choice.
+
+The distances are one BFS back from G over those moves, re-run only when a move
+works for the first time and a greedy choice is asked for: O(states) per test,
+nothing per training step but a flag.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from learning.free_space import back_move
+
+
+class KnownRoutes(NamedTuple):
+    distance: np.ndarray  # int32[nS]; moves to G over moves seen to work (-1: none known)
+    queue: np.ndarray  # int32[nS]; the BFS order (cells with a known route, G first)
+    stale: np.ndarray  # bool[1]; a move worked for the first time since the last BFS
+
+
+def new_known_routes(n_s: int) -> KnownRoutes:
+    return KnownRoutes(np.full(n_s, -1, np.int32), np.zeros(n_s, np.int32),
+                       np.ones(1, np.bool_))
+
+
+@njit(cache=True)
+def known_distances(nb, works, dist, queue, goal):
+    """BFS from G backwards over the moves seen to work: ``works[u, a] > 0`` for the move
+    from u to its neighbour ``nb[u, a]`` (a move that works reaches that neighbour)."""
+    for s in range(dist.shape[0]):
+        dist[s] = -1
+    dist[goal] = 0
+    queue[0] = goal
+    head, tail = 0, 1
+    while head < tail:
+        v = queue[head]
+        head += 1
+        for a in range(nb.shape[1]):
+            u = nb[v, a]
+            if u < 0 or dist[u] >= 0 or works[u, back_move(a)] == 0:
+                continue
+            dist[u] = dist[v] + 1
+            queue[tail] = u
+            tail += 1
+
+
+@njit(cache=True, inline="always")
+def known_move(nb, works, dist, s):
+    """The first move (lowest index) from s along a shortest known route; -1 if s has none
+    (the distances must be fresh: see :func:`known_distances`)."""
+    d = dist[s]
+    if d <= 0:
+        return -1
+    for a in range(nb.shape[1]):
+        u = nb[s, a]
+        if u >= 0 and works[s, a] > 0 and dist[u] == d - 1:
+            return a
+    return -1

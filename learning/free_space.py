@@ -110,3 +110,95 @@ def distances_change(nb, dist, blocked, s, a):
         if v >= 0 and dist[v] == ds - 1 and not blocked[s, b]:
             return False
     return True
+
+
+@njit(cache=True)
+def repair_distances(nb, blocked, dist, queue, goal, s):
+    """The distances after s's move was newly blocked (``blocked`` already says so), repaired
+    where they change instead of re-run over every state; returns the states whose
+    distance changed, or ``[-1]`` after a full BFS (a state lost its last route, so the set
+    of reachable states, and with it ``queue``, changed).
+
+    Unit-weight LPA*-style repair: (1) the states whose distance must grow are found level
+    by level from s: a state one move further than an affected one, whose every move to a
+    neighbour at its distance minus one leads into the affected set; (2) their new
+    distances come from a multi-source search inside the set, each seeded by its best
+    unaffected neighbour, merged in distance order (sorted seeds, then a FIFO). Cost:
+    O(affected states), not O(states) (measured on mazes, where most new walls changed
+    distances: see BENCHMARKS.md). ``queue`` keeps the reachable states, in an order no
+    longer sorted by distance (:func:`learning.rnh_ql_plus.optimism.refresh_values` needs
+    only the set)."""
+    n_a = nb.shape[1]
+    affected = np.zeros(dist.shape[0], np.bool_)
+    order = np.empty(64, np.int32)
+    order[0] = s
+    affected[s] = True
+    n_aff = 1
+    head = 0
+    while head < n_aff:
+        x = order[head]
+        head += 1
+        dx = dist[x]
+        for b in range(n_a):
+            v = nb[x, b]  # v reaches x by the opposite move
+            if v < 0 or affected[v] or dist[v] != dx + 1 or blocked[v, back_move(b)]:
+                continue
+            keep = False
+            for c in range(n_a):
+                w = nb[v, c]
+                if w >= 0 and not blocked[v, c] and dist[w] == dx and not affected[w]:
+                    keep = True
+                    break
+            if not keep:
+                affected[v] = True
+                if n_aff == order.shape[0]:
+                    grown = np.empty(2 * n_aff, np.int32)
+                    grown[:n_aff] = order
+                    order = grown
+                order[n_aff] = v
+                n_aff += 1
+    order = order[:n_aff]
+    seed_d = np.full(n_aff, -1, np.int64)
+    for i in range(n_aff):
+        v = order[i]
+        best = -1
+        for c in range(n_a):
+            w = nb[v, c]
+            if w >= 0 and not blocked[v, c] and not affected[w] and dist[w] >= 0:
+                if best < 0 or dist[w] + 1 < best:
+                    best = dist[w] + 1
+        seed_d[i] = best
+    for i in range(n_aff):
+        dist[order[i]] = -1
+    by_d = np.argsort(seed_d, kind="mergesort")
+    p = 0
+    while p < n_aff and seed_d[by_d[p]] < 0:
+        p += 1
+    fifo = np.empty(n_a * n_aff + 1, np.int32)
+    fifo_d = np.empty(n_a * n_aff + 1, np.int64)
+    f_head, f_tail = 0, 0
+    left = n_aff
+    while left > 0 and (p < n_aff or f_head < f_tail):
+        if f_head == f_tail or (p < n_aff and seed_d[by_d[p]] <= fifo_d[f_head]):
+            v = order[by_d[p]]
+            d = seed_d[by_d[p]]
+            p += 1
+        else:
+            v = fifo[f_head]
+            d = fifo_d[f_head]
+            f_head += 1
+        if not affected[v]:
+            continue  # settled already, at a distance no larger
+        affected[v] = False
+        dist[v] = d
+        left -= 1
+        for b in range(n_a):
+            u = nb[v, b]
+            if u >= 0 and affected[u] and not blocked[u, back_move(b)]:
+                fifo[f_tail] = u
+                fifo_d[f_tail] = d + 1
+                f_tail += 1
+    if left > 0:  # some state has no route left: rebuild the distances and the queue
+        bfs_distances(nb, blocked, dist, queue, goal)
+        return np.full(1, -1, np.int32)
+    return order

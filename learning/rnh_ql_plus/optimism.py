@@ -119,3 +119,21 @@ def observe_rewards(r_goal_seen, r_free_seen, s, r, s2, terminated):
         r_free_seen[0] = r
         return True
     return False
+
+
+@njit(cache=True)
+def revalue(y, stamp, dist, changed, gamma):
+    """y(s) for the repaired states only (every one still has a route: a repair that cut
+    one re-ran the BFS and returned ``[-1]``, and the caller marks the cache stale)."""
+    if stamp[0] < 0.0:
+        return
+    r_goal = stamp[0]
+    r_free = stamp[1]
+    for i in range(changed.shape[0]):
+        s = changed[i]
+        d = dist[s]
+        if d == 0:
+            y[s] = 0.0
+        else:
+            gd = gamma ** (d - 1)
+            y[s] = r_free * (1.0 - gd) / (1.0 - gamma) + gd * r_goal

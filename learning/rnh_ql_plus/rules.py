@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from learning.free_space import bfs_distances, distances_change
+from learning.free_space import bfs_distances, distances_change, repair_distances
 from learning.known_routes import known_distances, known_move
 from learning.move_model import (
     never_worked,
@@ -43,7 +43,13 @@ from learning.move_model import (
 )
 from learning.rnh_ql_plus.config import Potential
 from learning.rnh_ql_plus.features import leak_free_edge, leak_free_enter
-from learning.rnh_ql_plus.optimism import ensure_values, goal_reward, mark_stale, observe_rewards
+from learning.rnh_ql_plus.optimism import (
+    ensure_values,
+    goal_reward,
+    mark_stale,
+    observe_rewards,
+    revalue,
+)
 from learning.tabular import (
     argmax_drawn,
     argmax_first,
@@ -358,6 +364,18 @@ def plan(par, q, w, on, centre, y, phi_row, succ, to_goal, reward, works, fails,
         q_learning(q, ps, pa, pr, ps2, pterm, alpha, gamma, pf)
 
 
+@njit(**COLD)
+def repair_model(nb, blocked, dist, queue, goal, y, stamp, gamma, s):
+    """A new wall at s changed distances: repair them and the values of the states whose
+    distance changed (O(those states)); after a repair that fell back to a full BFS, mark
+    the values stale."""
+    changed = repair_distances(nb, blocked, dist, queue, goal, s)
+    if changed[0] < 0:
+        mark_stale(stamp)
+    else:
+        revalue(y, stamp, dist, changed, gamma)
+
+
 @njit(**HOOK)
 def update(st, s, a, r, s2, terminated, rng):
     """Real step: F from the cached Phi(s) and Phi(s'); Q(-lambda) update; V_NN update;
@@ -430,8 +448,11 @@ def update(st, s, a, r, s2, terminated, rng):
     # grid and at the exact fidelity a move's outcome never changes)
     if optimistic and now_fail != was_fail and (
             was_fail or distances_change(nb, dist, blocked, s, a)):
-        bfs_distances(nb, blocked, dist, queue, goal)
-        mark_stale(stamp)
+        if was_fail:  # a wall that moved after all (noisy worlds): distances may fall
+            bfs_distances(nb, blocked, dist, queue, goal)
+            mark_stale(stamp)
+        else:
+            repair_model(nb, blocked, dist, queue, goal, y, stamp, gamma, s)
         stale = True
     if stale and optimistic:
         ensure_values(y, stamp, r_goal_seen, r_free_seen, dist, queue, gamma)

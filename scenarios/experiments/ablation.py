@@ -45,6 +45,7 @@ VARIANTS: list[tuple[str, str, tuple[tuple[str, float], ...]]] = [
      (("v_target", 5),)),
     ("rnh-ql+ without look-ahead", "rnh-ql+", (("lookahead", 0),)),
     ("rnh-ql+ without planning", "rnh-ql+", (("n_planning", 0),)),
+    ("rnh-ql+ without the known-route test", "rnh-ql+", (("known_route", 0),)),
     ("dyna-q", "dyna-q", ()),
     ("dyna-q, 10 planning updates (rnh-ql+'s budget)", "dyna-q", (("n_planning", 10),)),
     ("q-lambda", "q-lambda", ()),

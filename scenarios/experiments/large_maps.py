@@ -20,14 +20,11 @@ free cell can reach every other.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
 from sim.grid.planning import grid_distances
 
 KINDS = ("city", "maze", "rooms", "random", "caves")
-SHARED_MAPS = Path(__file__).resolve().parents[3] / "shared" / "data" / "maps"
 
 
 def largest_component(free: np.ndarray) -> np.ndarray:
@@ -135,9 +132,9 @@ def caves(size: int, seed: int, fill: float = 0.45, rounds: int = 5) -> np.ndarr
 def city(size: int, seed: int = 0) -> np.ndarray:
     """Berlin_1_256 (the seed is unused: the streets are the map's), scaled up by whole
     cells to ``size`` (256 or a multiple)."""
-    from scenarios.experiments.suite import read_map
+    from scenarios.experiments.suite import MAPS_DIR, read_map
 
-    free = read_map(SHARED_MAPS / "Berlin_1_256.map")
+    free = read_map(MAPS_DIR / "Berlin_1_256.map")
     f = size // free.shape[0]
     if f < 1 or f * free.shape[0] != size:
         raise ValueError(f"city maps come in multiples of {free.shape[0]} cells, not {size}")

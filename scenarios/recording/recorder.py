@@ -342,8 +342,9 @@ class Recorder:
             episode=int(episode), step=max(self._step - 1, 0),
             v_nn=None if v_nn is None else self._heat(v_nn, value_range),
             max_q=self._heat(q.max(axis=1), value_range),
-            origins=(m.coords[s] - 0.3 * d).astype(np.float32),
-            vectors=(0.6 * d).astype(np.float32), optimal=ok))
+            # most of a cell long: at a few pixels a cell, a shorter arrow is a dot
+            origins=(m.coords[s] - 0.42 * d).astype(np.float32),
+            vectors=(0.84 * d).astype(np.float32), optimal=ok))
         self._add_scalars("policy_optimal", np.array([episode], np.int64),
                           np.array([float(ok.mean()) if len(s) else 0.0]))
         self._rows += m.n_states // 10

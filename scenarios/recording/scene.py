@@ -130,7 +130,7 @@ def meta_markdown(meta: dict[str, Any], sc: Scenario, prefix: str) -> str:
 * **Map**: dark discs are obstacles (true radii), blue-grey cells are blocked for the robot's
   disc (radius + clearance), green S / amber G are start and goal, the blue line is the BFS
   shortest route. Orange is a training episode, purple a greedy test from S; dots mark the
-  cells it visited, pink points are contacts (bumps). The red disc labelled "robot" and its
+  cells it visited, pink points are contacts (bumps). The red disc ("robot" in the key) and its
   red arrow are the robot and its heading.
 * **Timelines**: `episode` is the training episode (curves, heatmaps, the latest recorded
   trajectory). `step` plays the recorded episodes back to back, one row per move
@@ -228,8 +228,10 @@ def log_scene(rec: rr.RecordingStream, prefix: str, sc: Scenario, model: Tabular
                                        labels=[k[0] for k in keys], show_labels=True),
             static=True)
     # styles of the per-episode entities (static, so the columns carry data only)
+    # the robot is named in the colour key, not on the map: a label riding on the robot
+    # overlapped S at the start of every test (and G at its end)
     rec.log(f"{w}/robot", rr.Points2D.from_fields(radii=sc.robot.radius_m, colors=[ROBOT],
-                                                  labels=["robot"], show_labels=True,
+                                                  labels=["robot"], show_labels=False,
                                                   draw_order=Z_ROBOT), static=True)
     rec.log(f"{w}/robot", rr.Arrows2D.from_fields(radii=0.08 * c, colors=[ROBOT],
                                                   draw_order=Z_HEADING), static=True)
@@ -241,7 +243,7 @@ def log_scene(rec: rr.RecordingStream, prefix: str, sc: Scenario, model: Tabular
                                                         draw_order=Z_VISITED), static=True)
         rec.log(f"{k}/contacts", rr.Points2D.from_fields(radii=0.18 * c, colors=[CONTACT],
                                                          draw_order=Z_CONTACT), static=True)
-    rec.log(f"{w}/values/policy", rr.Arrows2D.from_fields(radii=0.07 * c,
+    rec.log(f"{w}/values/policy", rr.Arrows2D.from_fields(radii=0.13 * c,
                                                           draw_order=Z_POLICY), static=True)
     for name in ("v_nn", "max_q"):  # heat maps: one value per cell, scaled to metres
         rec.log(f"{w}/values/{name}", rr.Transform3D(scale=[c, c, 1.0]),

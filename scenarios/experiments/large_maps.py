@@ -10,7 +10,7 @@ Moving AI frame (row 0 at the top), and written as ``.map`` files:
   1-3 cells in each wall between neighbours;
 * ``random``: single blocked cells at a density (Moving AI's random-*-20 kind);
 * ``caves``: a game-like map, open areas joined by narrow passages (a cellular
-  automaton over random noise, 5 smoothing rounds);
+  automaton over random noise, 5 rounds of the 4-5 rule);
 * ``city``: ``Berlin_1_256`` as it is at 256, and each cell as 2 x 2 at 512
   (the same streets, twice the states: the only city at that size here).
 
@@ -117,15 +117,16 @@ def random_cells(size: int, seed: int, density: float = 0.2) -> np.ndarray:
 
 
 def caves(size: int, seed: int, fill: float = 0.45, rounds: int = 5) -> np.ndarray:
-    """Open areas and narrow passages: a cell becomes rock with 5 or more rock cells among
-    its 8 neighbours (the border counts as rock), repeated ``rounds`` times."""
+    """Open areas and narrow passages (a game map's kind): random rock at ``fill``, then
+    ``rounds`` of the 4-5 rule, a cell is rock if 5 or more of its 8 neighbours are, or if
+    it is rock and 4 are (the border counts as rock). About two thirds stays free."""
     rng = np.random.default_rng(seed)
     rock = rng.random((size, size)) < fill
     for _ in range(rounds):
         padded = np.pad(rock, 1, constant_values=True)
         count = sum(padded[1 + dr:size + 1 + dr, 1 + dc:size + 1 + dc]
                     for dr in (-1, 0, 1) for dc in (-1, 0, 1) if (dr, dc) != (0, 0))
-        rock = count >= 5
+        rock = (count >= 5) | (rock & (count >= 4))
     return largest_component(~rock)
 
 

@@ -82,6 +82,21 @@ def test_resume_skips_finished_runs(tmp_path):
     assert [r["seed"] for r in results["runs"]] == [0, 1, 2]
 
 
+def test_resume_after_a_finished_sweep_runs_only_what_is_new(tmp_path):
+    specs = make_specs("paper-40", ["st-ql"], [0, 1], 10, ["grid"])
+    run_sweep(specs, tmp_path, run_local, jobs=1, figures=False)
+    more = make_specs("paper-40", ["st-ql"], [0, 1, 2], 10, ["grid"])
+    seen = []
+
+    def execute(todo, on_result=None):
+        seen.extend(s.key for s in todo)
+        return run_local(todo, jobs=1, on_result=on_result)
+
+    results = run_sweep(more, tmp_path, execute, resume=True, figures=False)
+    assert seen == [more[2].key]
+    assert [r["seed"] for r in results["runs"]] == [0, 1, 2]
+
+
 def test_a_failed_run_is_reported_and_the_others_kept(tmp_path):
     good = make_specs("paper-40", ["st-ql"], [0], 10, ["grid"])
     bad = RunSpec("paper-40", "st-ql", 1, 10, world="moon")

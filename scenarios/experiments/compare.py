@@ -166,9 +166,18 @@ def assemble(specs: Sequence[RunSpec], runs: list[dict[str, Any]]) -> dict[str, 
 
 
 def read_partial(out_dir: Path) -> dict[str, dict[str, Any]]:
-    """Finished runs of an interrupted sweep, by key (a torn last line is ignored)."""
+    """Finished runs, by key: those of a finished sweep (its ``results.json``), then those
+    of an interrupted one (a torn last line is ignored). So ``--resume`` after a sweep that
+    finished re-runs nothing of it (an extended sweep runs only what is new)."""
     path = out_dir / PARTIAL
     done: dict[str, dict[str, Any]] = {}
+    finished = out_dir / "results.json"
+    if finished.exists():
+        try:
+            for rec in json.loads(finished.read_text(encoding="utf-8")).get("runs", []):
+                done[rec["key"]] = rec
+        except (json.JSONDecodeError, AttributeError, KeyError, TypeError):
+            pass  # not a results file of this tool: only the partial runs count
     if path.exists():
         for line in path.read_text(encoding="utf-8").splitlines():
             try:

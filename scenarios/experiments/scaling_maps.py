@@ -145,4 +145,10 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from sim.errors import InputError
+
+    try:
+        sys.exit(main())
+    except InputError as err:  # one line naming the file, the field and the fix; exit 2
+        print(f"scaling_maps: error: {err}", file=sys.stderr)
+        sys.exit(2)

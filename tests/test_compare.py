@@ -192,3 +192,16 @@ def test_resume_into_a_sweep_of_other_settings_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "another sweep" in err and "Traceback" not in err
     assert main([*base, "--episodes", "4", "--resume"]) == 0  # the same settings resume
+
+
+def test_an_import_broken_by_ctrl_c_counts_as_ctrl_c():
+    from scenarios.experiments.compare import interrupted
+
+    try:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as k:
+            raise ImportError("initialization failed") from k
+    except ImportError as err:
+        assert interrupted(err)
+    assert not interrupted(ImportError("no module named x"))

@@ -23,6 +23,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("rnhql: interrupted", file=sys.stderr)
         code = 130
+    except ImportError as err:  # a Ctrl-C inside a C extension's import surfaces as this
+        cause: BaseException | None = err
+        while cause is not None and not isinstance(cause, KeyboardInterrupt):
+            cause = cause.__cause__ or cause.__context__
+        if cause is None:
+            raise
+        print("rnhql: interrupted", file=sys.stderr)
+        code = 130
     if argv is None and code == 130:
         # the console script, interrupted (its handlers have kept what finished): exit now
         # with 130. Left to the interpreter's shutdown, an interrupt that once hit the

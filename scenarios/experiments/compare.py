@@ -210,10 +210,29 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
         except KeyboardInterrupt:
             _keep_finished(specs, out_dir, recording)
             raise
+        except ImportError as err:
+            if not interrupted(err):
+                raise
+            # Ctrl-C inside a C extension's import (matplotlib's, while the figures are
+            # drawn) surfaces as "ImportError: initialization failed": it is the same Ctrl-C
+            _keep_finished(specs, out_dir, recording)
+            raise KeyboardInterrupt from err
         if recording is not None:
             with _finishing(recording.path):  # every run is done: the recording holds them all
                 gather_parts(specs, recording.path, records=results["runs"])
     return results
+
+
+def interrupted(err: BaseException) -> bool:
+    """Whether ``err`` was caused by a Ctrl-C (a KeyboardInterrupt in its cause chain)."""
+    seen = set()
+    e: BaseException | None = err
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return False
 
 
 @contextlib.contextmanager

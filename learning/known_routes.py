@@ -27,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from learning.free_space import back_move
+from learning.free_space import bfs_distances
 
 
 class KnownRoutes(NamedTuple):
@@ -43,23 +43,10 @@ def new_known_routes(n_s: int) -> KnownRoutes:
 
 @njit(cache=True)
 def known_distances(nb, works, dist, queue, goal):
-    """BFS from G backwards over the moves seen to work: ``works[u, a] > 0`` for the move
-    from u to its neighbour ``nb[u, a]`` (a move that works reaches that neighbour)."""
-    for s in range(dist.shape[0]):
-        dist[s] = -1
-    dist[goal] = 0
-    queue[0] = goal
-    head, tail = 0, 1
-    while head < tail:
-        v = queue[head]
-        head += 1
-        for a in range(nb.shape[1]):
-            u = nb[v, a]
-            if u < 0 or dist[u] >= 0 or works[u, back_move(a)] == 0:
-                continue
-            dist[u] = dist[v] + 1
-            queue[tail] = u
-            tail += 1
+    """The free space's BFS from G (:func:`learning.free_space.bfs_distances`) with every
+    move not seen to work counted as blocked (a move that works reaches ``nb[u, a]``).
+    Runs once per greedy test at most, so the mask it builds costs nothing on a step."""
+    bfs_distances(nb, works == 0, dist, queue, goal)
 
 
 @njit(cache=True, inline="always")

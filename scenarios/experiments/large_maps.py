@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from scenarios.experiments.suite import spanning_tree
 from sim.grid.planning import grid_distances
 
 KINDS = ("city", "maze", "rooms", "random", "caves")
@@ -46,28 +47,12 @@ def maze(size: int, seed: int, corridor: int = 3, braid: float = 0.05) -> np.nda
     rng = np.random.default_rng(seed)
     pitch = corridor + 1
     n = (size - 1) // pitch
-    free = np.zeros((size, size), dtype=bool)
-    seen = np.zeros((n, n), dtype=bool)
-
-    def carve(r0: int, c0: int, r1: int, c1: int) -> None:
-        free[r0:r1, c0:c1] = True
-
-    for r in range(n):
-        for c in range(n):
-            carve(r * pitch + 1, c * pitch + 1, r * pitch + 1 + corridor, c * pitch + 1 + corridor)
-    stack = [(int(rng.integers(n)), int(rng.integers(n)))]
-    seen[stack[0]] = True
-    while stack:
-        r, c = stack[-1]
-        nbrs = [(r + dr, c + dc) for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1))
-                if 0 <= r + dr < n and 0 <= c + dc < n and not seen[r + dr, c + dc]]
-        if not nbrs:
-            stack.pop()
-            continue
-        nr, nc = nbrs[int(rng.integers(len(nbrs)))]
-        seen[nr, nc] = True
+    lattice = np.zeros(size, dtype=bool)  # the rows (and columns) of the corridors
+    for k in range(n):
+        lattice[k * pitch + 1:k * pitch + 1 + corridor] = True
+    free = np.outer(lattice, lattice)
+    for (r, c), (nr, nc) in spanning_tree(n, rng):
         _open(free, r, c, nr, nc, pitch, corridor)
-        stack.append((nr, nc))
     walls = [(r, c, r + dr, c + dc) for r in range(n) for c in range(n)
              for dr, dc in ((1, 0), (0, 1)) if r + dr < n and c + dc < n]
     for i in rng.permutation(len(walls))[:int(braid * len(walls))]:

@@ -36,17 +36,14 @@ HELD_OUT_SEEDS = (101, 102)
 # ---------------------------------------------------------------- generators (True = free)
 
 
-def maze(seed: int, braid: float = 0.1) -> np.ndarray:
-    """A seeded maze, 1-cell corridors and walls, 25-39 cells a side; ``braid`` of the
-    remaining inner walls between two corridors are knocked out (loops: several routes)."""
-    rng = np.random.default_rng(seed)
-    n = int(rng.integers(12, 20))  # lattice cells per side -> 2n + 1 map cells
-    size = 2 * n + 1
-    free = np.zeros((size, size), dtype=bool)
+def spanning_tree(n: int, rng: np.random.Generator) -> list[tuple[tuple[int, int],
+                                                                   tuple[int, int]]]:
+    """The edges (cell, neighbour) of a random depth-first spanning tree of an n x n
+    lattice, from a random cell: a perfect maze's corridors (every maze generator here)."""
     seen = np.zeros((n, n), dtype=bool)
     stack = [(int(rng.integers(n)), int(rng.integers(n)))]
     seen[stack[0]] = True
-    free[2 * stack[0][0] + 1, 2 * stack[0][1] + 1] = True
+    edges = []
     while stack:
         r, c = stack[-1]
         nbrs = [(r + dr, c + dc) for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1))
@@ -56,9 +53,21 @@ def maze(seed: int, braid: float = 0.1) -> np.ndarray:
             continue
         nr, nc = nbrs[int(rng.integers(len(nbrs)))]
         seen[nr, nc] = True
-        free[2 * nr + 1, 2 * nc + 1] = True
-        free[r + nr + 1, c + nc + 1] = True
+        edges.append(((r, c), (nr, nc)))
         stack.append((nr, nc))
+    return edges
+
+
+def maze(seed: int, braid: float = 0.1) -> np.ndarray:
+    """A seeded maze, 1-cell corridors and walls, 25-39 cells a side; ``braid`` of the
+    remaining inner walls between two corridors are knocked out (loops: several routes)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(12, 20))  # lattice cells per side -> 2n + 1 map cells
+    size = 2 * n + 1
+    free = np.zeros((size, size), dtype=bool)
+    free[1::2, 1::2] = True  # every lattice cell is reached by the spanning tree
+    for (r, c), (nr, nc) in spanning_tree(n, rng):
+        free[r + nr + 1, c + nc + 1] = True
     walls = [(r, c) for r in range(1, size - 1) for c in range(1, size - 1)
              if not free[r, c] and (r % 2) != (c % 2)]
     for i in rng.permutation(len(walls))[:int(braid * len(walls))]:

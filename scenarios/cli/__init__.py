@@ -17,8 +17,7 @@ from collections.abc import Sequence
 
 def main(argv: Sequence[str] | None = None) -> int:
     try:
-        from scenarios.cli.app import main as run
-
+        run = _import_app()
         code = run(argv)
     except KeyboardInterrupt:
         print("rnhql: interrupted", file=sys.stderr)
@@ -41,6 +40,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     if argv is None:  # the console script: nothing after this may turn into a traceback
         signal.signal(signal.SIGINT, signal.SIG_IGN)
     return code
+
+
+def _import_app():
+    """The parser's module, imported with Ctrl-C held until the imports are done: a
+    KeyboardInterrupt raised inside a library's optional import can surface as an
+    ImportError that the library catches and ignores, and the command then ran on as if
+    never interrupted (seen once in CI: exit 0). A Ctrl-C pressed meanwhile is raised
+    right after, as one."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        from scenarios.cli.app import main as run
+
+        return run
+    pressed = []
+    old = signal.signal(signal.SIGINT, lambda *_: pressed.append(True))
+    try:
+        from scenarios.cli.app import main as run
+    finally:
+        signal.signal(signal.SIGINT, old)
+    if pressed:
+        raise KeyboardInterrupt
+    return run
 
 
 __all__ = ["main"]

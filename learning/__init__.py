@@ -8,13 +8,16 @@ duck-typed :class:`TabularMDP` (fused kernels) or a gymnasium env plus a
 :class:`Geometry` (step-by-step agent).
 """
 
+from learning.jitcache import drop_stale_cache, prefer_quick_compile
+
+prefer_quick_compile()  # before anything compiles
+
 from learning.agent import EpisodeLog, StepAgent, make_agent, run_env_episodes
 from learning.checkpoint import Checkpoint, CheckpointError, load_checkpoint, save_checkpoint
 from learning.config import MethodConfig
 from learning.dyna_q import DynaQ
 from learning.geometry import Geometry, TabularMDP, geometry_of
 from learning.haql import HAQL
-from learning.jitcache import drop_stale_cache
 from learning.pfh_rl import PFHRL
 from learning.q_lambda import QLambda
 from learning.q_learning import STQL, QOpt

@@ -113,6 +113,41 @@ def distances_change(nb, dist, blocked, s, a):
 
 
 @njit(cache=True)
+def stable_order(keys):
+    """The indices that sort ``keys`` ascending, equal keys in index order: what
+    ``np.argsort(keys, kind="mergesort")`` gives, as a plain bottom-up merge sort
+    (numba's generic one costs ~1.3 s of compilation)."""
+    n = keys.shape[0]
+    idx = np.arange(n)
+    buf = np.empty(n, np.int64)
+    width = 1
+    while width < n:
+        for lo in range(0, n, 2 * width):
+            mid = min(lo + width, n)
+            hi = min(lo + 2 * width, n)
+            i, j, k = lo, mid, lo
+            while i < mid and j < hi:
+                if keys[idx[j]] < keys[idx[i]]:
+                    buf[k] = idx[j]
+                    j += 1
+                else:
+                    buf[k] = idx[i]
+                    i += 1
+                k += 1
+            while i < mid:
+                buf[k] = idx[i]
+                i += 1
+                k += 1
+            while j < hi:
+                buf[k] = idx[j]
+                j += 1
+                k += 1
+        idx, buf = buf, idx
+        width *= 2
+    return idx
+
+
+@njit(cache=True)
 def repair_distances(nb, blocked, dist, queue, goal, s):
     """The distances after s's move was newly blocked (``blocked`` already says so), repaired
     where they change instead of re-run over every state; returns the states whose
@@ -153,7 +188,8 @@ def repair_distances(nb, blocked, dist, queue, goal, s):
                 affected[v] = True
                 if n_aff == order.shape[0]:
                     grown = np.empty(2 * n_aff, np.int32)
-                    grown[:n_aff] = order
+                    for i in range(n_aff):  # a loop: a slice copy compiles numba's
+                        grown[i] = order[i]  # shape-error formatting (~2 s cold)
                     order = grown
                 order[n_aff] = v
                 n_aff += 1
@@ -170,7 +206,7 @@ def repair_distances(nb, blocked, dist, queue, goal, s):
         seed_d[i] = best
     for i in range(n_aff):
         dist[order[i]] = -1
-    by_d = np.argsort(seed_d, kind="mergesort")
+    by_d = stable_order(seed_d)
     p = 0
     while p < n_aff and seed_d[by_d[p]] < 0:
         p += 1

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from learning.hooks import act, begin, draw_start, end, exploit, update
+from learning.hooks import act, begin, draw_start, end, exploit_call, update
 
 
 @njit(cache=True, nogil=True)
@@ -101,7 +101,7 @@ def greedy_route(st, next_state, terminal, start, max_steps, route):
     route[0] = s
     seen[s] = True
     for t in range(max_steps):
-        s2 = next_state[s, exploit(st, s)]
+        s2 = next_state[s, exploit_call(st, s)]
         route[t + 1] = s2
         if terminal[s2]:
             return t + 1, t + 2
@@ -118,7 +118,7 @@ def on_shortest_fraction(st, next_state, distance, states):
     good = 0
     for i in range(states.shape[0]):
         s = states[i]
-        a = exploit(st, s)
+        a = exploit_call(st, s)
         if distance[next_state[s, a]] == distance[s] - 1:
             good += 1
     return good / max(states.shape[0], 1)
@@ -143,7 +143,7 @@ def epsilon_rollouts(st, next_state, terminal, start, max_steps, eps, n, rng):
             if rng.random() < eps:
                 a = rng.integers(0, n_actions)
             else:
-                a = exploit(st, s)
+                a = exploit_call(st, s)
             s = next_state[s, a]
             if terminal[s]:
                 out[i] = t + 1

@@ -17,7 +17,7 @@ from learning.registry import family_of_state, n_states_of
 @njit(cache=True)
 def _greedy_all(st, out):
     for s in range(out.shape[0]):
-        out[s] = hooks.exploit(st, s)
+        out[s] = hooks.exploit_call(st, s)
 
 
 def greedy_actions(st) -> np.ndarray:

@@ -10,6 +10,7 @@ from learning.free_space import (
     bfs_distances,
     distances_change,
     repair_distances,
+    stable_order,
 )
 
 
@@ -62,3 +63,9 @@ def test_repair_after_each_new_wall_equals_a_full_bfs(seed):
 def test_back_move_undoes_each_move():
     assert [back_move(back_move(a)) for a in range(4)] == [0, 1, 2, 3]
     assert [back_move(a) for a in range(4)] == [1, 0, 3, 2]
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 3, 7, 64, 1000, 4097])
+def test_stable_order_is_numpys_stable_argsort(n):
+    keys = np.random.default_rng(n).integers(-1, 20, n)
+    assert np.array_equal(stable_order(keys), np.argsort(keys, kind="mergesort"))

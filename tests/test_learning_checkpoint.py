@@ -199,3 +199,23 @@ def test_more_episodes_than_asked(saved, paper50_model):
     ck.state.tally.episode[0] = 50
     with pytest.raises(CheckpointError, match="field 'episodes' is 50"):
         train_tabular(RNHQL(), paper50_model, 10, np.random.default_rng(0), resume=ck)
+
+
+def test_rnh_ql_plus_keeps_no_rbf_features_it_never_reads_and_loads_older_checkpoints(
+        tmp_path, paper50_model):
+    from learning import RNHQLPlus
+    from learning.rnh_ql_plus.features import new_features
+
+    geom = geometry_of(paper50_model)
+    agent = make_agent(RNHQLPlus(), geom, np.random.default_rng(0))
+    assert agent.state.feat.on.size == 0 and agent.state.w.size == 0  # no network: no features
+    with_net = make_agent(RNHQLPlus(v_target=3), geom, np.random.default_rng(0))
+    assert with_net.state.feat.on.shape[0] == geom.n_states and with_net.state.w.size > 0
+    # a checkpoint of the default configuration written before: its unused features stored full
+    old_feat = new_features(RNHQLPlus(v_target=3), geom)
+    agent.state = agent.state._replace(feat=old_feat, w=np.zeros(old_feat.anchor.shape[0]),
+                                       v_trace=np.zeros(old_feat.anchor.shape[0]))
+    agent.state.q[5, 1] = 3.0
+    path = save_checkpoint(tmp_path / "old.npz", Checkpoint.of_agent(agent))
+    ck = load_checkpoint(path, method="rnh-ql+", geometry=geom)
+    assert ck.state.q[5, 1] == 3.0 and ck.state.feat.on.size == 0 and ck.state.w.size == 0

@@ -27,3 +27,20 @@ def test_custom_cache_dir_left_alone(tmp_path, monkeypatch):
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "elsewhere"))
     (tmp_path / "a.py").write_text("")
     assert not drop_stale_cache(tmp_path)
+
+
+def _opt_level_after_import(env: dict[str, str]) -> str:
+    import os
+    import subprocess
+    import sys
+
+    code = ("import learning, numba.core.config as c; c.reload_config(); "
+            "print(int(c.OPT))")
+    full = {k: v for k, v in os.environ.items() if k != "NUMBA_OPT"} | env
+    return subprocess.run([sys.executable, "-c", code], env=full, capture_output=True,
+                          text=True, check=True).stdout.strip()
+
+
+def test_kernels_compile_at_O2_unless_the_user_says_otherwise():
+    assert _opt_level_after_import({}) == "2"
+    assert _opt_level_after_import({"NUMBA_OPT": "3"}) == "3"

@@ -97,6 +97,13 @@ class RNHQLPlus(MethodConfig):
                              f"{self.v_target} (the optimistic model's value discounts: "
                              "use v_target 0-2 for gamma = 1)")
 
+    @property
+    def uses_features(self) -> bool:
+        """Whether anything reads the RBF features and V_NN's weights: a network potential
+        (``v_target`` < 4) or leak-free supports. The default (Phi = the optimistic value)
+        keeps them empty."""
+        return self.v_target != Potential.OPTIMISTIC or bool(self.leak_free)
+
     def params(self) -> Params | LeanParams:
         """The compiled rules' scalars. :class:`LeanParams` (same fields) when the potential
         is the optimistic value and leak-free supports, re-basing and Q traces are off: the

@@ -44,7 +44,8 @@ def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> Stat
     n_s, n_a = geom.n_states, geom.n_actions
     feat = new_features(cfg, geom)
     n_c = int(feat.anchor.shape[0])
-    step_v = cfg.beta / float(np.mean(np.sum(feat.base * feat.base, axis=1)))
+    step_v = (cfg.beta / float(np.mean(np.sum(feat.base * feat.base, axis=1)))
+              if n_c else 0.0)  # no features: no V_NN to step
     return State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), np.zeros(n_c), np.zeros(n_c),
                  np.zeros(n_s), feat, new_move_model(n_s, n_a), new_free_space(geom),
                  new_optimism(n_s), new_traces(n_s, n_a), np.zeros((1, n_a)),

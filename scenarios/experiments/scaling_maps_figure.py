@@ -5,7 +5,7 @@
 
 Reads the main sweep (``<kind>-<n>/sweep0/results.json``, not the ablation's) of every
 folder written by :mod:`scenarios.experiments.scaling_maps`, and draws, over the
-number of states (free cells) on log-log axes, each method's median episodes to a
+number of free cells with a route to G on log-log axes, each method's median episodes to a
 stable optimal route (bars: quartiles; a point only where at least half the seeds
 have one) and its median wall time per run, one line per map kind. Beside the PNG it
 writes a table (``.md``) of the points and of each line's exponent: the slope of a
@@ -38,7 +38,7 @@ class Point:
     method: str
     kind: str
     size: int  # cells a side
-    states: int  # free cells the learner can reach
+    states: int  # free cells with a route to G (what the learner can explore)
     seeds: int
     optimal: int  # seeds whose final greedy route is optimal
     episodes: tuple[float | None, float | None, float | None]  # q25, median, q75 [episodes]
@@ -66,7 +66,7 @@ def read_points(folders: Sequence[Path]) -> list[Point]:
                 e, w = st["episodes_to_stable_optimal"], st["wall_time_s"]
                 seeds = int(st["seeds"])
                 found[(method, kind, int(size))] = Point(
-                    method, kind, int(size), int(model.n_states), seeds,
+                    method, kind, int(size), int((model.distance_to_goal >= 0).sum()), seeds,
                     round(st["optimal_route_fraction"] * seeds),
                     (e["q25"], e["median"], e["q75"]), (w["q25"], w["median"], w["q75"]))
     return sorted(found.values(), key=lambda p: (p.method, p.kind, p.size))
@@ -119,7 +119,7 @@ def draw(points: Sequence[Point], path: Path) -> Path:
                                 "wall time per run [s] (median, quartiles)"), strict=True):
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("states (free cells)")
+        ax.set_xlabel("free cells with a route to G")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3, which="both")
     methods = list(dict.fromkeys(p.method for p in points))
@@ -154,7 +154,7 @@ def table(points: Sequence[Point]) -> str:
         for n in sizes:
             p = by.get(n)
             cells.append("–" if p is None else
-                         f"{p.states} states: {p.optimal}/{p.seeds} · {f(p.episodes[1])} "
+                         f"{p.states} cells: {p.optimal}/{p.seeds} · {f(p.episodes[1])} "
                          f"[{f(p.episodes[0])}, {f(p.episodes[2])}] · {p.wall[1]:.2f} s")
         ke = exponent([p.states for p in pts], [p.episodes[1] for p in pts])
         kw = exponent([p.states for p in pts], [p.wall[1] for p in pts])
@@ -178,9 +178,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"scaling_maps_figure: error: {err}", file=sys.stderr)
         return 2
     out = draw(points, args.out)
-    text = ("Cells: free states: seeds optimal · median [q25, q75] episodes to a stable "
-            "optimal route · median wall time per run. Exponents: least-squares slope over "
-            "log states.\n\n" + table(points))
+    text = ("Cells: free cells with a route to G: seeds optimal · median [q25, q75] episodes "
+            "to a stable optimal route · median wall time per run. Exponents: least-squares "
+            "slope over log free cells.\n\n" + table(points))
     atomic_write_text(args.out.with_suffix(".md"), text)
     print(text)
     print(f"wrote {out} and {args.out.with_suffix('.md')}", file=sys.stderr)

@@ -1,0 +1,75 @@
+"""Peak memory and checkpoint size per method and map size (issue 22, item 4).
+
+    python -m scenarios.bench.memory                          # rooms, 64..512, five methods
+    python -m scenarios.bench.memory --sizes 256 --methods rnh-ql+ --kind maze
+
+Each measurement is one ``rnhql train MAP --method M --episodes E --save`` in a fresh
+process, with the method's kernels compiled beforehand (compiling a kernel takes
+up to ~300 MB for a few seconds, once per machine): the peak resident set size is the
+kernel's ``ru_maxrss`` of that process (``os.wait4``), the checkpoint size the ``.npz``
+on disk. A bare ``python -c "import learning, sim, scenarios.cli.app"`` is measured
+too: the floor every run pays.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+METHODS = ("rnh-ql+", "haql", "rnh-ql", "dyna-q", "st-ql")
+
+
+def peak_rss_mb(cmd: list[str], env: dict[str, str]) -> tuple[float, int]:
+    """(peak RSS [MB] of the process, exit status)."""
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    err = proc.stderr.read().decode() if proc.stderr else ""
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): {err.strip()[-400:]}")
+    return usage.ru_maxrss / 1024.0, proc.returncode  # ru_maxrss is in KiB on Linux
+
+
+def main(argv: list[str] | None = None) -> int:
+    from scenarios.experiments.scaling_maps import write_problem
+
+    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--sizes", default="64,128,256,512", help="map sizes [cells a side]")
+    p.add_argument("--kind", default="rooms", help="map kind (scenarios.experiments.large_maps)")
+    p.add_argument("--methods", default=",".join(METHODS), help="methods")
+    p.add_argument("--episodes", type=int, default=20, help="training episodes per run")
+    p.add_argument("--map-seed", type=int, default=7, help="generator seed of the maps")
+    args = p.parse_args(argv)
+    methods = [m for m in args.methods.split(",") if m]
+    sizes = [int(s) for s in args.sizes.split(",")]
+    with tempfile.TemporaryDirectory(prefix="rnhql-memory-") as tmp:
+        folder = Path(tmp)
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(folder / "numba"))
+        floor, _ = peak_rss_mb([sys.executable, "-c", "import learning, sim, scenarios.cli.app"],
+                               env)
+        print(f"floor (imports only): {floor:.0f} MB")
+        print("| method | " + " | ".join(f"{n}²: peak RSS · checkpoint" for n in sizes) + " |")
+        print("|---|" + "---|" * len(sizes))
+        tomls = {n: write_problem(args.kind, n, args.map_seed, 0.1, folder / "maps")[0]
+                 for n in sizes}
+        for m in methods:  # compile first: the figures are the run's, not numba's
+            peak_rss_mb([sys.executable, "-m", "scenarios.cli", "train", str(tomls[sizes[0]]),
+                         "--method", m, "--episodes", "1"], env)
+            cells = []
+            for n in sizes:
+                ckpt = folder / f"{m}-{n}.npz"
+                rss, _ = peak_rss_mb([sys.executable, "-m", "scenarios.cli", "train",
+                                      str(tomls[n]), "--method", m, "--episodes",
+                                      str(args.episodes), "--save", str(ckpt)], env)
+                cells.append(f"{rss:.0f} MB · {ckpt.stat().st_size / 1e6:.1f} MB")
+            print(f"| {m} | " + " | ".join(cells) + " |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

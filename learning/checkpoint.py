@@ -212,6 +212,8 @@ def _state(data, cfg: MethodConfig, path: Path, geometry: Geometry | None,
 
 def _stored(data, path: Path, name: str, want: np.ndarray) -> np.ndarray:
     """The stored array ``state_<name>``, of ``want``'s dtype and rank."""
+    if want.size == 0 and f"state_{name}" not in data.files:
+        return want  # an empty field added after the checkpoint was written: nothing to read
     arr = _field(data, f"state_{name}", path)
     if arr.dtype != want.dtype or arr.ndim != want.ndim:
         raise CheckpointError(f"{path}: field 'state_{name}' is {arr.dtype}[{arr.ndim}d], "

@@ -60,6 +60,12 @@ class RNHQLPlus(MethodConfig):
       tried yet (Wiewiora 2003: shaping = initialising Q with Phi). Off by default:
       values learned while the optimistic model was too optimistic would stay
       inflated after it learns of a wall (measured: no route on zigzag-50).
+    * ``sweeping=1``: prioritized sweeping (Moore & Atkeson 1993) of the planned updates:
+      after a real step the seen pairs leading into s are queued by their TD error
+      relative to the optimistic value of their state, and the ``n_planning`` updates
+      take the largest first (each queueing its own predecessors); uniform replays fill
+      the budget when the queue runs dry. Needs Phi = the optimistic value
+      (``v_target=4``, no ``rebase``).
     * ``known_route=1`` (default): the greedy test (never the behaviour) follows, from a
       cell with one, the shortest route over moves seen to work
       (:mod:`learning.known_routes`); elsewhere the greedy choice above. The moves seen
@@ -89,6 +95,7 @@ class RNHQLPlus(MethodConfig):
     lookahead: int = 1  # 1: untried actions valued by one step of look-ahead on Phi
     n_fit: int = 0  # v_target = 3: extra V_NN fits at random states per real step [fits]
     known_route: int = 1  # 1: the greedy test follows the shortest route of moves seen to work
+    sweeping: int = 0  # 1: planned updates go to the pairs whose values changed most first
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -96,6 +103,10 @@ class RNHQLPlus(MethodConfig):
             raise ValueError(f"RNHQLPlus.gamma = {self.gamma!r} must be < 1 with v_target = "
                              f"{self.v_target} (the optimistic model's value discounts: "
                              "use v_target 0-2 for gamma = 1)")
+        if self.sweeping and (self.v_target != Potential.OPTIMISTIC or self.rebase):
+            raise ValueError(f"RNHQLPlus.sweeping = {self.sweeping!r} needs v_target = 4 and "
+                             "rebase = 0 (its priorities read Phi as the optimistic value): "
+                             "set sweeping = 0 or use those settings")
 
     @property
     def uses_features(self) -> bool:
@@ -117,7 +128,8 @@ class RNHQLPlus(MethodConfig):
             float(self.warmup_episodes), float(freeze), int(self.n_planning),
             int(self.v_target), float(self.shaping_scale), float(self.lam_q),
             float(self.trace_min), bool(self.normalise), bool(self.leak_free),
-            bool(self.rebase), bool(self.lookahead), int(self.n_fit), bool(self.known_route))
+            bool(self.rebase), bool(self.lookahead), int(self.n_fit), bool(self.known_route),
+            bool(self.sweeping))
 
 
 
@@ -139,6 +151,7 @@ class Params(NamedTuple):
     lookahead: bool
     n_fit: int
     known_route: bool
+    sweeping: bool
 
 
 # The same fields; a state holding these compiles the lean kernel (see RNHQLPlus.params).

@@ -10,6 +10,7 @@ from learning.free_space import FreeSpace, new_free_space
 from learning.geometry import Geometry
 from learning.known_routes import KnownRoutes, new_known_routes
 from learning.move_model import MoveModel, new_move_model
+from learning.priority_queue import PairQueue, new_pair_queue
 from learning.rnh_ql_plus.config import Params, RNHQLPlus
 from learning.rnh_ql_plus.features import Features, new_features
 from learning.rnh_ql_plus.optimism import Optimism, new_optimism
@@ -36,6 +37,7 @@ class State(NamedTuple):
     shaping: np.ndarray  # bool[1]; shaping on this episode
     train_v: np.ndarray  # bool[1]; V_NN learns this episode
     known: KnownRoutes  # routes over moves seen to work (the greedy test's, known_route)
+    sweep: PairQueue  # pairs queued for planned updates (sweeping; empty without)
 
 
 DERIVED = ("feat.base", "feat.centre", "step_v", "known.distance", "known.queue", "known.stale",
@@ -55,4 +57,5 @@ def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> Stat
                  np.zeros(n_rows), feat, new_move_model(n_s, n_a), new_free_space(geom),
                  new_optimism(n_s), new_traces(n_traced, n_a), np.zeros((1, n_a)),
                  np.array([step_v]), np.zeros(1), np.zeros(1, np.bool_), np.zeros(1, np.bool_),
-                 new_known_routes(n_s))
+                 new_known_routes(n_s),
+                 new_pair_queue(n_s * n_a) if cfg.sweeping else new_pair_queue(0, 0))

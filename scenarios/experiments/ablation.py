@@ -50,6 +50,8 @@ VARIANTS: list[tuple[str, str, tuple[tuple[str, float], ...]]] = [
     ("dyna-q, 10 planning updates (rnh-ql+'s budget)", "dyna-q", (("n_planning", 10),)),
     ("q-lambda", "q-lambda", ()),
     ("haql (heuristic from exploration)", "haql", ()),
+    ("rnh-ql+ with prioritized sweeping (an option, off by default)", "rnh-ql+",
+     (("sweeping", 1),)),
 ]
 
 

@@ -15,8 +15,8 @@ Episode starts: uniform over free cells, as the paper, except that a share
 ``--s-starts`` (0.1) of episodes starts at S. Under uniform starts alone the
 neighbourhood of S is rarely visited on a map of 50,000 cells, and a greedy test
 from S dies a few moves out at cells the agent never saw, whatever the method (see
-the README). ``--ablation`` adds rnh-ql+ rows with uniform starts only and
-without the known-route test.
+the README). ``--ablation`` adds rnh-ql+ rows with uniform starts only, without the
+known-route test, and with prioritized sweeping (``sweeping=1``).
 
 Cells of the table: seeds whose final greedy route is optimal, median [q25, q75]
 episodes to a stable optimal route, median wall time per run.
@@ -40,7 +40,8 @@ from sim.maps import movingai_to_cell
 METHODS = ("rnh-ql+", "haql", "dyna-q")
 # (label, method, overrides, uniform starts only)
 ABLATION = (("rnh-ql+, random starts only", "rnh-ql+", (), True),
-            ("rnh-ql+, no known-route test", "rnh-ql+", (("known_route", 0.0),), False))
+            ("rnh-ql+, no known-route test", "rnh-ql+", (("known_route", 0.0),), False),
+            ("rnh-ql+, prioritized sweeping", "rnh-ql+", (("sweeping", 1.0),), False))
 
 
 def write_problem(kind: str, size: int, seed: int, share: float, folder: Path

@@ -38,9 +38,24 @@ def test_the_study_runs_and_writes_its_table(tmp_path):
     from scenarios.experiments.scaling_maps import main
 
     out = tmp_path / "sm"
-    assert main(["--out", str(out), "--sizes", "48", "--kinds", "rooms", "--methods",
+    assert main(["--out", str(out), "--sizes", "32,48", "--kinds", "rooms", "--methods",
                  "rnh-ql+", "--seeds", "1", "--rewards", "goal-only", "--jobs", "1"]) == 0
     text = (out / "scaling-maps.md").read_text()
     assert "| rnh-ql+ | 1/1 ·" in text or "| rnh-ql+ | 0/1 ·" in text
     toml = (out / "maps" / "rooms-48.toml").read_text()
     assert "s_start_share = 0.1" in toml
+
+    from scenarios.experiments.scaling_maps_figure import main as figure
+
+    png = tmp_path / "fig" / "scaling.png"
+    assert figure([str(out), "--out", str(png)]) == 0
+    assert png.stat().st_size > 10_000
+    table = png.with_suffix(".md").read_text()
+    assert "| rnh-ql+ | rooms |" in table and "32²" in table and "48²" in table
+
+
+def test_the_figure_names_a_folder_that_is_not_a_study(tmp_path, capsys):
+    from scenarios.experiments.scaling_maps_figure import main as figure
+
+    assert figure([str(tmp_path), "--out", str(tmp_path / "x.png")]) == 2
+    assert "scaling_maps" in capsys.readouterr().err

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 from scenarios.cli import main
 from scenarios.recording.recorder import verify_recording
@@ -48,7 +49,12 @@ def test_bad_record_path_exits_2(capsys):
 
 
 def test_comparison_records_first_seeds_in_full_and_the_rest_as_curves(tmp_path):
-    from scenarios.experiments.compare import SweepRecording, make_specs, with_recording
+    from scenarios.experiments.compare import (
+        SweepRecording,
+        gather_parts,
+        make_specs,
+        with_recording,
+    )
 
     specs = make_specs("paper-40", ["st-ql", "rnh-ql"], [0, 1, 2], 5, ["grid"])
     rec = with_recording(specs, SweepRecording(str(tmp_path / "c.rrd"), every=10,
@@ -58,7 +64,14 @@ def test_comparison_records_first_seeds_in_full_and_the_rest_as_curves(tmp_path)
     assert {s.recording.prefix for s in rec if s.method == "st-ql"} == {
         "runs/st-ql/s0", "runs/st-ql/s1", "runs/st-ql/s2"}
     assert [s.key for s in rec] == [s.key for s in specs]  # recording is not part of a run
-    out = run_one(rec[2])  # a curves-only part still verifies
-    assert out["seed"] == 2
-    ok, msg = verify_recording(rec[2].recording.path)
+    out = run_one(rec[2])  # a curves-only run writes no part: its record carries its curves
+    assert out["seed"] == 2 and not Path(rec[2].recording.path).exists()
+    full = next(r for r in rec if r.method == "st-ql" and r.seed == 0)
+    records = [run_one(full), out]
+    merged = gather_parts([full, rec[2]], str(tmp_path / "c.rrd"), records=records)
+    ok, msg = verify_recording(merged)
     assert ok, msg
+    from tests.test_recording import read_table
+
+    table = read_table(merged, ["/runs/st-ql/s2/metrics/steps/**"], "episode")
+    assert table.num_rows > 0  # the curves-only run's curves, logged from its record

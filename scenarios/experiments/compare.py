@@ -121,19 +121,26 @@ def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False
     from scenarios.recording.comparison import gather_comparison
 
     worlds = {s.world for s in specs}
-    sc, _ = load(*specs[0].problem)
+    sc, model = load(*specs[0].problem)
     parts = [Path(s.recording.path) for s in specs
-             if s.recording is not None and Path(s.recording.path).exists()]
+             if s.recording is not None and s.recording.detail
+             and Path(s.recording.path).exists()]
     runs = [(run_label(s, worlds), s.seed) for s in specs]
     curves = None
+    curve_runs = []
     if records:
         from scenarios.recording.summary import summary_curves
 
         by_key = {s.key: s for s in specs}
         curves = summary_curves([r for r in records if r["key"] in by_key],
                                 lambda r: run_label(by_key[r["key"]], worlds))
-    rid = specs[0].recording.recording_id if specs[0].recording is not None else None
-    out = gather_comparison(record, parts, sc, runs, recording_id=rid, curves=curves)
+        record_of = {r["key"]: r for r in records}
+        curve_runs = [(run_label(s, worlds), record_of[s.key]) for s in specs
+                      if s.recording is not None and not s.recording.detail
+                      and s.key in record_of]
+    rid = next((s.recording.recording_id for s in specs if s.recording is not None), None)
+    out = gather_comparison(record, parts, sc, runs, recording_id=rid, curves=curves,
+                            model=model, curve_runs=curve_runs)
     if not keep_parts:
         shutil.rmtree(record + ".parts", ignore_errors=True)
     return out

@@ -5,12 +5,12 @@ Each run logs under its own subtree ``runs/<method>/s<seed>`` (:func:`run_prefix
 * One process: open one :class:`~scenarios.recording.RecordingFile`, create a
   recorder per run with ``file=f, prefix=run_prefix(m, s), blueprint=False``,
   and send :func:`~scenarios.recording_scene.comparison_blueprint` once.
-* Worker processes (``rnhql compare`` runs seeds in a pool): every worker
-  records ``<out>.parts/<method>-s<seed>.rrd`` with the shared ``recording_id``
-  and ``blueprint=False``; the parent calls :func:`gather_comparison`, which
-  adds a header (comparison table + blueprint) and merges everything with
-  ``rerun rrd merge`` into one ``.rrd``. Parts with the same recording id also
-  open together in the viewer (``rerun parts/*.rrd``) without merging.
+* Worker processes (``rnhql compare`` runs seeds in a pool): every run recorded in
+  full records ``<out>.parts/<method>-s<seed>.rrd`` with the shared
+  ``recording_id`` and ``blueprint=False``; a curves-only run records nothing, its
+  record carries its curves. The parent calls :func:`gather_comparison`, which
+  writes a header (comparison table + summary curves + blueprint), re-logs every
+  part, and logs the curves-only runs' curves from their records: one ``.rrd``.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from pathlib import Path
 import rerun as rr
 
 from scenarios.recording.recorder import RecordingFile, run_prefix, scene
+from sim.grid import TabularModel
 from sim.scenario import Scenario
 
 
@@ -38,9 +39,32 @@ def _log_header(stream: rr.RecordingStream, scenario: Scenario, runs: Sequence[t
                           make_active=True, make_default=True)
 
 
+def log_curves_of(file: RecordingFile, scenario: Scenario, model: TabularModel, label: str,
+                  record: dict) -> None:
+    """A curves-only run's per-seed curves, from its results.json record, under its subtree:
+    what it would have logged itself (every 10th episode), without a stream of its own."""
+    import numpy as np
+
+    from scenarios.recording.recorder import Recorder
+
+    rec = Recorder.create(None, scenario, model, method=record["method"],
+                          config=record.get("config", {}), seed=int(record["seed"]),
+                          world=record.get("world", "grid"), fidelity=record.get("fidelity"),
+                          prefix=run_prefix(label, int(record["seed"])), file=file,
+                          blueprint=False, with_scene=False)
+    steps = np.asarray(record["steps_per_episode"])
+    rec.log_episode_metrics(np.arange(len(steps)), steps,
+                            np.asarray(record["success_per_episode"]),
+                            np.asarray(record["return_per_episode"]),
+                            wall_time_s=np.asarray(record["wall_time_per_episode_s"]))
+    rec.close()
+
+
 def gather_comparison(out: str | Path, parts: Sequence[str | Path], scenario: Scenario,
                       runs: Sequence[tuple[str, int]], *, recording_id: str,
-                      application_id: str = "rnhql", curves: dict | None = None) -> Path:
+                      application_id: str = "rnhql", curves: dict | None = None,
+                      model: TabularModel | None = None,
+                      curve_runs: Sequence[tuple[str, dict]] = ()) -> Path:
     """Header (blueprint, summary curves) first, then every run's part: one ``.rrd``.
 
     The order matters: the web viewer reads a file front to back and draws the
@@ -48,7 +72,8 @@ def gather_comparison(out: str | Path, parts: Sequence[str | Path], scenario: Sc
     while the runs' detail is still loading. (``rerun rrd merge`` would order chunks
     by creation time and put the summary, made last, at the very end.) Each part is
     re-logged into this recording with ``log_file_from_path``, which keeps its
-    chunks. The parts are left in place.
+    chunks. The parts are left in place. ``curve_runs`` ((label, record) pairs, with
+    ``model``): runs recorded as curves only, logged here from their records.
     """
     out = Path(out)
     with RecordingFile(out, application_id=application_id, recording_id=recording_id,
@@ -57,5 +82,7 @@ def gather_comparison(out: str | Path, parts: Sequence[str | Path], scenario: Sc
         f.stream.flush()
         for part in parts:
             f.stream.log_file_from_path(part)
+        for label, record in curve_runs:
+            log_curves_of(f, scenario, model, label, record)
         f.stream.flush()
     return out

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -24,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from scenarios.experiments.scaling import fit_exponent
 from scenarios.palette import method_colour_mpl
 from sim.files import atomic_write_text
 
@@ -70,16 +70,6 @@ def read_points(folders: Sequence[Path]) -> list[Point]:
                     round(st["optimal_route_fraction"] * seeds),
                     (e["q25"], e["median"], e["q75"]), (w["q25"], w["median"], w["q75"]))
     return sorted(found.values(), key=lambda p: (p.method, p.kind, p.size))
-
-
-def exponent(xs: Sequence[float], ys: Sequence[float | None]) -> float | None:
-    """Least-squares slope of log y over log x, over the finite points (None: < 2)."""
-    pts = [(math.log(x), math.log(y)) for x, y in zip(xs, ys, strict=True)
-           if y is not None and y > 0]
-    if len(pts) < 2:
-        return None
-    lx, ly = np.array(pts).T
-    return float(np.polyfit(lx, ly, 1)[0])
 
 
 def lines(points: Sequence[Point]) -> dict[tuple[str, str], list[Point]]:
@@ -156,8 +146,8 @@ def table(points: Sequence[Point]) -> str:
             cells.append("–" if p is None else
                          f"{p.states} cells: {p.optimal}/{p.seeds} · {f(p.episodes[1])} "
                          f"[{f(p.episodes[0])}, {f(p.episodes[2])}] · {p.wall[1]:.2f} s")
-        ke = exponent([p.states for p in pts], [p.episodes[1] for p in pts])
-        kw = exponent([p.states for p in pts], [p.wall[1] for p in pts])
+        ke = fit_exponent([p.states for p in pts], [p.episodes[1] for p in pts])
+        kw = fit_exponent([p.states for p in pts], [p.wall[1] for p in pts])
         rows.append(f"| {method} | {kind} | " + " | ".join(cells)
                     + f" | {'–' if ke is None else f'{ke:.2f}'} | "
                     f"{'–' if kw is None else f'{kw:.2f}'} |")

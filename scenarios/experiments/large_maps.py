@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from scenarios.experiments.suite import spanning_tree
+from scenarios.experiments.suite import room_grid, spanning_tree
 from sim.grid.planning import grid_distances
 
 KINDS = ("city", "maze", "rooms", "random", "caves")
@@ -72,28 +72,7 @@ def _open(free: np.ndarray, r: int, c: int, nr: int, nc: int, pitch: int, corrid
 
 def rooms(size: int, seed: int, room: int = 15) -> np.ndarray:
     rng = np.random.default_rng(seed)
-    pitch = room + 1
-    k = (size - 1) // pitch
-    free = np.zeros((size, size), dtype=bool)
-    free[1:k * pitch, 1:k * pitch] = True
-    for j in range(1, k):
-        free[j * pitch, :] = False
-        free[:, j * pitch] = False
-    for a in range(k):
-        for b in range(k):
-            for vertical in (True, False):
-                if (vertical and b == k - 1) or (not vertical and a == k - 1):
-                    continue
-                for _ in range(int(rng.integers(1, 3))):
-                    w = int(rng.integers(1, 4))
-                    o = int(rng.integers(0, room - w + 1))
-                    lo = (a if vertical else b) * pitch + 1 + o
-                    wall = ((b + 1) if vertical else (a + 1)) * pitch
-                    if vertical:
-                        free[lo:lo + w, wall] = True
-                    else:
-                        free[wall, lo:lo + w] = True
-    return largest_component(free)
+    return largest_component(room_grid(size, (size - 1) // (room + 1), room, 3, rng))
 
 
 def random_cells(size: int, seed: int, density: float = 0.2) -> np.ndarray:

@@ -75,33 +75,41 @@ def maze(seed: int, braid: float = 0.1) -> np.ndarray:
     return free
 
 
-def rooms(seed: int) -> np.ndarray:
-    """Seeded rooms: a grid of rooms 5-8 cells wide, 1-cell walls, one or two doors
-    (1-2 cells) per wall between neighbouring rooms, 25-40 cells a side."""
-    rng = np.random.default_rng(seed)
-    room = int(rng.integers(5, 9))
-    k = int(rng.integers(max(3, 25 // (room + 1)), 40 // (room + 1) + 1))
-    size = k * (room + 1) + 1
-    free = np.ones((size, size), dtype=bool)
-    free[0, :] = free[-1, :] = free[:, 0] = free[:, -1] = False
+def room_grid(size: int, k: int, room: int, max_door: int, rng: np.random.Generator
+              ) -> np.ndarray:
+    """k x k rooms of ``room`` cells a side from the corner of a ``size``-cell square, 1-cell
+    walls, one or two doors of 1 to ``max_door`` cells in each wall between neighbouring
+    rooms (drawn from ``rng``); cells beyond the k x k rooms are blocked."""
+    pitch = room + 1
+    free = np.zeros((size, size), dtype=bool)
+    free[1:k * pitch, 1:k * pitch] = True
     for j in range(1, k):
-        free[j * (room + 1), :] = False
-        free[:, j * (room + 1)] = False
+        free[j * pitch, :] = False
+        free[:, j * pitch] = False
     for a in range(k):
         for b in range(k):
             for vertical in (True, False):
                 if (vertical and b == k - 1) or (not vertical and a == k - 1):
                     continue
                 for _ in range(int(rng.integers(1, 3))):
-                    w = int(rng.integers(1, 3))
+                    w = int(rng.integers(1, max_door + 1))
                     o = int(rng.integers(0, room - w + 1))
-                    lo = (a if vertical else b) * (room + 1) + 1 + o
-                    wall = ((b + 1) if vertical else (a + 1)) * (room + 1)
+                    lo = (a if vertical else b) * pitch + 1 + o
+                    wall = ((b + 1) if vertical else (a + 1)) * pitch
                     if vertical:
                         free[lo:lo + w, wall] = True
                     else:
                         free[wall, lo:lo + w] = True
     return free
+
+
+def rooms(seed: int) -> np.ndarray:
+    """Seeded rooms: a grid of rooms 5-8 cells wide, 1-cell walls, one or two doors
+    (1-2 cells) per wall between neighbouring rooms, 25-40 cells a side."""
+    rng = np.random.default_rng(seed)
+    room = int(rng.integers(5, 9))
+    k = int(rng.integers(max(3, 25 // (room + 1)), 40 // (room + 1) + 1))
+    return room_grid(k * (room + 1) + 1, k, room, 2, rng)
 
 
 # ---------------------------------------------------------------- maps and start/goal

@@ -18,6 +18,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
 from sim.errors import ScenarioError
 
 Cell = tuple[int, int]
@@ -84,6 +86,12 @@ class Rewards:
             if (self.goal, self.bump, self.step) == values:
                 return replace(self, scheme=name)
         return replace(self, scheme="custom")
+
+    def of_moves(self, bumped, at_goal):
+        """The route problem's reward rule, for one move or an array of them: ``bump`` when a
+        contact began (even in a move that ended in G), else ``goal`` on entering G, else
+        ``step``. Every world and model reads it from here."""
+        return np.where(bumped, self.bump, np.where(at_goal, self.goal, self.step))
 
     def label(self) -> str:
         return f"{self.scheme} (goal {self.goal:g}, bump {self.bump:g}, free step {self.step:g})"

@@ -27,7 +27,7 @@ def test_batched_physics_runs_equal_single_runs(half):
         assert _without_wall(rec) == _without_wall(run_one(spec)), spec.key
 
 
-def test_plan_tasks_batches_physics_and_balances_jobs():
+def test_plan_tasks_batches_physics_recorded_or_not_and_balances_jobs():
     grid = [RunSpec("paper-40", "st-ql", s, 10) for s in range(3)]
     phys = [RunSpec("paper-40", m, s, 10, world="physics")
             for m in ("st-ql", "haql") for s in range(5)]
@@ -38,8 +38,9 @@ def test_plan_tasks_batches_physics_and_balances_jobs():
     flat = sorted(i for t in tasks for i in t)
     assert flat == list(range(len(specs)))  # every spec once
     alone = [t for t in tasks if len(t) == 1]
-    assert {i for t in alone for i in t} == {0, 1, 2, len(specs) - 1}
-    batches = [t for t in tasks if len(t) > 1]
-    assert len(batches) == 2 and {len(t) for t in batches} == {5}
+    assert {i for t in alone for i in t} == {0, 1, 2}  # grid runs alone
+    batches = [t for t in tasks if len(t) > 1]  # the recorded run batches with the rest
+    assert len(batches) == 2 and {len(t) for t in batches} == {5, 6}
+    assert any(len(specs) - 1 in t for t in batches)
     many = [RunSpec("paper-40", "st-ql", s, 10, world="physics") for s in range(MAX_BATCH + 1)]
     assert max(len(t) for t in plan_tasks(many, jobs=1)) <= MAX_BATCH

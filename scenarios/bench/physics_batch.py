@@ -87,7 +87,7 @@ def learning(episodes: int = 300, seeds: int = 10, scenario: str = "paper-50",
              fidelity: str | None = None) -> dict:
     """One batch of ``len(methods) x seeds`` runs, as a physics compare trains them."""
     from learning.streams import streams
-    from scenarios.runs.physics_batch import RunGroup, train_physics_batch
+    from scenarios.runs.physics import RunGroup, train_physics_runs
     from scenarios.runs.spec import load, make_config
     from sim.physics.fidelity import parse_fidelity
 
@@ -99,8 +99,8 @@ def learning(episodes: int = 300, seeds: int = 10, scenario: str = "paper-50",
                                [r.physics for r in rs]))
     split: dict[str, float] = {}
     t = time.perf_counter()
-    train_physics_batch(sc, model, groups, episodes, 10, split=split,
-                        fidelity=parse_fidelity(fidelity))
+    train_physics_runs(sc, model, groups, episodes, 10, split=split,
+                       fidelity=parse_fidelity(fidelity))
     el = time.perf_counter() - t
     prims = split.pop("primitives")
     loop = el - split["final"]

@@ -39,18 +39,23 @@ def cmd_route(args: argparse.Namespace) -> int:
     trajectory = driven = None
     print(f"{ckpt.config.name} agent {args.agent} ({ckpt.episodes} episodes) on {sc.name}")
     if args.world == "physics":
-        from learning.agent import StepAgent
-        from scenarios.runs.physics import drive_greedy
-
-        agent = StepAgent(ckpt.config, geometry_of(model), np.random.default_rng(0), ckpt.state)
+        from learning.readout import greedy_actions
+        from scenarios.runs.physics_grading import FINAL_ROLLOUTS, FINAL_TAG
         from sim.physics.fidelity import parse_fidelity
+        from sim.physics.rollouts import drive_policy
 
-        driven = drive_greedy(agent, sc, fidelity=parse_fidelity(fidelity_arg(args)))
-        route, trajectory = driven.states, driven.trajectory
-        length = len(route) - 1 if driven.reached else -1
-        print(f"  driven in physics: {'reached G' if driven.reached else 'did not reach G'}, "
-              f"{driven.metres:.1f} m, {driven.contacts} contacts, {driven.sim_time_s:.1f} s "
-              "sim time")
+        fid = parse_fidelity(fidelity_arg(args) or sc.physics)
+        n = 1 if fid.is_exact else FINAL_ROLLOUTS
+        driven = drive_policy(sc, greedy_actions(ckpt.state), fid, n, 0, FINAL_TAG,
+                              measure_metres=True, keep_routes=True, keep_path=True)
+        route, trajectory = driven.routes[0], driven.path[:, :2]
+        length = len(route) - 1 if driven.reached[0] else -1
+        lo, hi = driven.p_goal_interval
+        print(f"  driven in physics at {fid.label}: P(G) {driven.p_goal:.2f} "
+              f"[{lo:.2f}, {hi:.2f}] over {n} drive(s); the drive shown "
+              f"{'reached G' if driven.reached[0] else 'did not reach G'}, "
+              f"{driven.metres[0]:.1f} m, {int(driven.contacts[0])} contacts, "
+              f"{driven.sim_time_s[0]:.1f} s sim time")
     record = record_path(args, sc.name, f"route-{ckpt.method}-{args.world}")
     if record is not None:
         from learning.readout import greedy_actions, potential, q_table
@@ -58,7 +63,7 @@ def cmd_route(args: argparse.Namespace) -> int:
 
         with Recorder.create(record, sc, model, method=ckpt.method, config=ckpt.config,
                              seed=-1, world=args.world, blueprint="route") as rec:
-            poses = driven.poses if args.world == "physics" else None
+            poses = driven.poses if driven is not None else None
             rec.log_episode_trajectory(ckpt.episodes, np.asarray(route), poses=poses,
                                        kind="greedy-test")
             rec.log_values(ckpt.episodes, q_table(ckpt.state), greedy_actions(ckpt.state),

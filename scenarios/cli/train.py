@@ -91,13 +91,19 @@ def cmd_train(args: argparse.Namespace) -> int:
 
             result = train_physics(cfg, sc, model, args.episodes, rng, recorder=recorder,
                                    plan=plan, start_rng=rs.starts,
-                                   fidelity=spec.fidelity_spec, noise_rng=rs.physics)
+                                   fidelity=spec.fidelity_spec, noise_rng=rs.physics,
+                                   grading_seed=args.seed)
             if args.save:
                 ck = Checkpoint.of_agent(result.agent)
                 ck.problem = problem
                 save_checkpoint(args.save, ck)
         if recorder is not None:
-            recorder.log_route("final route", result.final_route)
+            if args.world == "physics":
+                from scenarios.runs.physics import log_final
+
+                log_final(recorder, result)
+            else:
+                recorder.log_route("final route", result.final_route)
     finally:
         if recorder is not None:
             recorder.close()  # also on Ctrl-C: the recording keeps what was logged
@@ -106,10 +112,11 @@ def cmd_train(args: argparse.Namespace) -> int:
     from learning.train import epsilon_route_lengths
 
     # the paper's epsilon-greedy test on the evaluation stream, as `rnhql compare` runs it
-    graded = model if args.world == "grid" else result.graded
-    state = result.state if args.world == "grid" else result.agent.state
-    rec = run_record(spec, cfg, RunOutcome.of(
-        result, epsilon_route_lengths(state, graded, cfg.eps, rs.evaluation)))
+    if args.world == "grid":
+        eps_routes = epsilon_route_lengths(result.state, model, cfg.eps, rs.evaluation)
+    else:
+        eps_routes = result.grader.epsilon_routes(result.agent.state, cfg.eps, rs.evaluation)
+    rec = run_record(spec, cfg, RunOutcome.of(result, eps_routes))
     print_run(rec, model.optimal_route_length)
     if args.save:
         print(f"  saved agent           {args.save}")

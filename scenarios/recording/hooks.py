@@ -5,17 +5,17 @@ N-th, the last, and every greedy test from S. Curves are logged for every
 episode, value heat maps every ``values_every`` episodes. In the grid world
 the fused kernel writes the states of the chunks that hold a recorded episode
 into a trace buffer (one store per step, no draws, so a recorded run equals
-an unrecorded one); in physics an env wrapper taps poses, contacts and sim
-time from ``info`` while a recorded episode runs.
+an unrecorded one); in physics a vector-env wrapper taps the recorded runs' sub-envs
+(poses, contacts, sim time, every physics step) while a recorded episode runs.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
+from gymnasium.vector import VectorWrapper
 
 from learning.readout import greedy_actions, potential, q_table
 from scenarios.recording.recorder import Recorder
@@ -100,55 +100,75 @@ class GridRecorder:
         self.views.after_chunk(first_episode + n, arrays, state, test[1])
 
 
-class EpisodeTap(gym.Wrapper):
-    """Captures states, poses, sim time and contact points of an episode while ``armed``."""
+class EpisodeTaps(VectorWrapper):
+    """Taps sub-envs of a :class:`sim.physics.vector.PhysicsRouteVectorEnv`: while sub-env
+    ``i`` is armed (:meth:`arm`, at the start of an episode to record in full), its states,
+    poses, sim time, contact points and every physics step's pose are kept, for
+    :meth:`log_to`. Untapped sub-envs cost nothing; the env must keep trajectories."""
 
-    def __init__(self, env: gym.Env) -> None:
+    def __init__(self, env: Any, indices: list[int]) -> None:
         super().__init__(env)
-        self.armed = False
-        self._clear()
+        self.taps = {int(i): _Tap() for i in indices}
 
-    def _clear(self) -> None:
-        self.states: list[int] = []
-        self.poses: list[tuple[float, float, float]] = []
-        self.times: list[float] = []
-        self.contacts: list[tuple[float, float]] = []
-        self.contact_steps: list[int] = []
-        self.substeps: list[np.ndarray] = []  # every physics step's pose, per primitive
-        self.substep_times: list[np.ndarray] = []
+    def arm(self, i: int, on: bool) -> None:
+        """Record sub-env ``i``'s next episode in full (or not); clears what it held."""
+        self.taps[i] = _Tap(armed=on)
 
-    def reset(self, **kwargs: Any):
-        obs, info = self.env.reset(**kwargs)
-        self._clear()
-        if self.armed:
-            self.states.append(int(obs))
-            self.poses.append(info["pose"])
-            self.times.append(info["time_s"])
+    def reset(self, *, seed: Any = None, options: dict[str, Any] | None = None):
+        obs, info = self.env.reset(seed=seed, options=options)
+        mask = (options or {}).get("reset_mask")
+        for i, tap in self.taps.items():
+            if tap.armed and (mask is None or mask[i]):
+                tap.states.append(int(obs[i]))
+                tap.poses.append(tuple(info["pose"][i]))
+                tap.times.append(float(info["time_s"][i]))
         return obs, info
 
-    def step(self, action: int):
-        obs, r, term, trunc, info = self.env.step(action)
-        if self.armed:
-            traj = np.asarray(info["trajectory"], dtype=np.float64).reshape(-1, 3)
+    def step(self, actions: Any):
+        obs, r, term, trunc, info = self.env.step(actions)
+        base = self.env.unwrapped
+        for i, tap in self.taps.items():
+            if not (tap.armed and info["_steps"][i]):
+                continue
+            traj = base.trajectory(i)
             if len(traj):  # the continuous drive, its times spread over the primitive
-                t0 = self.times[-1] if self.times else 0.0
-                self.substeps.append(traj)
-                self.substep_times.append(np.linspace(t0, info["time_s"], len(traj) + 1)[1:])
-            self.states.append(int(obs))
-            self.poses.append(info["pose"])
-            self.times.append(info["time_s"])
-            for c in info["contacts"]:
-                self.contacts.append((c.x_m, c.y_m))
-                self.contact_steps.append(len(self.states) - 1)
+                t0 = tap.times[-1] if tap.times else 0.0
+                tap.substeps.append(traj)
+                tap.substep_times.append(np.linspace(t0, info["time_s"][i], len(traj) + 1)[1:])
+            tap.states.append(int(obs[i]))
+            tap.poses.append(tuple(info["pose"][i]))
+            tap.times.append(float(info["time_s"][i]))
+            records = base.contact_records(i)
+            for c in records[tap.records_seen:]:
+                tap.contacts.append((c.x_m, c.y_m))
+                tap.contact_steps.append(len(tap.states) - 1)
+            tap.records_seen = len(records)
         return obs, r, term, trunc, info
 
-    def log_to(self, rec: Recorder, episode: int) -> None:
-        if not self.states:
+    def log_to(self, i: int, rec: Recorder, episode: int) -> None:
+        """Log sub-env ``i``'s armed episode (nothing if it was not armed)."""
+        tap = self.taps[i]
+        if not tap.states:
             return
         rec.log_episode_trajectory(
-            episode, np.asarray(self.states), poses=np.asarray(self.poses),
-            contacts=np.asarray(self.contacts).reshape(-1, 2),
-            sim_time_s=np.asarray(self.times), kind="train",
-            contact_steps=np.asarray(self.contact_steps, dtype=np.int64),
-            substeps=(np.concatenate(self.substeps) if self.substeps else None),
-            substep_times_s=(np.concatenate(self.substep_times) if self.substeps else None))
+            episode, np.asarray(tap.states), poses=np.asarray(tap.poses),
+            contacts=np.asarray(tap.contacts).reshape(-1, 2),
+            sim_time_s=np.asarray(tap.times), kind="train",
+            contact_steps=np.asarray(tap.contact_steps, dtype=np.int64),
+            substeps=(np.concatenate(tap.substeps) if tap.substeps else None),
+            substep_times_s=(np.concatenate(tap.substep_times) if tap.substeps else None))
+
+
+@dataclass
+class _Tap:
+    """One tapped sub-env's episode so far."""
+
+    armed: bool = False
+    records_seen: int = 0  # the sub-env's contact records already taken
+    states: list[int] = field(default_factory=list)
+    poses: list[tuple[float, float, float]] = field(default_factory=list)
+    times: list[float] = field(default_factory=list)
+    contacts: list[tuple[float, float]] = field(default_factory=list)
+    contact_steps: list[int] = field(default_factory=list)
+    substeps: list[np.ndarray] = field(default_factory=list)  # every step's pose, per primitive
+    substep_times: list[np.ndarray] = field(default_factory=list)

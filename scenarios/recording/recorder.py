@@ -351,15 +351,21 @@ class Recorder:
         self._maybe_flush()
 
     def log_route(self, name: str, states: Sequence[int] | np.ndarray,
-                  episode: int | None = None) -> None:
-        """A route as a labelled line (static, or at ``episode``)."""
+                  episode: int | None = None, *, label: str | None = None,
+                  path_m: np.ndarray | None = None) -> None:
+        """A route as a labelled line (static, or at ``episode``). ``path_m`` (k, 2) [m]:
+        draw the continuous drive (every physics step) instead of the cell centres;
+        ``label``: the text shown (default: the route's moves, or "no G")."""
         pts = scene.route_points(self.model, states)
         colour = scene.ROUTE_PALETTE[self._n_routes % len(scene.ROUTE_PALETTE)]
         self._n_routes += 1
         states = np.asarray(states)
         reached = len(states) > 0 and int(states[-1]) == self.model.goal
-        label = (f"{name}: {len(pts) - 1} moves" if reached
-                 else f"{name}: no G (loops at {len(pts) - 1})")
+        if label is None:
+            label = (f"{name}: {len(pts) - 1} moves" if reached
+                     else f"{name}: no G (loops at {len(pts) - 1})")
+        if path_m is not None and len(path_m) > 1:
+            pts = np.asarray(path_m, dtype=np.float64)[:, :2]
         sc, m = self.scenario, self.model
         strip = rr.LineStrips2D([pts], radii=0.1 * sc.cell_size_m, colors=[colour],
                                 labels=[label], show_labels=False,

@@ -1,126 +1,73 @@
-"""Training and driving in the physics world (``--world physics``).
+"""Physics training (``--world physics``): one loop for every physics run.
 
-The learner is the step-by-step agent (:mod:`learning.agent`) on
-``rnhql/PhysicsRoute-v0``: the same update rules as the grid kernels, states
-from the discretised pose, bumps from real contacts.
+Every physics run, alone or one of a sweep's, recorded or not, is trained by
+:func:`train_physics_runs`: the runs are the sub-envs of one
+:class:`sim.physics.vector.PhysicsRouteVectorEnv` (N robots in one Pymunk Space; a single
+run is ``num_envs=1``), their learners the rows of one
+:class:`learning.batch_agent.BatchAgent` per method and config. The loop is CleanRL's
+``act -> step -> update``; the route problem's rules (reward, termination at G, the time
+limit, each run's noise stream) are the env's. The env runs with autoreset ``DISABLED``:
+the loop resets a run's sub-env when its episode ends, with a start cell drawn from the
+run's own start stream (as the grid kernels draw it), and a run that has finished its
+episodes is simply not reset again. A recorded run is a tap on its sub-env
+(:class:`scenarios.recording.hooks.EpisodeTaps`), so recorded runs batch with the rest.
 
-Greedy tests every ``test_every`` episodes evaluate the learned policy on the
-*physics world's own* tabular model (:func:`sim.physics.model.physics_model`:
-each primitive driven once from each reachable cell centre, cached), against
-the physics optimum: the real disc can enter cells the grid's clearance blocks,
-so grading on the grid model would call a route through them "no G". The
-record keeps both optima (``grid_optimal_route_length``,
-``physics_optimal_route_length``). The final greedy route is then also *driven*
-in physics, which gives the continuous figures (metres, contacts, sim time).
+Each run is the run it would be alone with its seed: its robot is the single-robot
+world, its agent draws from its own learner stream in the same order, its start cells
+come from its own start stream (tested record for record). Only the wall time differs:
+a batched step's time is shared among the runs it advanced.
+
+Greedy tests every ``test_every`` episodes, and the final policy, are graded in the
+world the run trained in (:mod:`scenarios.runs.physics_grading`).
 """
 
 from __future__ import annotations
 
 import contextlib
-import os
 import signal
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
+from gymnasium.vector import AutoresetMode
 
-import sim.envs  # noqa: F401  (registers the ids)
-from learning.agent import StepAgent, make_agent, run_env_episodes
+from learning.agent import StepAgent
+from learning.batch_agent import BatchAgent
+from learning.generator_handle import handles
 from learning.geometry import geometry_of
 from learning.metrics import episodes_to_first_optimal
-from learning.train import greedy_test, shortest_fraction
+from scenarios.runs.physics_grading import Grader
 from sim.grid import TabularModel
+from sim.physics.vector import PhysicsRouteVectorEnv
 from sim.scenario import Scenario
 
 
-class ContactCounter(gym.Wrapper):
-    """Counts contacts and sim time per episode from the physics env's ``info``."""
+@dataclass(frozen=True)
+class RunGroup:
+    """Runs of one method and config: one learner, one start and one noise stream per run."""
 
-    def __init__(self, env: gym.Env) -> None:
-        super().__init__(env)
-        self.contacts: list[int] = []
-        self.sim_time_s: list[float] = []
-        self._c, self._t, self._active = 0, 0.0, False
-
-    def reset(self, **kwargs: Any):
-        self.flush()
-        return self.env.reset(**kwargs)
-
-    def step(self, action: int):
-        obs, r, term, trunc, info = self.env.step(action)
-        self._c += len(info["contacts"])
-        self._t, self._active = info["time_s"], True
-        return obs, r, term, trunc, info
-
-    def flush(self) -> None:
-        """Close the running episode's counts (called by reset, and once at the end)."""
-        if self._active:
-            self.contacts.append(self._c)
-            self.sim_time_s.append(self._t)
-        self._c, self._t, self._active = 0, 0.0, False
+    cfg: Any
+    learner_rngs: Sequence[np.random.Generator]
+    start_rngs: Sequence[np.random.Generator]
+    noise_rngs: Sequence[np.random.Generator] | None = None  # the physics streams (noise)
+    grading_seeds: Sequence[int] | None = None  # each run's rollout seed (common across
+    #                                             methods: the run's seed)
 
 
-def continuous_optimum_rounded(sc: Scenario) -> float | None:
-    """The disc's any-angle S-G path length [m] (:mod:`sim.physics.optimum`), for records."""
-    from sim.physics.optimum import continuous_optimum_m
+@dataclass(frozen=True)
+class RecordedRun:
+    """Where run ``i`` of the loop is recorded: its recorder and what to record in full."""
 
-    v = continuous_optimum_m(sc)
-    return None if v is None else round(v, 4)
-
-
-@dataclass
-class DrivenRoute:
-    """A greedy policy driven from S in physics."""
-
-    states: list[int]
-    trajectory: np.ndarray  # (n, 3) poses of every substep [m, m, rad]
-    reached: bool
-    contacts: int
-    sim_time_s: float
-    metres: float  # path length driven [m]
-    poses: np.ndarray  # (len(states), 3): the pose after each primitive [m, m, rad]
-
-    def extras(self) -> dict[str, Any]:
-        xy = np.round(self.trajectory[::2, :2], 3)
-        return {"physics_route_length": len(self.states) - 1 if self.reached else -1,
-                "physics_route_xy": xy.tolist(),
-                "physics_route_metres": round(self.metres, 4),
-                "physics_route_contacts": self.contacts,
-                "physics_route_sim_time_s": round(self.sim_time_s, 4)}
-
-
-def drive_greedy(agent_or_policy: Any, sc: Scenario, max_steps: int | None = None,
-                 fidelity: Any = None) -> DrivenRoute:
-    """Drive the greedy policy (a StepAgent or ``policy(s) -> a``) from S in a fresh world
-    (at ``fidelity``; its noise from the env's stream seeded 0, the same for every run)."""
-    policy = (agent_or_policy.greedy_action if isinstance(agent_or_policy, StepAgent)
-              else agent_or_policy)
-    env = gym.make("rnhql/PhysicsRoute-v0", scenario=sc, fidelity=fidelity,
-                   max_episode_steps=max_steps or sc.steps_per_episode)
-    s, info = env.reset(seed=0)
-    states, traj, poses = [int(s)], [info["trajectory"]], [info["pose"]]
-    contacts, term, trunc = 0, False, False
-    while not (term or trunc):
-        s, _, term, trunc, info = env.step(policy(int(s)))
-        states.append(int(s))
-        traj.append(info["trajectory"])
-        poses.append(info["pose"])
-        contacts += len(info["contacts"])
-    pts = np.concatenate(traj)
-    # per primitive: after a bump the robot is *placed* back, and that jump is not driven
-    metres = float(sum(np.hypot(*np.diff(t[:, :2], axis=0).T).sum() for t in traj))
-    env.close()
-    return DrivenRoute(states, pts, bool(term), contacts, float(info["time_s"]), metres,
-                       np.asarray(poses, dtype=np.float64))
+    recorder: Any  # scenarios.recording.recorder.Recorder
+    plan: Any  # scenarios.recording.hooks.RecordPlan
 
 
 @dataclass(eq=False)
 class PhysicsTrainResult:
-    """The fields :func:`scenarios.experiment.run_record` reads, for a physics run."""
+    """What a finished physics run measured (see :class:`scenarios.runs.spec.RunOutcome`)."""
 
     agent: StepAgent
     steps: np.ndarray
@@ -135,51 +82,42 @@ class PhysicsTrainResult:
     final_route: list[int]
     final_route_length: int
     optimal_action_fraction: float
-    driven: DrivenRoute
-    graded: TabularModel  # the model the greedy tests ran on (the physics world's own)
+    graded: TabularModel  # the physics world's own exact model (moves the disc can drive)
+    grader: Grader  # how the run was graded (its world and fidelity)
+    final_rollouts: Any = None  # sim.physics.rollouts.Rollouts of the final policy
     world_extras: dict[str, Any] = field(default_factory=dict)
 
     @property
     def episodes_to_optimal(self) -> int | None:
         return episodes_to_first_optimal(self.test_episodes, self.test_route_length,
-                                  self.optimal_length)
+                                         self.optimal_length)
 
 
-class _StopAtStep(gym.Wrapper):
-    """Ctrl-C during physics training is raised here, between env steps, never elsewhere.
+def continuous_optimum_rounded(sc: Scenario) -> float | None:
+    """The disc's any-angle S-G path length [m] (:mod:`sim.physics.optimum`), for records."""
+    from sim.physics.optimum import continuous_optimum_m
 
-    A SIGINT delivered while Python is inside a numba call's argument handling (the
-    step agent passes its ``numpy.random.Generator`` on every update) or inside a
-    Chipmunk callback crashes the process (SIGSEGV) or is lost. While training runs,
-    the signal only sets a flag; this wrapper raises ``KeyboardInterrupt`` at the next
-    ``step``/``reset``, in plain Python. A second Ctrl-C exits at once (status 130).
-    """
+    v = continuous_optimum_m(sc)
+    return None if v is None else round(v, 4)
 
-    def __init__(self, env: Any) -> None:
-        super().__init__(env)
+
+class StopFlag:
+    """Ctrl-C during physics training: the first sets a flag that the loop turns into a
+    ``KeyboardInterrupt`` between batched steps, in plain Python (a signal acted on inside
+    a compiled call's argument handling or a Chipmunk query can crash the process or be
+    lost); a second raises at once."""
+
+    def __init__(self) -> None:
         self.requested = False
 
     def request(self, _sig: int, _frame: Any) -> None:
         if self.requested:
-            os._exit(130)
-        self.requested = True
-
-    def _check(self) -> None:
-        if self.requested:
             raise KeyboardInterrupt
-
-    def step(self, action: Any) -> Any:
-        out = self.env.step(action)
-        self._check()
-        return out
-
-    def reset(self, **kwargs: Any) -> Any:
-        self._check()
-        return self.env.reset(**kwargs)
+        self.requested = True
 
 
 @contextlib.contextmanager
-def sigint_to(stopper: Any) -> Iterator[None]:
+def sigint_to(stopper: StopFlag) -> Iterator[None]:
     """SIGINT goes to ``stopper.request`` while the block runs (main thread only)."""
     if threading.current_thread() is not threading.main_thread() or \
             signal.getsignal(signal.SIGINT) is signal.SIG_IGN:  # e.g. a pool worker
@@ -192,82 +130,207 @@ def sigint_to(stopper: Any) -> Iterator[None]:
         signal.signal(signal.SIGINT, old)
 
 
+class _Logs:
+    """Per-run, per-episode arrays, filled as episodes end."""
+
+    def __init__(self, n: int, episodes: int) -> None:
+        self.steps = np.zeros((n, episodes), np.int32)
+        self.returns = np.zeros((n, episodes))
+        self.success = np.zeros((n, episodes), bool)
+        self.shaping_mean = np.zeros((n, episodes))
+        self.shaping_std = np.zeros((n, episodes))
+        self.wall = np.zeros((n, episodes))
+        self.contacts = np.zeros((n, episodes), np.int64)
+        self.sim_time = np.zeros((n, episodes))
+        self.tests_e: list[list[int]] = [[] for _ in range(n)]
+        self.tests_l: list[list[int]] = [[] for _ in range(n)]
+
+    def arrays(self, i: int, done: int) -> dict[str, np.ndarray]:
+        """Run ``i``'s first ``done`` episodes, as a recording's curves want them."""
+        return {"steps": self.steps[i, :done], "returns": self.returns[i, :done],
+                "success": self.success[i, :done], "shaping_mean": self.shaping_mean[i, :done],
+                "shaping_std": self.shaping_std[i, :done], "wall_time_s": self.wall[i, :done]}
+
+
+def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGroup],
+                       n_episodes: int, test_every: int = 10, fidelity: Any = None,
+                       recorded: dict[int, RecordedRun] | None = None,
+                       split: dict[str, float] | None = None
+                       ) -> list[list[PhysicsTrainResult]]:
+    """Train every run of every group at once; results per group, per run.
+
+    ``recorded[i]`` records run ``i`` (runs are numbered group by group). ``split``, if
+    given, receives the wall time [s] of the parts of the loop: ``learner`` (act and
+    update), ``kernel`` (the world's compiled call), ``chipmunk`` (casts and contact
+    checks), ``episodes`` (ends, greedy tests, starts), ``driver`` (the rest of the loop)
+    and ``final`` (final grading), plus ``primitives``.
+    """
+    from scenarios.recording.hooks import ChunkLogger, EpisodeTaps
+
+    recorded = dict(recorded or {})
+    geom = geometry_of(model)
+    starts = np.asarray(geom.start_states)
+    agents, bounds = [], []
+    lo = 0
+    for g in groups:
+        agents.append(BatchAgent(g.cfg, geom, list(g.learner_rngs)))
+        bounds.append((lo, lo + len(g.learner_rngs)))
+        lo += len(g.learner_rngs)
+    n = lo
+    start_h = handles([r for g in groups for r in g.start_rngs])
+    world = PhysicsRouteVectorEnv(n, sc, max_episode_steps=sc.steps_per_episode,
+                                  fidelity=fidelity, autoreset_mode=AutoresetMode.DISABLED,
+                                  trajectories=bool(recorded))
+    noise = [r for g in groups for r in (g.noise_rngs or [None] * len(g.learner_rngs))]
+    for i, r in enumerate(noise):
+        if r is not None:
+            world.set_noise_rng(i, r)
+    grading_seeds = [s for g in groups
+                     for s in (g.grading_seeds or [0] * len(g.learner_rngs))]
+    grader = Grader(sc, world.fidelity)
+    env = EpisodeTaps(world, sorted(recorded)) if recorded else world
+    views = {i: ChunkLogger(r.recorder, r.plan) for i, r in recorded.items()}
+    logs = _Logs(n, n_episodes)
+    s = np.zeros(n, np.int64)
+    a = np.zeros(n, np.int64)
+    t = np.zeros(n, np.int64)
+    ret = np.zeros(n)
+    wall = np.zeros(n)
+    contacts = np.zeros(n, np.int64)
+    done = np.zeros(n, np.int64)
+    active = np.ones(n, bool)
+
+    def start_episodes(which: np.ndarray) -> None:
+        for ag, (b0, b1) in zip(agents, bounds, strict=True):
+            sub = which[b0:b1]
+            if sub.any():
+                s0 = ag.draw_starts(start_h[b0:b1], starts, sub)
+                s[b0:b1][sub] = s0[sub]
+                ag.begin_episode(sub, s[b0:b1])
+        for i, r in recorded.items():
+            if which[i]:
+                env.arm(i, r.plan.wants(int(done[i])))
+        env.reset(options={"reset_mask": which, "starts": s})
+
+    clock = time.perf_counter
+    t_learn = t_world = t_ep = 0.0
+    t_start = clock()
+    stop = StopFlag()
+    with sigint_to(stop):
+        start_episodes(active)
+        while active.any():
+            t0 = clock()
+            for ag, (b0, b1) in zip(agents, bounds, strict=True):
+                a[b0:b1] = ag.act(active[b0:b1], s[b0:b1])
+            t1 = clock()
+            s2, r, term, trunc, info = env.step(a)
+            t2 = clock()
+            t += active
+            ret += r
+            contacts += info["contacts"]
+            t3 = clock()
+            for ag, (b0, b1) in zip(agents, bounds, strict=True):
+                ag.update(active[b0:b1], s[b0:b1], a[b0:b1], r[b0:b1], s2[b0:b1],
+                          term[b0:b1], trunc[b0:b1])
+            t4 = clock()
+            np.copyto(s, s2, where=active)
+            wall[active] += (t4 - t0) / active.sum()
+            t_learn += (t1 - t0) + (t4 - t3)
+            t_world += t2 - t1
+            ended = term | trunc
+            if ended.any():
+                for ag, (b0, b1) in zip(agents, bounds, strict=True):
+                    sub = ended[b0:b1]
+                    if not sub.any():
+                        continue
+                    ag.end_episode(sub)
+                    fmean, fstd = ag.last_shaping()
+                    for k in np.flatnonzero(sub):
+                        i = b0 + int(k)
+                        e = int(done[i])
+                        logs.steps[i, e] = t[i]
+                        logs.returns[i, e], logs.success[i, e] = ret[i], term[i]
+                        logs.shaping_mean[i, e], logs.shaping_std[i, e] = fmean[k], fstd[k]
+                        logs.wall[i, e], logs.contacts[i, e] = wall[i], contacts[i]
+                        logs.sim_time[i, e] = info["time_s"][i]
+                        done[i] = e + 1
+                        t[i], ret[i], wall[i], contacts[i] = 0, 0.0, 0.0, 0
+                        if i in recorded:
+                            env.log_to(i, recorded[i].recorder, e)
+                        if done[i] % test_every == 0 or done[i] == n_episodes:
+                            length, route = grader.test(ag.state(int(k)),
+                                                        grading_seeds[i], int(done[i]))
+                            logs.tests_e[i].append(int(done[i]))
+                            logs.tests_l[i].append(length)
+                            if i in views:
+                                views[i].after_chunk(int(done[i]), logs.arrays(i, done[i]),
+                                                     ag.state(int(k)), route)
+                        if done[i] == n_episodes:
+                            active[i] = False
+                start_episodes(ended & active)
+                t_ep += clock() - t4
+            if stop.requested:
+                raise KeyboardInterrupt
+    t_loop = clock() - t_start
+    results: list[list[PhysicsTrainResult]] = []
+    for ag, (b0, b1) in zip(agents, bounds, strict=True):
+        results.append([_result(ag, k, b0 + k, logs, grader, model, grading_seeds[b0 + k])
+                        for k in range(b1 - b0)])
+    if split is not None:
+        b = world.batch
+        split.update(learner=t_learn, kernel=b.kernel_s, chipmunk=b.chipmunk_s,
+                     episodes=t_ep, driver=t_loop - t_learn - t_world - t_ep,
+                     world_python=t_world - b.kernel_s - b.chipmunk_s,
+                     final=clock() - t_start - t_loop, primitives=float(logs.steps.sum()))
+    return results
+
+
+def _result(ag: BatchAgent, k: int, i: int, logs: _Logs, grader: Grader,
+            model: TabularModel, grading_seed: int) -> PhysicsTrainResult:
+    agent = ag.step_agent(k)
+    final = grader.final(agent.state, grading_seed)
+    extras = {"grid_optimal_route_length": model.optimal_route_length,
+              "physics_optimal_route_length": grader.exact.optimal_route_length,
+              "continuous_optimal_route_m": continuous_optimum_rounded(grader.scenario),
+              "contacts_per_episode": logs.contacts[i].tolist(),
+              "sim_time_per_episode_s": np.round(logs.sim_time[i], 4).tolist(),
+              **final.extras}
+    return PhysicsTrainResult(
+        agent=agent, steps=logs.steps[i], returns=logs.returns[i], success=logs.success[i],
+        shaping_mean=logs.shaping_mean[i], shaping_std=logs.shaping_std[i],
+        wall_time_s=logs.wall[i], test_episodes=np.asarray(logs.tests_e[i]),
+        test_route_length=np.asarray(logs.tests_l[i]),
+        optimal_length=grader.exact.optimal_route_length, final_route=final.route,
+        final_route_length=final.length,
+        optimal_action_fraction=final.optimal_action_fraction, graded=grader.exact,
+        grader=grader, final_rollouts=final.rollouts, world_extras=extras)
+
+
 def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
                   rng: np.random.Generator, test_every: int = 10,
                   recorder: Any = None, plan: Any = None,
                   start_rng: np.random.Generator | None = None, fidelity: Any = None,
-                  noise_rng: np.random.Generator | None = None) -> PhysicsTrainResult:
-    """Train the step agent in PhysicsRoute-v0; optionally record (see recorded_runs).
+                  noise_rng: np.random.Generator | None = None,
+                  grading_seed: int = 0) -> PhysicsTrainResult:
+    """One physics run: :func:`train_physics_runs` with one sub-env.
 
     ``rng`` is the learner's stream, ``start_rng`` the start cells' (default ``rng``):
     with :func:`learning.streams.streams` a grid run and a physics run of one seed
     start their episodes in the same cells.
     """
-    from scenarios.recording.hooks import EpisodeTap
-
-    inner = gym.make("rnhql/PhysicsRoute-v0", scenario=sc, fidelity=fidelity,
-                     max_episode_steps=sc.steps_per_episode)
-    if noise_rng is not None:
-        inner.unwrapped.set_noise_rng(noise_rng)
-    counter = ContactCounter(inner)
-    env = EpisodeTap(counter)
-    stopper = _StopAtStep(env)
-    with sigint_to(stopper):
-        return _train(cfg, sc, model, n_episodes, rng, test_every, recorder, plan, start_rng,
-                      counter, env, stopper, fidelity)
+    group = RunGroup(cfg, [rng], [rng if start_rng is None else start_rng],
+                     None if noise_rng is None else [noise_rng], [grading_seed])
+    recorded = {0: RecordedRun(recorder, plan)} if recorder is not None else None
+    return train_physics_runs(sc, model, [group], n_episodes, test_every, fidelity,
+                              recorded)[0][0]
 
 
-def _train(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
-           rng: np.random.Generator, test_every: int, recorder: Any, plan: Any,
-           start_rng: np.random.Generator | None, counter: Any, env: Any,
-           stopper: _StopAtStep, fidelity: Any = None) -> PhysicsTrainResult:
-    from scenarios.recording.hooks import ChunkLogger
-    from sim.physics.model import physics_model
+def log_final(recorder: Any, res: PhysicsTrainResult) -> None:
+    """The final policy on a recording's map: one drive of it, every physics step, labelled
+    with what its rollouts achieved at the run's fidelity."""
+    from scenarios.runs.physics_grading import final_policy_label
 
-    graded = physics_model(sc)  # the physics world's own transitions and optimum
-    agent = make_agent(cfg, geometry_of(model), rng)
-    views = ChunkLogger(recorder, plan) if recorder is not None else None
-    logs, walls, tests_e, tests_l = [], [], [], []
-    done = 0
-    while done < n_episodes:
-        n = min(test_every, n_episodes - done)
-        # segments of the chunk: each recorded episode alone, the rest together
-        marks = [plan is not None and plan.wants(done + i) for i in range(n)]
-        i = 0
-        while i < n:
-            j = i + 1 if marks[i] else next((k for k in range(i, n) if marks[k]), n)
-            env.armed = marks[i]
-            t0 = time.perf_counter()
-            logs.append(run_env_episodes(agent, stopper, j - i, start_rng))
-            walls.append(np.full(j - i, (time.perf_counter() - t0) / (j - i)))
-            if marks[i] and recorder is not None:
-                env.log_to(recorder, done + i)
-            i = j
-        done += n
-        test = greedy_test(agent.state, graded)
-        tests_e.append(done)
-        tests_l.append(test[0])
-        if views is not None:
-            arrays = {k: np.concatenate([getattr(lg, k) for lg in logs])
-                      for k in ("steps", "returns", "success", "shaping_mean", "shaping_std")}
-            arrays["wall_time_s"] = np.concatenate(walls)
-            views.after_chunk(done, arrays, agent.state, test[1])
-    counter.flush()
-    env.close()
-    length, route = greedy_test(agent.state, graded)
-    driven = drive_greedy(agent, sc, fidelity=fidelity)
-    cat = {k: np.concatenate([getattr(lg, k) for lg in logs])
-           for k in ("steps", "returns", "success", "shaping_mean", "shaping_std")}
-    extras = {"grid_optimal_route_length": model.optimal_route_length,
-              "physics_optimal_route_length": graded.optimal_route_length,
-              "continuous_optimal_route_m": continuous_optimum_rounded(sc),
-              "contacts_per_episode": counter.contacts[-n_episodes:],
-              "sim_time_per_episode_s": np.round(counter.sim_time_s[-n_episodes:], 4).tolist(),
-              **driven.extras()}
-    return PhysicsTrainResult(agent=agent, **cat, wall_time_s=np.concatenate(walls),
-                              test_episodes=np.asarray(tests_e),
-                              test_route_length=np.asarray(tests_l),
-                              optimal_length=graded.optimal_route_length, final_route=route,
-                              final_route_length=length,
-                              optimal_action_fraction=shortest_fraction(agent.state, graded),
-                              driven=driven, graded=graded, world_extras=extras)
+    r = res.final_rollouts
+    path = r.path if r is not None and len(r.path) else None
+    recorder.log_route("final route", res.final_route, path_m=path,
+                       label=final_policy_label(res.grader.fidelity, r, res.final_route_length))

@@ -20,7 +20,12 @@
                  steps), "reward_per_step_last_10pct", "wall_time_s", "env_steps",
                  "optimal_action_fraction", "steps_per_episode" [int],
                  "return_per_episode" [float], "wall_time_per_episode_s" [float],
-                 "test_episodes" [int], "test_route_length" [int], ...} ],
+                 "test_episodes" [int], "test_route_length" [int],
+                 physics runs: "final_policy" {"rollouts", "p_goal", "p_goal_ci95",
+                 "primitives_mean", "primitives_median", "contacts_mean", "bumps_mean",
+                 "metres_mean", "sim_time_s_mean"} (the final greedy policy driven from S in
+                 the run's own world: once at exact, 50 times above it; there the route
+                 lengths are median primitives over drives), ...} ],
       "summary": {method: {world: {figure: {"median", "q25", "q75"}, ...,
                                    "optimal_route_fraction", "reached_goal_fraction",
                                    "seeds"}}}
@@ -43,6 +48,7 @@ import numpy as np
 from sim.files import atomic_write_text
 
 RESULTS_VERSION = 2
+RELIABLE_P_GOAL = 0.98  # a final policy "reaches G reliably" at this P(G) over its drives
 SUMMARY_FIGURES = ("episodes_to_stable_optimal", "episodes_to_optimal", "optimal_test_fraction",
                    "final_route_length", "epsilon_route_length", "success_rate",
                    "reward_per_step", "reward_per_step_last_10pct", "wall_time_s", "env_steps",
@@ -97,6 +103,15 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, dict[str, dict[str, Any]]
                                                         for r in rs]))
         entry["optimal_route_fraction"] = float(np.mean([r["final_route_optimal"] for r in rs]))
         entry["seeds"] = len(rs)
+        pols = [r.get("final_policy") for r in rs]
+        if all(p is not None for p in pols):  # physics: the final policy's drives
+            entry["final_policy_p_goal"] = _stats([p["p_goal"] for p in pols])
+            entry["final_policy_reliable_fraction"] = float(np.mean(
+                [p["p_goal"] >= RELIABLE_P_GOAL for p in pols]))
+            entry["final_policy_primitives_mean"] = _stats([p["primitives_mean"]
+                                                            for p in pols])
+            entry["final_policy_contacts_mean"] = _stats([p["contacts_mean"] for p in pols])
+            entry["final_policy_rollouts"] = int(pols[0]["rollouts"])
         out[method][world] = entry
     return dict(out)
 
@@ -150,8 +165,31 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
                 f"{_fmt(e['epsilon_route_length'], missing='no G')} | "
                 f"{_fmt(e['success_rate'], 2)} | {_fmt(e['reward_per_step'], 3)} | "
                 f"{_fmt(e['wall_time_s'], 2)} |")
+    lines += _policy_table(summ, methods, fid)
     lines += ["", *verdict(results)]
     return "\n".join(lines) + "\n"
+
+
+def _policy_table(summ: dict[str, Any], methods: list[str], fid: str | None) -> list[str]:
+    """Physics runs: the final policy driven in the world it trained in."""
+    rows = [(m, e) for m in methods for w, e in summ.get(m, {}).items()
+            if w == "physics" and "final_policy_p_goal" in e]
+    if not rows:
+        return []
+    n = rows[0][1]["final_policy_rollouts"]
+    out = ["", f"Physics final policies, each driven {n} time(s) from S at fidelity "
+           f"`{fid or 'exact'}` (own noise stream per drive, common across methods); "
+           "above `exact` the route lengths above are the median primitives of these drives. "
+           f"*Reliable*: seeds whose P(G) ≥ {RELIABLE_P_GOAL}. Primitives: mean over the "
+           "drives that reached G.", "",
+           "| method | P(G) | reliable seeds | primitives | contacts per drive |",
+           "|---|---|---|---|---|"]
+    for m, e in rows:
+        out.append(f"| {m} | {_fmt(e['final_policy_p_goal'], 2)} | "
+                   f"{e['final_policy_reliable_fraction']:.0%} | "
+                   f"{_fmt(e['final_policy_primitives_mean'], 1, missing='no G')} | "
+                   f"{_fmt(e['final_policy_contacts_mean'], 1)} |")
+    return out
 
 
 RANKING = ("most seeds optimal, then fewest episodes to a stable optimal route, then most seeds "

@@ -259,6 +259,10 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     if spec.world not in WORLDS:
         raise ExperimentError("command line", "--world", f"unknown world {spec.world!r}",
                               f"use one of: {', '.join(WORLDS)}")
+    if spec.world == "physics":  # one physics loop: a single run is a batch of one
+        from scenarios.runs.physics_batch import run_physics_batch
+
+        return run_physics_batch([spec])[0]
     opts = spec.recording
     if opts is None or not opts.detail:
         # a curves-only run of a comparison records nothing itself: the comparison logs its
@@ -274,8 +278,7 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
                          seed=spec.seed, world=spec.world, prefix=opts.prefix,
                          recording_id=opts.recording_id, blueprint=not opts.prefix,
                          with_scene=opts.detail,
-                         fidelity=(spec.fidelity_spec.label if spec.world == "physics"
-                                   else None)) as rec:
+                         fidelity=None) as rec:
         outcome = _train(spec, sc, model, cfg, rec, plan)
         if opts.detail:
             rec.log_route("final route", outcome.final_route)
@@ -284,20 +287,12 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
 
 def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder: Any = None,
            plan: Any = None) -> RunOutcome:
+    """A grid run (physics runs go through :mod:`scenarios.runs.physics_batch`)."""
     from learning.streams import streams
-    from learning.train import epsilon_route_lengths
+    from learning.train import epsilon_route_lengths, train_tabular
 
     rs = streams(spec.seed)  # starts, learner, evaluation: independent (common random numbers)
     rng = rs.learner
-    if spec.world == "physics":
-        from scenarios.runs.physics import train_physics
-
-        result = train_physics(cfg, sc, model, spec.episodes, rng, test_every=spec.test_every,
-                               recorder=recorder, plan=plan, start_rng=rs.starts,
-                               fidelity=spec.fidelity_spec, noise_rng=rs.physics)
-        return RunOutcome.of(result, epsilon_route_lengths(result.agent.state, result.graded,
-                                                           cfg.eps, rs.evaluation))
-    from learning.train import train_tabular
 
     observer = None
     if recorder is not None:
@@ -309,11 +304,8 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
     # the paper's test, on its own stream so it never changes the training run
     eps_routes = epsilon_route_lengths(result.state, model, cfg.eps, rs.evaluation)
     extras = None
-    if spec.drive_final:
-        from learning.agent import StepAgent
-        from learning.geometry import geometry_of
-        from scenarios.runs.physics import drive_greedy
+    if spec.drive_final:  # the grid-learned policy, graded in the physics world
+        from scenarios.runs.physics_grading import Grader
 
-        agent = StepAgent(cfg, geometry_of(model), rng, result.state)
-        extras = drive_greedy(agent, sc, fidelity=spec.fidelity_spec).extras()
+        extras = Grader(sc, spec.fidelity_spec).final(result.state, spec.seed).extras
     return RunOutcome.of(result, eps_routes, extras)

@@ -213,7 +213,7 @@ class RouteBatch:
                       self._drive_caps, self._drive_sums, self._traj, self._ntraj,
                       self.radius_m, g.circles, g.walls, g.boxes, g.start, g.items, self._seen,
                       self._stamp, self._casts, fid.wheel_noise, fid.carried_pose,
-                      self._half_base_m, self._noise, self._npos)
+                      self._half_base_m, self._noise, self._npos, fid.bumper_travel_m)
             t1 = clock()
             self.kernel_s += t1 - t0
             status = ist[:, K.STATUS]

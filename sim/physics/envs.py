@@ -143,8 +143,6 @@ class PhysicsRouteEnv(gym.Env):
         self.observation_space = spaces.Discrete(self.model.n_states)
         self.action_space = spaces.Discrete(4)
         self.disc = Discretiser.from_scenario(self.scenario)
-        rw = self.scenario.rewards
-        self._r_goal, self._r_bump, self._r_step = rw.goal, rw.bump, rw.step
         self._goal = self.model.goal
         self.world: RobotView | None = None
         self._batch: RouteBatch | None = None
@@ -186,12 +184,7 @@ class PhysicsRouteEnv(gym.Env):
         s = int(out.state[0])
         self._s = s
         bumped = bool(out.bumped[0])
-        if bumped:
-            reward = self._r_bump
-        elif s == self._goal:
-            reward = self._r_goal
-        else:
-            reward = self._r_step
+        reward = float(self.scenario.rewards.of_moves(bumped, s == self._goal))
         traj = batch.trajectory(0)
         if self._trail is not None:
             self._trail.chunks.append(traj)

@@ -12,7 +12,11 @@ a real robot does:
   measured pose until within 2 cm / 2 degrees) still lands it near the target centre.
 - ``carried_pose``: after a contact the robot stays where the contact stopped it, at rest,
   instead of being placed back (a bumper that stops the motors). The next primitive
-  starts from there: its cell is whatever cell that pose lies in.
+  starts from there: its cell is whatever cell that pose lies in. A bump is what a
+  bumper reports: a contact with a surface it was not touching, or a drive that presses
+  into the surface it rests on by ``bumper_travel_m`` [m] (a switch with mm of travel);
+  the surface holds the disc meanwhile (it slides along it, it does not sink in), and a
+  turn in place against it turns.
 
 Every knob is deterministic per seed: the noise comes from the generator the env (or the
 sweep) gives each robot. ``parse_fidelity("noisy")`` or ``"exact,wheel_noise=0.02"`` (a
@@ -29,6 +33,7 @@ from dataclasses import dataclass
 from sim.errors import ScenarioError
 
 MAX_WHEEL_NOISE = 0.5  # beyond this a "primitive" is no longer a move to a neighbour
+MAX_BUMPER_TRAVEL_M = 0.005  # PhysicsConfig.contact_depth_m: no step goes deeper [m]
 
 
 @dataclass(frozen=True)
@@ -38,6 +43,8 @@ class Fidelity:
     name: str = "exact"
     wheel_noise: float = 0.0  # relative sigma of each wheel's commanded speed, per period [-]
     carried_pose: bool = False  # after a contact the robot stays where it stopped
+    bumper_travel_m: float = 0.002  # carried pose: a drive pressing into the surface the
+    #   robot rests on reports a new bump after this much travel [m] (a bumper switch)
 
     @property
     def label(self) -> str:
@@ -58,6 +65,12 @@ class Fidelity:
                 and 0.0 <= self.wheel_noise <= MAX_WHEEL_NOISE):
             raise ScenarioError(source, "wheel_noise", f"must be in 0..{MAX_WHEEL_NOISE}, got "
                                 f"{self.wheel_noise!r}", "use e.g. 0.05 (5 % per wheel)")
+        if not (isinstance(self.bumper_travel_m, int | float)
+                and math.isfinite(self.bumper_travel_m)
+                and 0.0 < self.bumper_travel_m <= MAX_BUMPER_TRAVEL_M):
+            raise ScenarioError(source, "bumper_travel_m", f"must be in (0, "
+                                f"{MAX_BUMPER_TRAVEL_M}] m, got {self.bumper_travel_m!r}",
+                                "use e.g. 0.002 (2 mm)")
         if not isinstance(self.carried_pose, bool):
             raise ScenarioError(source, "carried_pose", f"must be true or false, got "
                                 f"{self.carried_pose!r}", "use true or false")

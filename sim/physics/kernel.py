@@ -18,7 +18,8 @@ a drive leg whose swept disc meets a surface (the leg's guard, cast once with Ch
 every step that ends within :data:`CHECK_MARGIN_M` of that surface, or past it, is handed
 back with status ``CHECK`` and the caller asks Chipmunk's collision detection
 (``cpSpaceShapeQuery``, the narrow phase ``cpSpaceStep`` runs) whether a contact began.
-Turns in place cannot begin a contact (a disc turning about its centre sweeps nothing).
+A disc turning about its centre sweeps nothing, so a turn in place begins no contact;
+with carried pose a robot resting against a surface is held by it (see :func:`advance`).
 The guard itself is cast in compiled code with Chipmunk's own segment-query formulas
 (:mod:`sim.physics.sweep`), once per (cell, action) for legs that start on their cell
 centre and once per leg otherwise. The controller (turn in place, stop, drive,
@@ -53,7 +54,8 @@ GX, GY, LIMIT = 17, 18, 19  # guard: leg start and allowed advance (inf: nothing
 TSCALE, DSCALE, TSIGN = 20, 21, 22  # scale of the turn / drive profiles, turn direction
 FREE = 23  # free distance of the leg from its start [m] (inf: none); also the cast answer
 PX, PY, PTH = 24, 25, 26  # pose before the step being checked
-NF = 27
+PRESS = 27  # carried pose: how far the drive has pressed the bumper this primitive [m]
+NF = 28
 
 # int columns of ist
 STATUS, STEPS, STEPS0 = 0, 1, 2
@@ -124,6 +126,7 @@ def begin(fs, ist, i, action, cell_m, nx, ny, deltas, headings):
     ist[i, LEG] = 0
     ist[i, CMDSET] = -1
     ist[i, FORCED] = 0
+    fs[i, PRESS] = 0.0
     ist[i, STATUS] = RUNNING
 
 
@@ -188,7 +191,7 @@ def _command(fs, ist, i, k, turn_caps, drive_caps):
 def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps, depth_m,
             cell_m, nx, ny, guards, turn_caps, turn_sums, drive_caps, drive_sums, traj, ntraj,
             radius_m, circles, walls, boxes, grid_start, grid_items, seen, stamp, casts,
-            wheel_noise, carried, half_base_m, noise, npos):
+            wheel_noise, carried, half_base_m, noise, npos, bumper_travel_m):
     """Run every ``active`` robot's primitive until it is DONE or needs Chipmunk.
 
     ``guards[cell, action]``: free distance of the drive leg from that cell's centre to
@@ -198,6 +201,12 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
     receives the pose after every step when ``traj.shape[1] > 0`` (``ntraj[i]`` counts).
     Robots left with status CHECK want to know whether the disc at (X, Y) touches
     anything; resume by calling again with the answer applied (see :mod:`sim.physics.batch`).
+
+    A robot resting against a surface (carried pose, ``INCONTACT``) is held by it: a step
+    that would carry it deeper keeps only its motion along the surface (and its turn). On
+    a drive leg the motion taken away presses the bumper (``PRESS``); at
+    ``bumper_travel_m`` the bumper reports a bump. On a turn leg nothing presses: a turn
+    in place against a surface turns.
     """
     record = traj.shape[1] > 0
     noisy = wheel_noise > 0.0 or carried  # per-step guards; twists follow the heading
@@ -321,8 +330,15 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
                                                    grid_start, grid_items, seen, stamp[0],
                                                    radius_m, fs[i, X], fs[i, Y])
                             if depth1 > depth0 + 1e-12:  # pushes into what it rests on
-                                ist[i, FORCED] = 1
-                                candidate = True
+                                into = _held(fs, i, circles, walls, boxes, cell_m, nx, ny,
+                                             grid_start, grid_items, seen, stamp, radius_m)
+                                k_now = ist[i, CMD]
+                                turning = ist[i, NTURN] > 0 and k_now <= ist[i, NTURN]
+                                if not turning:
+                                    fs[i, PRESS] += into
+                                    if fs[i, PRESS] >= bumper_travel_m:
+                                        ist[i, FORCED] = 1
+                                        candidate = True
                             elif depth1 <= 0.0:
                                 ist[i, INCONTACT] = 0
                         if candidate:
@@ -361,6 +377,34 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
                 ist[i, STATUS] = DONE
                 break
             ist[i, LEG] = 0
+
+
+@njit(cache=True)
+def _held(fs, i, circles, walls, boxes, cell_m, nx, ny, grid_start, grid_items, seen, stamp,
+          radius_m):
+    """The surface holds the disc: take away the part of the last step that went into it
+    (along the surface normal, from central differences of the overlap depth) and return
+    how far that was [m] (the bumper's press)."""
+    h = 1e-5
+    x, y = fs[i, X], fs[i, Y]
+    d = np.empty(4)
+    for j in range(4):
+        px = x + (h if j == 0 else -h if j == 1 else 0.0)
+        py = y + (h if j == 2 else -h if j == 3 else 0.0)
+        stamp[0] += 1
+        d[j] = overlap_depth(circles, walls, boxes, cell_m, nx, ny, grid_start, grid_items,
+                             seen, stamp[0], radius_m, px, py)
+    gx, gy = d[0] - d[1], d[2] - d[3]  # grows into the surface
+    g = math.hypot(gx, gy)
+    if g == 0.0:
+        return 0.0
+    nx_, ny_ = gx / g, gy / g
+    into = (x - fs[i, PX]) * nx_ + (y - fs[i, PY]) * ny_
+    if into <= 0.0:
+        return 0.0
+    fs[i, X] = x - into * nx_
+    fs[i, Y] = y - into * ny_
+    return into
 
 
 @njit(cache=True, inline="always")

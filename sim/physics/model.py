@@ -101,8 +101,7 @@ def model_from_transitions(sc: Scenario, nxt: np.ndarray) -> TabularModel:
     nxt[goal] = goal
     states = np.arange(nxt.shape[0])[:, None]
     rw = sc.rewards
-    reward = np.where(nxt == states, rw.bump, rw.step).astype(np.float64)
-    reward[nxt == goal] = rw.goal
+    reward = rw.of_moves(nxt == states, nxt == goal).astype(np.float64)  # a stay is a bump
     reward[goal] = 0.0
     dist = distances_to(nxt, goal)
     start_states = episode_starts(np.flatnonzero(dist > 0), grid.start, sc.s_start_share)

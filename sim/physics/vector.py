@@ -62,6 +62,21 @@ class PhysicsRouteVectorEnv(VectorEnv):
     right). ``infos`` holds arrays over sub-envs (gymnasium's ``key`` / ``_key`` form):
     ``pose`` (N, 3) [m, m, rad], ``time_s`` [s], ``bumped``, ``reached``, ``timeout``,
     ``steps`` (physics steps of the primitive) and ``contacts`` (how many began).
+
+    The route problem's episode rules live here and nowhere else: the reward
+    (:meth:`sim.scenario.Rewards.of_moves`), termination on entering G, truncation after
+    ``max_episode_steps`` primitives, and each sub-env's own noise stream. Physics training
+    (:mod:`scenarios.runs.physics`) steps this env; a single run is ``num_envs=1``.
+
+    ``autoreset_mode``: ``NEXT_STEP`` (gymnasium's default) or ``DISABLED``. With
+    ``DISABLED`` the caller resets ended sub-envs itself (``reset(options={"reset_mask":
+    m, "starts": s})``) and a sub-env whose episode ended and was not reset sits out every
+    later step (observation unchanged, reward 0, neither terminated nor truncated, its
+    ``_key`` masks False): a training loop whose runs finish at different times leaves them
+    there. ``reset`` options: ``start`` (``"S"``, ``"random"`` or a state, for every reset
+    sub-env), ``starts`` (``int[N]``, a start state per sub-env; only masked entries are
+    read), ``reset_mask`` (``bool[N]``). ``trajectories=True`` keeps every physics step's
+    pose of the last primitive (:meth:`trajectory`) for recordings.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}  # noqa: RUF012
@@ -70,11 +85,17 @@ class PhysicsRouteVectorEnv(VectorEnv):
                  config: PhysicsConfig | None = None, max_episode_steps: int | None = 600,
                  autoreset_options: dict[str, Any] | None = None,
                  render_mode: str | None = None,
-                 fidelity: Fidelity | str | None = None) -> None:
+                 fidelity: Fidelity | str | None = None,
+                 autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+                 trajectories: bool = False) -> None:
         if render_mode is not None:
             raise ValueError("PhysicsRouteVectorEnv does not render; use the single env")
         if not (isinstance(num_envs, int) and num_envs >= 1):
             raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+        mode = AutoresetMode(autoreset_mode)
+        if mode not in (AutoresetMode.NEXT_STEP, AutoresetMode.DISABLED):
+            raise ValueError(f"autoreset_mode must be NEXT_STEP or DISABLED, got {mode!r}")
+        self.metadata = {**type(self).metadata, "autoreset_mode": mode}
         self.num_envs = num_envs
         self.scenario = _scenario(scenario)
         self.model = build_model(self.scenario)
@@ -85,22 +106,39 @@ class PhysicsRouteVectorEnv(VectorEnv):
         self.fidelity = (fidelity if isinstance(fidelity, Fidelity)
                          else parse_fidelity(fidelity if fidelity is not None
                                              else self.scenario.physics, "fidelity"))
-        self.batch = RouteBatch(self.scenario, num_envs, self.config, fidelity=self.fidelity)
+        self.batch = RouteBatch(self.scenario, num_envs, self.config, fidelity=self.fidelity,
+                                trajectories=trajectories)
         self.single_observation_space = spaces.Discrete(self.model.n_states)
         self.single_action_space = spaces.Discrete(4)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
-        rw = self.scenario.rewards
-        self._r_goal, self._r_bump, self._r_step = rw.goal, rw.bump, rw.step
+        self._rewards = self.scenario.rewards
         self._goal = self.model.goal
         self._obs = np.zeros(num_envs, dtype=np.int64)
         self._elapsed = np.zeros(num_envs, dtype=np.int64)
         self._needs_reset = np.ones(num_envs, dtype=bool)
         self._rngs: list[np.random.Generator] = [seeding.np_random()[0]
                                                  for _ in range(num_envs)]
+        self._own_noise = np.zeros(num_envs, dtype=bool)  # noise set by set_noise_rng
 
-    def _reset_one(self, i: int, options: dict[str, Any] | None) -> None:
-        s = start_state_from_options(options, self.model, self._rngs[i])
+    @property
+    def autoreset_mode(self) -> AutoresetMode:
+        return self.metadata["autoreset_mode"]
+
+    def set_noise_rng(self, i: int, rng: np.random.Generator) -> None:
+        """Sub-env ``i`` draws its wheel noise from ``rng`` from now on, whatever seeds later
+        resets get (a sweep gives each run its own physics stream)."""
+        self.batch.set_noise_rng(int(i), rng)
+        self._own_noise[i] = True
+
+    def _reset_one(self, i: int, options: dict[str, Any] | None,
+                   starts: np.ndarray | None = None) -> None:
+        if starts is not None:
+            s = int(starts[i])
+            if not (0 <= s < self.model.n_states):
+                raise ValueError(f"options['starts'][{i}] = {s} is not a state")
+        else:
+            s = start_state_from_options(options, self.model, self._rngs[i])
         x, y = self.batch.disc.state_centre(s)
         self.batch.place(i, x, y, 0.0)
         self._obs[i] = s
@@ -113,12 +151,16 @@ class PhysicsRouteVectorEnv(VectorEnv):
         seeds = sub_env_seeds(seed, self.num_envs)
         opts = dict(options or {})
         mask = np.asarray(opts.pop("reset_mask", np.ones(self.num_envs, bool)), dtype=bool)
+        starts = opts.pop("starts", None)
+        if starts is not None:
+            starts = np.asarray(starts, dtype=np.int64).reshape(self.num_envs)
         for i in np.flatnonzero(mask):
-            if seeds[i] is not None or self.batch._noise_rngs[i] is None:
-                if seeds[i] is not None:
-                    self._rngs[i] = seeding.np_random(seeds[i])[0]
+            if seeds[i] is not None:
+                self._rngs[i] = seeding.np_random(seeds[i])[0]
+            if not self._own_noise[i] and (seeds[i] is not None
+                                           or self.batch._noise_rngs[i] is None):
                 self.batch.set_noise_rng(int(i), self._rngs[i])  # as the single env does
-            self._reset_one(int(i), opts or None)
+            self._reset_one(int(i), opts or None, starts)
         return self._obs.copy(), self._infos(mask, None)
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
@@ -126,22 +168,38 @@ class PhysicsRouteVectorEnv(VectorEnv):
         acts = np.asarray(actions, dtype=np.int64).reshape(self.num_envs)
         if ((acts < 0) | (acts > 3)).any():
             raise ValueError(f"actions must be in 0..3, got {acts.tolist()}")
-        resetting = self._needs_reset.copy()
-        for i in np.flatnonzero(resetting):
-            self._reset_one(int(i), self.autoreset_options)
-        moving = ~resetting
+        if self.autoreset_mode == AutoresetMode.NEXT_STEP:
+            resetting = self._needs_reset.copy()
+            for i in np.flatnonzero(resetting):
+                self._reset_one(int(i), self.autoreset_options)
+            moving = ~resetting
+        else:
+            moving = ~self._needs_reset
         out = self.batch.step(acts, moving)
         obs = np.where(moving, out.state, self._obs)
         terminated = moving & (obs == self._goal)
-        rewards = np.where(out.bumped, self._r_bump,
-                           np.where(terminated, self._r_goal, self._r_step)) * moving
+        rewards = self._rewards.of_moves(out.bumped, terminated) * moving
         self._elapsed += moving
         truncated = (moving & (self._elapsed >= self.max_episode_steps)
                      if self.max_episode_steps is not None else np.zeros_like(moving))
         self._obs[:] = obs
-        self._needs_reset = terminated | truncated
+        if self.autoreset_mode == AutoresetMode.DISABLED:
+            self._needs_reset |= terminated | truncated  # idle until the caller resets
+            mask = moving
+        else:
+            self._needs_reset = terminated | truncated
+            mask = np.ones(self.num_envs, bool)
         return obs.copy(), rewards.astype(np.float64), terminated, truncated, \
-            self._infos(np.ones(self.num_envs, bool), out)
+            self._infos(mask, out)
+
+    def trajectory(self, i: int) -> np.ndarray:
+        """float64[n, 3]: sub-env ``i``'s pose before its last primitive, then after each
+        physics step of it (needs ``trajectories=True``)."""
+        return self.batch.trajectory(int(i))
+
+    def contact_records(self, i: int) -> list[Any]:
+        """Sub-env ``i``'s contacts (:class:`sim.physics.Contact`) since its last reset."""
+        return self.batch.contacts[int(i)]
 
     def _infos(self, mask: np.ndarray, out: Any) -> dict[str, Any]:
         b = self.batch

@@ -1,0 +1,155 @@
+"""A policy driven from S many times in the physics world at a fidelity: what it achieves.
+
+Above ``exact`` a primitive's outcome is random (wheel noise, a pose carried from the
+last contact), so one drive of a policy is one sample: a policy that reaches G in 98 %
+of drives can miss in the one drive that is shown, and one that misses a quarter of the
+time can reach G in it. A policy is graded by driving it ``n`` times, each rollout a
+robot of one :class:`sim.physics.vector.PhysicsRouteVectorEnv` (one Space, one compiled
+call per primitive for all of them) with its own noise stream, seeded from
+``(seed, tag, k)`` so rollout ``k`` of every method sees the same stream (common random
+numbers). P(G) carries a Wilson 95 % interval.
+
+At ``exact`` every rollout is the same, so ``n = 1`` is the deterministic test.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium.vector import AutoresetMode
+
+from sim.physics.fidelity import Fidelity
+from sim.physics.static import PhysicsConfig
+from sim.physics.vector import PhysicsRouteVectorEnv
+from sim.scenario import Scenario
+
+Z95 = 1.959963984540054  # two-sided 95 % normal quantile
+
+
+def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """The Wilson score interval of a binomial proportion (good at 0/n and n/n, where the
+    normal approximation collapses to a point)."""
+    if n <= 0:
+        return 0.0, 1.0
+    p = successes / n
+    denom = 1.0 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+@dataclass(frozen=True)
+class Rollouts:
+    """``n`` drives of one policy from S; arrays per rollout."""
+
+    reached: np.ndarray  # bool[n]: entered G within the step budget
+    primitives: np.ndarray  # int64[n]: primitives driven (the budget when G was missed)
+    contacts: np.ndarray  # int64[n]: contacts that began
+    bumps: np.ndarray  # int64[n]: primitives that ended in a bump
+    sim_time_s: np.ndarray  # float64[n]: simulated time [s]
+    metres: np.ndarray  # float64[n]: path length driven [m] (nan when not measured)
+    routes: list[list[int]]  # the cells of each rollout, S first (empty when not kept)
+    path: np.ndarray  # float64[m, 3]: rollout 0's poses, as the env's info trajectories
+    #                   concatenate (each primitive's start pose, then every physics step)
+    poses: np.ndarray  # float64[k + 1, 3]: rollout 0's pose at S and after each primitive
+
+    @property
+    def n(self) -> int:
+        return int(self.reached.size)
+
+    @property
+    def p_goal(self) -> float:
+        return float(self.reached.mean()) if self.n else 0.0
+
+    @property
+    def p_goal_interval(self) -> tuple[float, float]:
+        return wilson_interval(int(self.reached.sum()), self.n)
+
+    def median_primitives(self) -> float:
+        """Median primitives to G, a rollout that missed counting as infinite."""
+        v = np.where(self.reached, self.primitives.astype(float), np.inf)
+        return float(np.median(v)) if self.n else math.inf
+
+    def summary(self) -> dict[str, object]:
+        """The record's fields (means over rollouts; primitives over those that reached G)."""
+        lo, hi = self.p_goal_interval
+        hit = self.reached
+        med = self.median_primitives()
+        return {
+            "rollouts": self.n,
+            "p_goal": round(self.p_goal, 6),
+            "p_goal_ci95": [round(lo, 6), round(hi, 6)],
+            "primitives_mean": (round(float(self.primitives[hit].mean()), 4)
+                                if hit.any() else None),
+            "primitives_median": None if not math.isfinite(med) else med,
+            "contacts_mean": round(float(self.contacts.mean()), 4),
+            "bumps_mean": round(float(self.bumps.mean()), 4),
+            "metres_mean": (None if np.isnan(self.metres).all()
+                            else round(float(np.nanmean(self.metres)), 4)),
+            "sim_time_s_mean": round(float(self.sim_time_s.mean()), 4),
+        }
+
+
+def rollout_rngs(seed: int, tag: int, n: int) -> list[np.random.Generator]:
+    """Rollout ``k``'s noise stream: the same for every method of a seed (``tag`` names
+    the test, e.g. the episode it ran after)."""
+    return [np.random.default_rng([int(seed), int(tag), k, 0x524F4C4C]) for k in range(n)]
+
+
+def drive_policy(sc: Scenario, policy: np.ndarray | Callable[[np.ndarray], np.ndarray],
+                 fidelity: Fidelity, n: int, seed: int = 0, tag: int = 0,
+                 max_steps: int | None = None, config: PhysicsConfig | None = None, *,
+                 measure_metres: bool = False, keep_routes: bool = False,
+                 keep_path: bool = False) -> Rollouts:
+    """Drive ``policy`` (``int[nS]``, an action per cell, or ``f(states) -> actions``) from S
+    ``n`` times at ``fidelity``, each rollout for at most ``max_steps`` primitives (default:
+    the scenario's episode length)."""
+    n = int(n)
+    if n < 1:
+        raise ValueError(f"n must be >= 1, got {n}")
+    limit = int(max_steps or sc.steps_per_episode)
+    env = PhysicsRouteVectorEnv(n, sc, config=config, max_episode_steps=limit,
+                                fidelity=fidelity, autoreset_mode=AutoresetMode.DISABLED,
+                                trajectories=measure_metres or keep_path)
+    for k, rng in enumerate(rollout_rngs(seed, tag, n)):
+        env.set_noise_rng(k, rng)
+    table = None if callable(policy) else np.asarray(policy, dtype=np.int64)
+    s, info = env.reset(options={"start": "S"})
+    path: list[np.ndarray] = [info["pose"][:1].copy()] if keep_path else []
+    poses: list[np.ndarray] = [info["pose"][0].copy()] if keep_path else []
+    running = np.ones(n, bool)
+    reached = np.zeros(n, bool)
+    prims = np.zeros(n, np.int64)
+    contacts = np.zeros(n, np.int64)
+    bumps = np.zeros(n, np.int64)
+    sim_t = np.zeros(n)
+    metres = np.zeros(n) if measure_metres else np.full(n, np.nan)
+    routes = [[int(x)] for x in s] if keep_routes else []
+    while running.any():
+        a = table[s] if table is not None else np.asarray(policy(s), dtype=np.int64)
+        s2, _, term, trunc, info = env.step(np.where(running, a, 0))
+        prims += running
+        contacts += info["contacts"]
+        bumps += info["bumped"]
+        if measure_metres or keep_path:
+            for i in np.flatnonzero(running):
+                traj = env.trajectory(int(i))
+                if measure_metres:
+                    metres[i] += float(np.hypot(*np.diff(traj[:, :2], axis=0).T).sum())
+                if keep_path and i == 0:
+                    path.append(traj)
+                    poses.append(info["pose"][0].copy())
+        if keep_routes:
+            for i in np.flatnonzero(running):
+                routes[i].append(int(s2[i]))
+        reached |= term
+        ended = term | trunc
+        sim_t = np.where(ended, info["time_s"], sim_t)
+        running &= ~ended
+        s = s2
+    return Rollouts(reached, prims, contacts, bumps, sim_t, metres, routes,
+                    np.concatenate(path) if path else np.zeros((0, 3)),
+                    np.asarray(poses) if poses else np.zeros((0, 3)))

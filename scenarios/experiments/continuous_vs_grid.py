@@ -34,7 +34,7 @@ def overlay_method(results: dict[str, Any], methods: list[str]) -> str:
     for m in methods:
         runs = [r for r in results["runs"] if r["method"] == m]
         first = min(runs, key=lambda r: (r["world"], r["seed"]))
-        if first.get("physics_route_length", -1) >= 0:
+        if first.get("final_policy", {}).get("p_goal", 0) > 0:
             return m
     return methods[0]
 
@@ -105,6 +105,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="worker processes")
     p.add_argument("--resume", action="store_true", help="keep the runs of an earlier call")
     p.add_argument("--out", default="results/continuous-vs-grid", help="output folder")
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/ladder.NAME.json (the docs render it)")
     args = p.parse_args(argv)
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     maps = [m.strip() for m in args.maps.split(",") if m.strip()]
@@ -125,7 +127,15 @@ def main(argv: list[str] | None = None) -> int:
             overlay(results, name, overlay_method(results, methods), sub / "overlay.png")
     text = ladder_report(cells, args)
     atomic_write_text(out / "ladder.md", text)
-    ladder_figure(cells, methods, out / "ladder.png")
+    data = ladder_data(cells, args)
+    ladder_figure(data["rows"], methods, out / "ladder.png")
+    if args.artifact:  # the docs' table and figure, from the same data
+        from scenarios.artifacts import ROOT, write_artifact
+
+        write_artifact(f"ladder.{args.artifact}", ladder_command(args)
+                       + f" --artifact {args.artifact}", ["grid", "physics-exact",
+                                                          "physics-noisy"], data)
+        ladder_figure(data["rows"], methods, ROOT / "docs" / "ladder.png")
     print(text)
     return 0
 
@@ -166,7 +176,9 @@ def _q(values: list[float], digits: int = 1) -> str:
 
 
 def ladder_rows(cells: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """One row per map x rung x method x where it was trained (grid / the rung itself)."""
+    """One row per map x rung x method x where it was trained (grid / the rung itself),
+    from each run's ``final_policy``: the final greedy policy driven from S at the rung
+    (once at exact, 50 times above it)."""
     from sim.physics.optimum import continuous_optimum_m
 
     rows = []
@@ -181,67 +193,60 @@ def ladder_rows(cells: list[dict[str, Any]]) -> list[dict[str, Any]]:
         for r in res["runs"]:
             groups.setdefault((r["method"], r["world"]), []).append(r)
         for (method, world), runs in groups.items():
-            reached = [r for r in runs if r.get("physics_route_length", -1) >= 0]
-            metres = [r["physics_route_metres"] for r in reached]
+            pols = [r["final_policy"] for r in runs]
+            metres = [p["metres_mean"] for p in pols if p["p_goal"] > 0]
             rows.append(dict(
                 map=cell["map"], rung=cell["rung"], method=method,
                 trained="grid" if world == "grid" else cell["rung"], seeds=len(runs),
-                reached=len(reached), metres=metres,
-                ratio=[m / cont for m in metres] if cont else [],
-                grid_optimal=sum(r["final_route_optimal"] for r in runs),
-                sim_time=[r["physics_route_sim_time_s"] for r in reached],
-                contacts=[r["physics_route_contacts"] for r in runs],
+                p_goal=[p["p_goal"] for p in pols],
+                reliable=sum(p["p_goal"] >= 0.98 for p in pols),
+                primitives=[p["primitives_mean"] for p in pols if p["p_goal"] > 0],
+                metres=metres, ratio=[m / cont for m in metres] if cont else [],
+                sim_time=[p["sim_time_s_mean"] for p in pols if p["p_goal"] > 0],
+                contacts=[p["contacts_mean"] for p in pols],
                 train_contacts=[float(np.mean(r["contacts_per_episode"])) for r in runs
                                 if r.get("contacts_per_episode")],
+                rollouts=pols[0]["rollouts"],
+                physics_opt=runs[0].get("physics_optimal_route_length"),
                 grid_opt=res["optimal_route_length"], cont=cont,
                 aliasing=cell["aliasing"]["multi_outcome_fraction"]))
     return rows
 
 
-def ladder_report(cells: list[dict[str, Any]], args: argparse.Namespace) -> str:
+def ladder_data(cells: list[dict[str, Any]], args: argparse.Namespace) -> dict[str, Any]:
+    """The artifact the docs render the ladder table from (quantiles computed here)."""
+    from scenarios.runs.results import quantile
+
+    def q(v: list[float]) -> list[float | None]:
+        return [quantile(v, x) for x in (0.5, 0.25, 0.75)] if v else [None] * 3
+
     rows = ladder_rows(cells)
-    best: dict[tuple[str, str], float] = {}
+    out = []
     for r in rows:
-        if r["metres"]:
-            k = (r["map"], r["rung"])
-            best[k] = min(best.get(k, np.inf), float(np.median(r["metres"])))
-    lines = [
-        "# Continuous vs gridded, along the fidelity ladder", "",
-        f"Command: `python -m scenarios.experiments.continuous_vs_grid --maps {args.maps} "
-        f"--methods {args.methods} --rungs {args.rungs} --seeds {args.seeds} "
-        f"--episodes {args.episodes} --rewards {args.rewards}`", "",
-        "Each row: a method trained in the grid (its final greedy policy then *driven* at "
-        "the rung: transfer) or in physics at the rung (trained and driven there). "
-        "*reached G*: seeds whose driven route from S reaches G; *optimal (graded)*: seeds "
-        "whose final greedy route is optimal on the world's exact cell model (grid runs: the "
-        "grid's; physics runs: the physics world's); *driven*: route length in metres, median "
-        "[q25, q75] over the seeds that reached G; *vs best*: that median over the best median "
-        "of any row at this map and rung; */ continuous*: over the disc's any-angle optimum "
-        "(Theta*, an upper bound on the true shortest path); *aliasing*: share of (cell, "
-        f"action) pairs with more than one next cell ({args.repeats} drives each).", "",
-        "| map | rung | aliasing | method | trained in | reached G | optimal (graded) | "
-        "driven (m) | vs best | / continuous | sim time to G (s) | contacts on the drive | "
-        "contacts per training episode |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        med = float(np.median(r["metres"])) if r["metres"] else None
-        vs = f"{med / best[(r['map'], r['rung'])]:.3f}" if med is not None else "—"
-        ratio = f"{np.median(r['ratio']):.3f}" if r["ratio"] else "—"
-        train_c = _q(r["train_contacts"], 2) if r["train_contacts"] else "—"
-        lines.append(
-            f"| {r['map']} | {r['rung']} | {r['aliasing']:.3f} | {r['method']} | "
-            f"{r['trained']} | {r['reached']}/{r['seeds']} | "
-            f"{r['grid_optimal']}/{r['seeds']} | {_q(r['metres'])} | {vs} | {ratio} | "
-            f"{_q(r['sim_time'])} | {_q(r['contacts'], 0)} | {train_c} |")
-    conts = {r["map"]: r["cont"] for r in rows}
-    lines += ["", "Optima per map: " + "; ".join(
-        f"{m}: grid {next(r['grid_opt'] for r in rows if r['map'] == m)} moves, continuous "
-        f"{'—' if c is None else f'{c:.2f} m'}" for m, c in conts.items()) + "."]
-    return "\n".join(lines) + "\n"
+        out.append({k: r[k] for k in ("map", "rung", "method", "trained", "seeds",
+                                      "reliable", "rollouts", "aliasing", "grid_opt",
+                                      "physics_opt", "cont")}
+                   | {k: q(r[k]) for k in ("p_goal", "primitives", "metres", "ratio",
+                                           "sim_time", "contacts", "train_contacts")})
+    return {"command": ladder_command(args), "repeats": args.repeats, "rows": out}
 
 
-def ladder_figure(cells: list[dict[str, Any]], methods: list[str], path: Path) -> None:
-    """Per map: seeds reaching G (top) and driven route over the continuous optimum (bottom)
+def ladder_command(args: argparse.Namespace) -> str:
+    return (f"python -m scenarios.experiments.continuous_vs_grid --maps {args.maps} "
+            f"--methods {args.methods} --rungs {args.rungs} --seeds {args.seeds} "
+            f"--episodes {args.episodes} --rewards {args.rewards}")
+
+
+def ladder_report(cells: list[dict[str, Any]], args: argparse.Namespace) -> str:
+    from scenarios.artifact_tables import ladder_table
+
+    return ("# Continuous vs gridded, along the fidelity ladder\n\n"
+            f"Command: `{ladder_command(args)}`\n\n" + ladder_table(ladder_data(cells, args)))
+
+
+def ladder_figure(rows: list[dict[str, Any]], methods: list[str], path: Path) -> None:
+    """From the artifact's rows (:func:`ladder_data`). Per map: seeds with P(G) ≥ 0.98 (top)
+    and driven route over the continuous optimum (bottom)
     against the rung, a line per method and where it was trained (solid: at the rung,
     dashed: in the grid)."""
     import matplotlib
@@ -251,7 +256,6 @@ def ladder_figure(cells: list[dict[str, Any]], methods: list[str], path: Path) -
 
     from scenarios.palette import method_colour_mpl
 
-    rows = ladder_rows(cells)
     maps = list(dict.fromkeys(r["map"] for r in rows))
     rungs = list(dict.fromkeys(r["rung"] for r in rows))
     fig, axes = plt.subplots(2, len(maps), figsize=(4.2 * len(maps), 6.4), dpi=110,
@@ -268,15 +272,15 @@ def ladder_figure(cells: list[dict[str, Any]], methods: list[str], path: Path) -
                 style = dict(color=method_colour_mpl(method), ls="-" if physics else "--",
                              marker="o" if physics else "s", ms=4, lw=1.3)
                 label = f"{method} ({'physics' if physics else 'grid'}-trained)"
-                axes[0, j].plot(x, [r["reached"] / r["seeds"] for _, r in pts], label=label,
-                                **style)
-                y = [np.median(r["ratio"]) if r["ratio"] else np.nan for _, r in pts]
+                axes[0, j].plot(x, [r["reliable"] / r["seeds"] for _, r in pts],
+                                label=label, **style)
+                y = [np.nan if r["ratio"][0] is None else r["ratio"][0] for _, r in pts]
                 axes[1, j].plot(x, y, **style)
         axes[0, j].set_title(m, fontsize=10)
         axes[0, j].set_ylim(-0.05, 1.05)
         axes[1, j].set_xticks(range(len(rungs)), rungs)
         axes[1, j].set_xlabel("physics fidelity")
-    axes[0, 0].set_ylabel("seeds whose driven route reaches G")
+    axes[0, 0].set_ylabel("seeds with P(G) ≥ 0.98")
     axes[1, 0].set_ylabel("driven / continuous optimum")
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7, frameon=False)

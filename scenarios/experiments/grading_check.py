@@ -64,6 +64,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--rewards", default="goal-only")
     p.add_argument("--drives", type=int, default=50)
     p.add_argument("--out", default="results/grading-check")
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/NAME.json (a table the docs render)")
     args = p.parse_args(argv)
     fid = parse_fidelity(args.fidelity)
     sc, model = load(args.scenario, None, None, args.rewards)
@@ -116,8 +118,36 @@ def main(argv: list[str] | None = None) -> int:
     atomic_write_text(outdir / "grading.json", json.dumps(
         {"command": cmd, "fidelity": fid.label, "policies": out}, indent=1))
     atomic_write_text(outdir / "GRADING.md", text)
+    if args.artifact:
+        from scenarios.artifacts import write_artifact
+
+        write_artifact(f"physics-grading.{args.artifact}", cmd + f" --artifact {args.artifact}",
+                       ["grid", "physics-exact", "physics-noisy"],
+                       artifact_data(args, fid.label, methods, out))
     print(text)
     return 0
+
+
+def artifact_data(args: argparse.Namespace, label: str, methods: list[str],
+                  out: list[dict]) -> dict:
+    """What the docs' table shows, per method (quantiles over seeds, type 7)."""
+    from scenarios.runs.results import quantile
+
+    def stats(v: list) -> list:
+        return [quantile(v, q) for q in (0.5, 0.25, 0.75)]
+
+    per = {}
+    for m in methods:
+        rows = [o for o in out if o["method"] == m]
+        per[m] = {"seeds": len(rows),
+                  "reliable": sum(o["tool"]["p_goal"] >= 0.98 for o in rows),
+                  "p_goal": stats([o["tool"]["p_goal"] for o in rows]),
+                  "primitives": stats([o["tool"]["primitives_mean"] for o in rows]),
+                  "contacts": stats([o["tool"]["contacts_mean"] for o in rows]),
+                  "independent_p_goal": stats([o["independent"]["p_goal"] for o in rows]),
+                  "agree": sum(o["agree"] for o in rows)}
+    return {"scenario": args.scenario, "fidelity": label, "episodes": args.episodes,
+            "rewards": args.rewards, "drives": args.drives, "methods": per}
 
 
 if __name__ == "__main__":

@@ -10,9 +10,12 @@ per cell, :func:`learning.readout.greedy_actions`) from S as rollouts at the run
 fidelity (:func:`sim.physics.rollouts.drive_policy`), each with its own noise stream,
 common across methods (seeded by the run's seed and the test's episode):
 
-* a periodic test: :data:`TEST_ROLLOUTS` rollouts; its route length is the median
-  number of primitives (a rollout that missed G counting as infinite; -1 when the
-  median is), so "optimal" means at least half the drives took the fewest moves;
+* a periodic test: :data:`TEST_ROLLOUTS` rollouts of at most
+  ``TEST_BUDGET_FACTOR`` x the exact optimum + :data:`TEST_BUDGET_SLACK` primitives (a
+  longer drive is far from optimal whatever it does next, and a policy that loops would
+  otherwise cost the full episode length ten times per test); its route length is the
+  median number of primitives (a rollout that missed G counting as infinite; -1 when
+  the median is), so "optimal" means at least half the drives took the fewest moves;
 * the final policy: :data:`FINAL_ROLLOUTS` rollouts, reported as P(G) with a Wilson 95 %
   interval (50 drives bound a policy that never missed at P >= 0.93) and the mean and
   median primitives, contacts, bumps, metres and sim time (``final_policy`` in the
@@ -34,10 +37,12 @@ from learning.readout import greedy_actions
 from learning.train import epsilon_route_lengths, greedy_test, shortest_fraction
 from sim.physics.fidelity import Fidelity
 from sim.physics.model import physics_model
-from sim.physics.rollouts import Rollouts, drive_policy
+from sim.physics.rollouts import Rollouts, drive_policy, rollout_env
 from sim.scenario import Scenario
 
 TEST_ROLLOUTS = 10  # drives per periodic greedy test above exact
+TEST_BUDGET_FACTOR = 3  # a periodic test's drive ends after this x the exact optimum ...
+TEST_BUDGET_SLACK = 20  # ... + this many primitives (at most the episode length)
 FINAL_ROLLOUTS = 50  # drives of the final policy above exact
 FINAL_TAG = 1 << 40  # the final policy's rollout streams (periodic tests use the episode)
 EPSILON_TAG = (1 << 40) + 1  # the epsilon-greedy test's rollout streams
@@ -78,20 +83,32 @@ class Grader:
         self.scenario = sc
         self.fidelity = fidelity or Fidelity()
         self.exact = physics_model(sc)  # the disc's own moves at exact (the yardstick there)
+        self._envs: dict[tuple[int, bool], Any] = {}  # rollout envs, built once
+
+    def _env(self, n: int, trajectories: bool) -> Any:
+        key = (n, trajectories)
+        if key not in self._envs:
+            self._envs[key] = rollout_env(self.scenario, n, self.fidelity,
+                                          trajectories=trajectories)
+        return self._envs[key]
 
     @property
     def in_rollouts(self) -> bool:
         return not self.fidelity.is_exact
 
     def drive(self, st, n: int, seed: int, tag: int, **kw: Any) -> Rollouts:
+        env = self._env(n, kw.get("measure_metres", False) or kw.get("keep_path", False))
         return drive_policy(self.scenario, greedy_actions(st), self.fidelity, n, seed, tag,
-                            **kw)
+                            env=env, **kw)
 
     def test(self, st, seed: int, episode: int) -> tuple[int, list[int]]:
         """(route length or -1, cells of the route shown) of a periodic greedy test."""
         if not self.in_rollouts:
             return greedy_test(st, self.exact)
-        r = self.drive(st, TEST_ROLLOUTS, seed, episode, keep_routes=True)
+        opt = max(self.exact.optimal_route_length, 0)
+        budget = min(self.scenario.steps_per_episode,
+                     TEST_BUDGET_FACTOR * opt + TEST_BUDGET_SLACK)
+        r = self.drive(st, TEST_ROLLOUTS, seed, episode, keep_routes=True, max_steps=budget)
         return median_length(r), r.routes[0]
 
     def final(self, st, seed: int) -> FinalGrade:

@@ -93,6 +93,14 @@ class Rollouts:
         }
 
 
+def rollout_env(sc: Scenario, n: int, fidelity: Fidelity, config: PhysicsConfig | None = None,
+                *, trajectories: bool = False) -> PhysicsRouteVectorEnv:
+    """A vector env of ``n`` robots for :func:`drive_policy` to reuse."""
+    return PhysicsRouteVectorEnv(n, sc, config=config, fidelity=fidelity,
+                                 autoreset_mode=AutoresetMode.DISABLED,
+                                 trajectories=trajectories)
+
+
 def rollout_rngs(seed: int, tag: int, n: int) -> list[np.random.Generator]:
     """Rollout ``k``'s noise stream: the same for every method of a seed (``tag`` names
     the test, e.g. the episode it ran after)."""
@@ -103,17 +111,22 @@ def drive_policy(sc: Scenario, policy: np.ndarray | Callable[[np.ndarray], np.nd
                  fidelity: Fidelity, n: int, seed: int = 0, tag: int = 0,
                  max_steps: int | None = None, config: PhysicsConfig | None = None, *,
                  measure_metres: bool = False, keep_routes: bool = False,
-                 keep_path: bool = False) -> Rollouts:
+                 keep_path: bool = False, env: PhysicsRouteVectorEnv | None = None
+                 ) -> Rollouts:
     """Drive ``policy`` (``int[nS]``, an action per cell, or ``f(states) -> actions``) from S
     ``n`` times at ``fidelity``, each rollout for at most ``max_steps`` primitives (default:
-    the scenario's episode length)."""
+    the scenario's episode length). ``env``: a :func:`rollout_env` of ``n`` sub-envs to
+    reuse (its Space and static shapes are built once; every rollout is reset anyway)."""
     n = int(n)
     if n < 1:
         raise ValueError(f"n must be >= 1, got {n}")
     limit = int(max_steps or sc.steps_per_episode)
-    env = PhysicsRouteVectorEnv(n, sc, config=config, max_episode_steps=limit,
-                                fidelity=fidelity, autoreset_mode=AutoresetMode.DISABLED,
-                                trajectories=measure_metres or keep_path)
+    if env is None:
+        env = rollout_env(sc, n, fidelity, config, trajectories=measure_metres or keep_path)
+    elif env.num_envs != n or ((measure_metres or keep_path) and not env.batch._traj.shape[1]):
+        raise ValueError("the env to reuse must have n sub-envs (and trajectories if "
+                         "metres or the path are wanted)")
+    env.max_episode_steps = limit
     for k, rng in enumerate(rollout_rngs(seed, tag, n)):
         env.set_noise_rng(k, rng)
     table = None if callable(policy) else np.asarray(policy, dtype=np.int64)

@@ -1,0 +1,112 @@
+"""The Markdown of each kind of artifact (:mod:`scenarios.artifacts`): one function each,
+registered under the kind (the artifact's name up to its first dot)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {}
+
+
+def renderer(kind: str) -> Callable[[Callable[[dict[str, Any]], str]], Callable]:
+    def deco(fn: Callable[[dict[str, Any]], str]) -> Callable:
+        RENDERERS[kind] = fn
+        return fn
+    return deco
+
+
+def _q(v: list[float | None], digits: int = 0, missing: str = "never") -> str:
+    """``median [q25, q75]``; ``None`` or infinity reads ``missing``."""
+    def one(x: float | None) -> str:
+        return missing if x is None or not math.isfinite(x) else f"{x:.{digits}f}"
+    return f"{one(v[0])} [{one(v[1])}, {one(v[2])}]"
+
+
+@renderer("physics-grading")
+def physics_grading(d: dict[str, Any]) -> str:
+    lines = [f"{d['scenario']} at `{d['fidelity']}`, {d['episodes']} episodes, rewards "
+             f"`{d['rewards']}`; each final greedy policy driven {d['drives']} times from S "
+             "in the world it trained in (median [q25, q75] over seeds).", "",
+             "| method | seeds with P(G) ≥ 0.98 | P(G) | primitives to G (mean) | "
+             "contacts per drive | independent P(G) | agree |",
+             "|---|---|---|---|---|---|---|"]
+    for m, e in d["methods"].items():
+        lines.append(f"| {m} | {e['reliable']}/{e['seeds']} | {_q(e['p_goal'], 2)} | "
+                     f"{_q(e['primitives'], 1, 'no G')} | {_q(e['contacts'], 1)} | "
+                     f"{_q(e['independent_p_goal'], 2)} | {e['agree']}/{e['seeds']} |")
+    return "\n".join(lines) + "\n"
+
+
+@renderer("ladder")
+def ladder_table(d: dict[str, Any]) -> str:
+    """The fidelity ladder: each method trained in the grid (then driven at the rung) and
+    in physics at the rung, graded by driving its final policy at the rung."""
+    rows = d["rows"]
+    best: dict[tuple[str, str], float] = {}
+    for r in rows:
+        if r["metres"][0] is not None:
+            k = (r["map"], r["rung"])
+            best[k] = min(best.get(k, math.inf), r["metres"][0])
+    n = max((r["rollouts"] for r in rows), default=0)
+    lines = [
+        "Each row: a method trained in the grid (its final greedy policy then *driven* at "
+        "the rung: transfer) or in physics at the rung. Every final policy is driven from S "
+        f"at the rung (once at `exact`, {n} times above it, each drive its own noise "
+        "stream); figures are median [q25, q75] over seeds of each seed's mean over its "
+        "drives. *P(G)*: share of drives reaching G; *reliable*: seeds with P(G) ≥ 0.98; "
+        "*primitives*, *driven*, *sim time*: over the drives that reached G; *vs best*: "
+        "that median over the best at this map and rung; */ continuous*: over the disc's "
+        "any-angle optimum (Theta*); *aliasing*: share of (cell, action) pairs with more "
+        f"than one next cell ({d['repeats']} drives each).", "",
+        "| map | rung | aliasing | method | trained in | P(G) | reliable | primitives | "
+        "driven (m) | vs best | / continuous | sim time to G (s) | contacts per drive | "
+        "contacts per training episode |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        med = r["metres"][0]
+        vs = "—" if med is None else f"{med / best[(r['map'], r['rung'])]:.3f}"
+        ratio = "—" if r["ratio"][0] is None else f"{r['ratio'][0]:.3f}"
+        tc = "—" if r["train_contacts"][0] is None else _q(r["train_contacts"], 2)
+        lines.append(
+            f"| {r['map']} | {r['rung']} | {r['aliasing']:.3f} | {r['method']} | "
+            f"{r['trained']} | {_q(r['p_goal'], 2)} | {r['reliable']}/{r['seeds']} | "
+            f"{_q(r['primitives'], 1, '—')} | {_q(r['metres'], 1, '—')} | {vs} | {ratio} | "
+            f"{_q(r['sim_time'], 1, '—')} | {_q(r['contacts'], 1)} | {tc} |")
+    maps = list(dict.fromkeys(r["map"] for r in rows))
+    lines += ["", "Optima per map: " + "; ".join(
+        f"{m}: grid {next(r['grid_opt'] for r in rows if r['map'] == m)} moves, physics "
+        f"(exact) {_physics_opt(rows, m)} moves, continuous "
+        + next(("—" if r["cont"] is None else f"{r['cont']:.2f} m")
+               for r in rows if r["map"] == m) for m in maps) + "."]
+    return "\n".join(lines) + "\n"
+
+
+def _physics_opt(rows: list[dict[str, Any]], m: str) -> str:
+    return next((str(r["physics_opt"]) for r in rows if r["map"] == m and r["physics_opt"]),
+                "—")
+
+
+def scenario_table() -> str:
+    """The built-in scenarios, listed from the code (not a measurement: no artifact)."""
+    from sim.grid import build_model
+    from sim.scenario_io import builtin_names, resolve_scenario
+
+    lines = ["| scenario | cells | circles | blocked map cells | free cells | S | G | "
+             "BFS route (moves) | what it is |", "|---|---|---|---|---|---|---|---|---|"]
+    for name in builtin_names():
+        sc = resolve_scenario(name)
+        m = build_model(sc)
+        desc = " ".join(sc.description.split()) or "—"
+        lines.append(f"| `{name}` | {sc.nx}×{sc.ny} | {len(sc.obstacles)} | "
+                     f"{len(sc.blocked_cells)} | {int((~m.blocked).sum())} | {sc.start} | "
+                     f"{sc.goal} | {m.optimal_route_length} | {desc} |")
+    return "\n".join(lines) + "\n"
+
+
+def show_scenarios() -> None:
+    """For a Cog block: the scenario table."""
+    import cog
+
+    cog.out(scenario_table())

@@ -1,0 +1,146 @@
+"""Results as code: every figure in the docs comes from a committed artifact, and says so.
+
+A study that the README or a ``docs/`` page quotes writes a small JSON artifact to
+``docs/results/<name>.json`` (:func:`write_artifact`) holding what it measured and how:
+the command, the date, the code version, and the *behaviour digests* of the code that
+measured it. The Markdown tables are rendered from those files by code (:func:`render`),
+inside Cog blocks (the ``cogapp`` package) in the Markdown::
+
+    <!-- [[[cog from scenarios.artifacts import render; render("physics-grading.x") ]]] -->
+    ... generated ...
+    <!-- [[[end]]] -->
+
+``cog -r README.md docs/*.md`` regenerates them; ``cog --check`` (run by the tests) fails
+when a block differs from what its artifact renders to, so a table cannot drift from its
+artifact unnoticed.
+
+**Staleness shows itself.** The behaviour digests are hashes of the golden sweep's
+records (``tests/data/golden_sweep.json``: every method in the grid, in physics at
+``exact`` and at ``noisy``), one per part a study can depend on: ``grid``,
+``physics-exact``, ``physics-noisy``. A change that alters results must regenerate the
+golden file (its test fails otherwise), which changes the digest of the part it touched;
+every table measured with the old digest then renders with a banner naming what changed
+and the command that re-measures it, until that command is re-run. A refactor that
+keeps every record leaves every table fresh.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import json
+import subprocess
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from sim.files import atomic_write_text
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS_DIR = ROOT / "docs" / "results"
+GOLDEN = ROOT / "tests" / "data" / "golden_sweep.json"
+PARTS = ("grid", "physics-exact", "physics-noisy")
+FORMAT = "rnhql-artifact-1"
+
+
+class ArtifactError(ValueError):
+    """A missing or malformed artifact (its path, what is wrong, how to fix it)."""
+
+
+def part_of(key: str) -> str:
+    """Which behaviour part a golden record's key belongs to."""
+    if "|grid|" in key:
+        return "grid"
+    return "physics-noisy" if "|fid=" in key else "physics-exact"
+
+
+def behaviour_digests(golden: Path = GOLDEN) -> dict[str, str]:
+    """12 hex digits per part: a hash of the golden records of that part."""
+    records = json.loads(golden.read_text())
+    out = {}
+    for part in PARTS:
+        rows = sorted((k, v) for k, v in records.items() if part_of(k) == part)
+        out[part] = hashlib.sha256(json.dumps(rows).encode()).hexdigest()[:12]
+    return out
+
+
+def code_version() -> str:
+    """The git commit the study ran on (``+dirty`` with uncommitted changes), if known."""
+    try:
+        rev = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], cwd=ROOT,
+                             capture_output=True, text=True, timeout=10, check=True).stdout
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=ROOT, capture_output=True, text=True, timeout=10).stdout
+        return rev.strip() + ("+dirty" if dirty.strip() else "")
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any,
+                   directory: Path = RESULTS_DIR) -> Path:
+    """Write ``docs/results/<name>.json`` atomically: the study's figures and provenance."""
+    parts = sorted(set(depends_on))
+    unknown = [p for p in parts if p not in PARTS]
+    if unknown:
+        raise ArtifactError(f"{name}: unknown behaviour part(s) {unknown}; use {PARTS}")
+    digests = behaviour_digests()
+    doc = {"format": FORMAT, "name": name, "command": command,
+           "date": _dt.date.today().isoformat(), "code_version": code_version(),
+           "behaviour": {p: digests[p] for p in parts}, "data": data}
+    path = directory / f"{name}.json"
+    atomic_write_text(path, json.dumps(doc, indent=1, sort_keys=False) + "\n")
+    return path
+
+
+def load_artifact(name: str, directory: Path = RESULTS_DIR) -> dict[str, Any]:
+    path = directory / f"{name}.json"
+    try:
+        doc = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise ArtifactError(f"{path}: missing; run the study that writes it") from None
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ArtifactError(f"{path}: unreadable ({exc}); re-run the study") from None
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        raise ArtifactError(f"{path}: not an {FORMAT} file; re-run the study")
+    return doc
+
+
+def stale_parts(doc: dict[str, Any], now: dict[str, str] | None = None) -> list[str]:
+    """The parts whose behaviour changed since the artifact was measured."""
+    now = now or behaviour_digests()
+    return sorted(p for p, d in doc["behaviour"].items() if now.get(p) != d)
+
+
+def provenance(doc: dict[str, Any], now: dict[str, str] | None = None) -> str:
+    """The line under a generated table, and the stale banner above it when due."""
+    stale = stale_parts(doc, now)
+    line = (f"<sub>Generated from `docs/results/{doc['name']}.json`, written by "
+            f"`{doc['command']}` on {doc['date']} at {doc['code_version']}.</sub>")
+    if not stale:
+        return line
+    return (f"> **Stale**: the code's behaviour ({', '.join(stale)}) changed since these "
+            f"figures were measured; re-run `{doc['command']}`, then `cog -r` the page.\n\n"
+            + line)
+
+
+def rendered(name: str) -> str:
+    """The Markdown of artifact ``name``: its table, then its provenance (and staleness)."""
+    from scenarios.artifact_tables import RENDERERS
+
+    doc = load_artifact(name)
+    kind = doc["name"].split(".")[0]
+    fn = RENDERERS.get(kind)
+    if fn is None:
+        raise ArtifactError(f"no renderer for artifact {name!r}")
+    stale = stale_parts(doc)
+    body = fn(doc["data"]).rstrip("\n")
+    head = provenance(doc).split("\n\n")[0] + "\n\n" if stale else ""
+    tail = provenance(doc).split("\n\n")[-1]
+    return f"{head}{body}\n\n{tail}\n"
+
+
+def render(name: str) -> None:
+    """For Cog blocks: write artifact ``name``'s Markdown into the page."""
+    import cog  # only inside a Cog run
+
+    cog.out(rendered(name))

@@ -1,0 +1,75 @@
+"""Results as code: artifacts carry their provenance, tables render from them, stale ones say so,
+and every generated block in the docs matches what its artifact renders to."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from scenarios import artifacts
+from scenarios.artifacts import (
+    ArtifactError,
+    behaviour_digests,
+    load_artifact,
+    provenance,
+    stale_parts,
+    write_artifact,
+)
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+def test_behaviour_digests_cover_every_part_and_follow_the_golden_records(tmp_path):
+    golden = tmp_path / "g.json"
+    records = {"m#d|grid|st-ql|t10|s0|e100": "a", "m#d|physics|st-ql|t10|s0|e100": "b",
+               "m#d|physics|fid=noisy|haql|t10|s0|e30": "c"}
+    golden.write_text(json.dumps(records))
+    before = behaviour_digests(golden)
+    assert set(before) == set(artifacts.PARTS)
+    records["m#d|physics|fid=noisy|haql|t10|s0|e30"] = "changed"
+    golden.write_text(json.dumps(records))
+    after = behaviour_digests(golden)
+    assert [p for p in artifacts.PARTS if before[p] != after[p]] == ["physics-noisy"]
+
+
+def test_an_artifact_records_its_provenance_and_turns_stale_with_the_behaviour(tmp_path):
+    path = write_artifact("physics-grading.t", "python -m x --y", ["physics-noisy"],
+                          {"k": 1}, directory=tmp_path)
+    doc = load_artifact("physics-grading.t", directory=tmp_path)
+    assert doc["command"] == "python -m x --y" and doc["data"] == {"k": 1}
+    assert set(doc["behaviour"]) == {"physics-noisy"} and doc["date"] and doc["code_version"]
+    assert path.name == "physics-grading.t.json"
+    now = behaviour_digests()
+    assert stale_parts(doc, now) == []
+    assert "Stale" not in provenance(doc, now)
+    moved = {**now, "physics-noisy": "000000000000"}
+    assert stale_parts(doc, moved) == ["physics-noisy"]
+    text = provenance(doc, moved)
+    assert "**Stale**" in text and "python -m x --y" in text
+
+
+def test_bad_artifacts_are_clear_errors(tmp_path):
+    with pytest.raises(ArtifactError, match="missing"):
+        load_artifact("nope", directory=tmp_path)
+    (tmp_path / "bad.json").write_text("{not json")
+    with pytest.raises(ArtifactError, match="unreadable"):
+        load_artifact("bad", directory=tmp_path)
+    (tmp_path / "other.json").write_text('{"format": "something else"}')
+    with pytest.raises(ArtifactError, match="not an"):
+        load_artifact("other", directory=tmp_path)
+    with pytest.raises(ArtifactError, match="unknown behaviour part"):
+        write_artifact("x.y", "cmd", ["physics-rough"], {}, directory=tmp_path)
+
+
+def test_every_generated_block_in_the_docs_matches_its_artifact():
+    """``cog --check``: a table in the README or docs/ that differs from what its artifact
+    renders (edited by hand, or its artifact re-measured without ``cog -r``) fails here."""
+    from cogapp import Cog
+
+    pages = [p for p in [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+             if "[[[cog" in p.read_text()]
+    assert pages, "no generated blocks found"
+    code = Cog().main(["cog", "--check", "-I", str(REPO), *map(str, pages)])
+    assert code == 0, "generated blocks are out of date: run `cog -r README.md docs/*.md`"

@@ -144,3 +144,19 @@ def render(name: str) -> None:
     import cog  # only inside a Cog run
 
     cog.out(rendered(name))
+
+
+def legacy_note(command: str, known: str = "") -> str:
+    """The banner above a table typed by hand before tables were generated: its figures are
+    unverified until the study is re-run with ``--artifact`` and the table replaced."""
+    extra = f" Known since: {known}" if known else ""
+    return (f"> **Typed by hand, not generated from an artifact**: from an earlier run of "
+            f"`{command}`; unverified against today's code until that study writes an "
+            f"artifact and this table is rendered from it.{extra}\n")
+
+
+def legacy(command: str, known: str = "") -> None:
+    """For a Cog block above a hand-typed table (see :func:`legacy_note`)."""
+    import cog
+
+    cog.out(legacy_note(command, known))

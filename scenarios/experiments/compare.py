@@ -164,12 +164,35 @@ def assemble(specs: Sequence[RunSpec], runs: list[dict[str, Any]]) -> dict[str, 
                      "s_start_share": sc.s_start_share},
         "world": ",".join(worlds),
         "fidelity": next((s.fidelity_spec.label for s in specs if s.world == "physics"), None),
+        "fidelity_knobs": next((fidelity_knobs(s.fidelity_spec) for s in specs
+                                if s.world == "physics" or s.drive_final), None),
+        "physics_grading": next((grading_protocol(s.fidelity_spec) for s in specs
+                                 if s.world == "physics" or s.drive_final), None),
         "episodes": spec0.episodes,
         "overrides": {s.method: {k: v for k, v in s.overrides} for s in specs if s.overrides},
         "optimal_route_length": model.optimal_route_length,
         "runs": runs,
         "summary": summarise(runs),
     }
+
+
+def fidelity_knobs(fid: Any) -> dict[str, Any]:
+    """Every knob of a fidelity by name, with its unit in the name (``..._m``) or below."""
+    import dataclasses
+
+    return {f.name: getattr(fid, f.name) for f in dataclasses.fields(fid)}
+
+
+def grading_protocol(fid: Any) -> dict[str, Any]:
+    """How physics runs were graded (see :mod:`scenarios.runs.physics_grading`)."""
+    from scenarios.runs import physics_grading as g
+
+    if fid.is_exact:
+        return {"tests": "greedy walk on the exact physics model", "final_rollouts": 1}
+    return {"tests": "rollouts at the run's fidelity", "test_rollouts": g.TEST_ROLLOUTS,
+            "test_budget_primitives": f"min(steps_per_episode, {g.TEST_BUDGET_FACTOR} x "
+                                      f"optimum + {g.TEST_BUDGET_SLACK})",
+            "final_rollouts": g.FINAL_ROLLOUTS, "p_goal_interval": "Wilson 95 %"}
 
 
 def read_partial(out_dir: Path) -> dict[str, dict[str, Any]]:

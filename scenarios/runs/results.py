@@ -7,6 +7,9 @@
       "scenario": {name, source, size_cells, start, goal, rewards: {scheme, goal, bump, step}},
       "world": "grid" | "physics" | "grid,physics",
       "fidelity": the physics fidelity's label ("exact", "noisy", ...) or null (grid only),
+      "fidelity_knobs": {"name", "wheel_noise" [relative sigma per wheel per control period],
+                         "carried_pose" [bool], "bumper_travel_m" [m]} or null,
+      "physics_grading": how physics runs were graded (rollouts per test and final) or null,
       "episodes": int,
       "optimal_route_length": int,            # BFS moves S -> G on the grid model
       "runs": [ {"key", "method", "method_name", "seed", "world", "fidelity", "config",
@@ -132,7 +135,12 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
     scheme = (f"rewards `{rw['scheme']}` (goal {rw['goal']:g}, bump {rw['bump']:g}, free step "
               f"{rw['step']:g})" if rw else "rewards as in the scenario")
     fid = results.get("fidelity")
-    world = f"{results['world']}" + (f" (physics fidelity `{fid}`)" if fid else "")
+    knobs = results.get("fidelity_knobs") or {}
+    knob_text = (": wheel_noise {wheel_noise} (relative, per wheel per control period), "
+                 "carried_pose {carried_pose}, bumper_travel_m {bumper_travel_m} m"
+                 .format(**knobs) if {"wheel_noise", "carried_pose", "bumper_travel_m"}
+                 <= set(knobs) else "")
+    world = f"{results['world']}" + (f" (physics fidelity `{fid}`{knob_text})" if fid else "")
     share = results["scenario"].get("s_start_share") or 0.0
     starts = (f", {share:.0%} of episodes start at S (the rest on random free cells)"
               if share > 0 else "")

@@ -21,8 +21,10 @@ them. Rest poses that arrive later are assigned to the nearest particle like any
 
 Built models are cached in-process and on disk
 (``$XDG_CACHE_HOME/rnhql/stochastic-model/<digest>.npz``; the digest holds the scenario,
-physics config, fidelity, sampling and batch size; written atomically; a file that does
-not load is rebuilt, never trusted). ``RNHQL_NO_DISK_CACHE=1`` turns the disk cache off.
+physics config, fidelity, sampling, batch size and a hash of the source of the modules a
+drive runs through, so a new contact rule means a new model; written atomically; a file
+that does not load is rebuilt, never trusted). ``RNHQL_NO_DISK_CACHE=1`` turns the disk
+cache off.
 """
 
 from __future__ import annotations
@@ -310,16 +312,30 @@ def cache_dir() -> Path:
     return Path(base) / "rnhql" / "stochastic-model"
 
 
+@lru_cache(maxsize=1)
+def _code_digest() -> str:
+    """A hash of the source of every module a drive runs through: a change to the world
+    (the kernel's contact rule, the controller) must not be answered from an old model."""
+    from sim.physics import batch, controller, static, sweep, world
+    from sim.physics import stochastic_model as model
+
+    h = hashlib.sha256()
+    for mod in (K, batch, controller, static, sweep, world, model):
+        h.update(Path(mod.__file__).read_bytes())
+    h.update(Path(__file__).read_bytes())
+    return h.hexdigest()
+
+
 def digest(sc: Scenario, config: PhysicsConfig, fid: Fidelity, sampling: Sampling) -> str:
     """What the model depends on: the scenario's content, the physics config, the fidelity,
-    the sampling, the batch size (which robot slot, so which noise stream, drives what)
-    and pymunk."""
+    the sampling, the batch size (which robot slot, so which noise stream, drives what),
+    pymunk and the source of the world's code."""
     fields = {k: v for k, v in dataclasses.asdict(sc).items()
               if k not in ("name", "source", "description", "rewards", "physics",
                            "s_start_share")}
-    blob = json.dumps([FORMAT, pymunk.version, fields, dataclasses.asdict(config),
-                       dataclasses.asdict(fid), dataclasses.asdict(sampling), BATCH],
-                      sort_keys=True, default=repr)
+    blob = json.dumps([FORMAT, pymunk.version, _code_digest(), fields,
+                       dataclasses.asdict(config), dataclasses.asdict(fid),
+                       dataclasses.asdict(sampling), BATCH], sort_keys=True, default=repr)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 

@@ -48,7 +48,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
     from sim.physics.optimum import continuous_optimum_m
     from sim.physics.static import PhysicsConfig
     from sim.physics.stochastic_build import cache_dir, digest, stochastic_model
-    from sim.physics.stochastic_model import MAX_SAMPLES, REFINE, Sampling
+    from sim.physics.stochastic_model import MAX_SAMPLES, REFINE, Sampling, is_resting
     from sim.physics.stochastic_rollouts import drive_model_policy
     from sim.physics.stochastic_solve import solve
 
@@ -76,7 +76,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
     print(f"  model       {_states_line(model)}")
     how = (f"{sp.samples} drives per (state, action), {sp.refined} where they disagreed"
            if sp.refined > sp.samples else f"{sp.samples} drive(s) per (state, action)")
-    if model.context_counts()[1:5].sum():
+    if is_resting(model.state_context).any():
         how += f"; {sp.particles} rest poses x {sp.particle_samples} drives"
     built = f"{model.primitives:,} primitives driven in {model.build_s:.1f} s"
     if cached and wall < model.build_s:

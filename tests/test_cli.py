@@ -257,3 +257,34 @@ def test_every_flag_of_every_command_has_a_help_line_and_its_default():
             if act.option_strings and d not in (None, False, argparse.SUPPRESS):
                 assert "default" in p._get_formatter()._get_help_string(act), (name, act.dest)
         assert "--help" in text
+
+
+def test_optimum_prints_v_star_next_to_the_exact_and_continuous_optima(capsys):
+    from sim.physics.stochastic_build import stochastic_model
+
+    stochastic_model.cache_clear()
+    assert main(["optimum", "paper-40", "--rollouts", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "paper-40 at fidelity exact" in out and "1,388 states: 1,388 arrived" in out
+    assert "5,552 primitives driven in" in out
+    for line in ("V*(S)       60.00 expected primitives", "P(G)        1.0000 within the "
+                 "episode's 600 primitives", "exact       60 primitives", "continuous  43.3 m",
+                 "2 rollouts of the optimal policy: P(G) 1.0000"):
+        assert line in out, line
+    stochastic_model.cache_clear()
+    assert main(["optimum", "paper-40"]) == 0  # a new process: from the disk cache
+    assert "loaded from the cache" in capsys.readouterr().out
+    stochastic_model.cache_clear()
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["optimum", "paper-40", "--fidelity", "noisy,speed=2"], "speed: is not a fidelity knob"),
+    (["optimum", "paper-40", "--samples", "0"], "--samples: must be >= 1"),
+    (["optimum", "paper-40", "--seed", "-1"], "--seed: must be >= 0"),
+    (["optimum", "paper-40", "--rollouts", "-2"], "--rollouts: must be >= 1"),
+    (["optimum", "no-such-map"], "is not a named scenario"),
+])
+def test_optimum_bad_input_is_one_line_and_exit_2(capsys, argv, words):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1

@@ -15,7 +15,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from scenarios.cli import aliasing, bench, catalog, compare, route, train, view
+from scenarios.cli import aliasing, bench, catalog, compare, optimum, route, train, view
 from scenarios.cli.args import add_fidelity_arg, add_record_args, add_scenario_args
 from scenarios.runs.backends import SweepError
 from sim.errors import InputError
@@ -111,6 +111,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder: aliasing.json, heat map PNG, recording")
     p.set_defaults(func=aliasing.cmd_aliasing)
+
+    p = sub.add_parser("optimum", help="V*: the optimum of the physics world at a fidelity "
+                                       "(expected primitives, P(G)), from a model built by "
+                                       "driving")
+    add_scenario_args(p)
+    add_fidelity_arg(p)
+    p.add_argument("--samples", type=int, default=None, metavar="K",
+                   help="drives per (state, action) (default: 1 at exact, 32 above; 8 K "
+                        "where they disagree)")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the model's start poses and noise streams")
+    p.add_argument("--rollouts", type=int, default=0, metavar="N",
+                   help="also drive the optimal policy N times from S as a check (0: no)")
+    p.set_defaults(func=optimum.cmd_optimum)
 
     p = sub.add_parser("view", help="open a .rrd recording in the Rerun viewer")
     p.add_argument("file", metavar="FILE.rrd", help="a recording written by --record")

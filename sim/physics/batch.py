@@ -146,12 +146,17 @@ class RouteBatch:
         self.shapes.append(shape)
 
     # ------------------------------------------------------------------ episodes
-    def place(self, i: int, x_m: float, y_m: float, heading_rad: float = 0.0) -> None:
-        """Put robot ``i`` at rest at a pose: a new episode (its step clock and contacts reset)."""
+    def place(self, i: int, x_m: float, y_m: float, heading_rad: float = 0.0, *,
+              resting: bool = False) -> None:
+        """Put robot ``i`` at rest at a pose: a new episode (its step clock and contacts reset).
+        ``resting``: it rests against a surface there, as a bump at carried pose leaves it
+        (a stochastic model restarts robots from such poses)."""
         fs, ist = self.fs, self.ist
         fs[i, :] = 0.0
         fs[i, K.X], fs[i, K.Y], fs[i, K.TH] = x_m, y_m, heading_rad
         ist[i, :] = 0
+        if resting:
+            ist[i, K.INCONTACT] = 1
         self.contacts[i] = []
         self.contact_counts[i] = dict.fromkeys(CollisionType, 0)
         self._ntraj[i] = 0

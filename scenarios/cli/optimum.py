@@ -1,0 +1,104 @@
+"""``rnhql optimum``: V*, the optimum of the physics world at a fidelity (the yardstick).
+
+"Optimal at F" means matching V* at F (``/work/shared/DESIGN.md``, Fidelity): the
+expected primitives from S under the best policy in the stochastic model of the physics
+world at that fidelity, built by driving (:mod:`sim.physics.stochastic_build`) and solved
+by value iteration (:mod:`sim.physics.stochastic_solve`). The command prints it next to
+the exact optimum and the continuous one, with what the model cost to build; with
+``--rollouts N`` it also drives the optimal policy N times as a check.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+from scenarios.cli.args import positive, scenario_from_args, seed_value
+from sim.grid.actions import ACTION_NAMES
+
+MAX_ROLLOUTS = 100_000
+
+
+def _states_line(model) -> str:
+    from sim.physics.stochastic_model import ARRIVED, FACING, RESTING
+
+    counts = model.context_counts()
+    facing = counts[FACING:FACING + len(ACTION_NAMES)]
+    resting = counts[RESTING:RESTING + len(ACTION_NAMES)]
+    resting_families = len({(int(c), int(x)) for c, x in
+                            zip(model.state_cell, model.state_context, strict=True)
+                            if RESTING <= x < FACING})
+    parts = []
+    if counts[ARRIVED]:
+        parts.append(f"{counts[ARRIVED]:,} arrived")
+    if facing.sum():
+        parts.append(f"{facing.sum():,} arrived facing ("
+                     + ", ".join(f"{n} {k:,}" for n, k in zip(ACTION_NAMES, facing, strict=True))
+                     + ")")
+    if resting.sum():
+        parts.append(f"{resting.sum():,} resting: rest poses in {resting_families:,} "
+                     "(cell, bumped action) pairs")
+    return f"{model.n_states:,} states: " + "; ".join(parts)
+
+
+def cmd_optimum(args: argparse.Namespace) -> int:
+    from sim.physics.fidelity import parse_fidelity
+    from sim.physics.model import physics_model
+    from sim.physics.optimum import continuous_optimum_m
+    from sim.physics.static import PhysicsConfig
+    from sim.physics.stochastic_build import cache_dir, digest, stochastic_model
+    from sim.physics.stochastic_model import MAX_SAMPLES, REFINE, Sampling, is_resting
+    from sim.physics.stochastic_rollouts import drive_model_policy
+    from sim.physics.stochastic_solve import solve
+
+    fid = parse_fidelity(args.fidelity)
+    samples = (None if args.samples is None
+               else positive(args.samples, "--samples", MAX_SAMPLES // REFINE))
+    seed = seed_value(args.seed, "--seed")
+    rollouts = args.rollouts
+    if rollouts:
+        positive(rollouts, "--rollouts", MAX_ROLLOUTS)
+    sc = scenario_from_args(args)
+    sampling = Sampling.default(fid, samples, seed)
+    path = cache_dir() / f"{digest(sc, PhysicsConfig(), fid, sampling)}.npz"
+    cached = path.exists()
+    t0 = time.perf_counter()
+    model = stochastic_model(sc, fid, sampling)
+    wall = time.perf_counter() - t0
+    budget = sc.steps_per_episode
+    opt = solve(model, budget)
+    exact = physics_model(sc).optimal_route_length
+    continuous = continuous_optimum_m(sc)
+
+    sp = model.sampling
+    print(f"{sc.name} at fidelity {fid.label}: the optimum in the physics world (V*)")
+    print(f"  model       {_states_line(model)}")
+    how = (f"{sp.samples} drives per (state, action), {sp.refined} where they disagreed"
+           if sp.refined > sp.samples else f"{sp.samples} drive(s) per (state, action)")
+    if is_resting(model.state_context).any():
+        how += f"; {sp.particles} rest poses x {sp.particle_samples} drives"
+    built = f"{model.primitives:,} primitives driven in {model.build_s:.1f} s"
+    if cached and wall < model.build_s:
+        built = f"loaded from the cache in {wall:.1f} s (built from {built})"
+    print(f"  built       {built}; {how}; seed {sp.seed}")
+    start = opt.start
+    if math.isinf(start.expected_primitives):
+        print("  V*(S)       inf: no policy reaches G with probability 1 in the model")
+    else:
+        print(f"  V*(S)       {start.expected_primitives:.2f} expected primitives "
+              f"(value iteration, {opt.sweeps} sweeps)")
+    print(f"  P(G)        {start.p_goal_within_budget:.4f} within the episode's {budget} "
+          "primitives, under the optimal policy")
+    print(f"  exact       {exact if exact >= 0 else 'G not reached'} primitives "
+          "(the physics world at exact)")
+    if continuous is not None:
+        print(f"  continuous  {continuous:.1f} m (Theta* path of the disc: an upper bound on "
+              "the shortest)")
+    if rollouts:
+        r = drive_model_policy(sc, model, opt.policy, rollouts, seed=seed + 1)
+        lo, hi = r.p_goal_interval
+        print(f"  driven      {rollouts} rollouts of the optimal policy: P(G) {r.p_goal:.4f} "
+              f"(95 % interval {lo:.3f}-{hi:.3f}), mean {r.mean_primitives:.2f} primitives "
+              f"(median {r.median_primitives:g}), {r.mean_contacts:.2f} contacts per rollout")
+    return 0

@@ -154,6 +154,13 @@ def assemble(specs: Sequence[RunSpec], runs: list[dict[str, Any]]) -> dict[str, 
     runs = sorted(runs, key=lambda r: order.get(r["key"], len(order)))
     worlds = sorted({s.world for s in specs}, key=["grid", "physics"].index)
     rw = sc.rewards
+    phys = next((s for s in specs if s.world == "physics"), None)
+    optimum = (optimum_at_fidelity(sc, phys.fidelity_spec)
+               if phys is not None and not phys.fidelity_spec.is_exact else None)
+    if optimum is not None:
+        for r in runs:
+            if r["world"] == "physics" and r.get("final_policy"):
+                r["optimal_at_fidelity"] = matches_optimum(r["final_policy"], optimum)
     return {
         "version": RESULTS_VERSION,
         "rnhql_version": version(),
@@ -168,12 +175,45 @@ def assemble(specs: Sequence[RunSpec], runs: list[dict[str, Any]]) -> dict[str, 
                                 if s.world == "physics" or s.drive_final), None),
         "physics_grading": next((grading_protocol(s.fidelity_spec) for s in specs
                                  if s.world == "physics" or s.drive_final), None),
+        "optimum_at_fidelity": optimum,
         "episodes": spec0.episodes,
         "overrides": {s.method: {k: v for k, v in s.overrides} for s in specs if s.overrides},
         "optimal_route_length": model.optimal_route_length,
         "runs": runs,
         "summary": summarise(runs),
     }
+
+
+def optimum_at_fidelity(sc: Any, fid: Any) -> dict[str, Any] | None:
+    """V* at the fidelity (:mod:`sim.physics.stochastic_solve`; built once per scenario and
+    fidelity, cached on disk): the yardstick "optimal at F" is measured against.
+    ``RNHQL_NO_OPTIMUM=1`` skips it (tiny test sweeps)."""
+    import os
+
+    if os.environ.get("RNHQL_NO_OPTIMUM") == "1":
+        return None
+    from sim.physics.stochastic_build import stochastic_model
+    from sim.physics.stochastic_rollouts import ABS_TOL, P_TOL, REL_TOL
+    from sim.physics.stochastic_solve import solve
+
+    opt = solve(stochastic_model(sc, fid), sc.steps_per_episode).start
+    return {"expected_primitives": round(float(opt.expected_primitives), 4),
+            "p_goal_within_budget": round(float(opt.p_goal_within_budget), 6),
+            "budget": int(opt.budget),
+            "tolerance": {"p_goal": P_TOL, "primitives_relative": REL_TOL,
+                          "primitives_absolute": ABS_TOL}}
+
+
+def matches_optimum(policy: dict[str, Any], optimum: dict[str, Any]) -> bool:
+    """A final policy is optimal at F when its drives match V* within the model's stated
+    tolerance: P(G) at least P*(G) - 0.05 and mean primitives at most V*(S) + max(1, 5 %)."""
+    tol = optimum["tolerance"]
+    v = optimum["expected_primitives"]
+    prims = policy.get("primitives_mean")
+    return bool(prims is not None
+                and policy["p_goal"] >= optimum["p_goal_within_budget"] - tol["p_goal"]
+                and prims <= v + max(tol["primitives_absolute"],
+                                     tol["primitives_relative"] * v))
 
 
 def fidelity_knobs(fid: Any) -> dict[str, Any]:

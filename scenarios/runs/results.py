@@ -10,6 +10,9 @@
       "fidelity_knobs": {"name", "wheel_noise" [relative sigma per wheel per control period],
                          "carried_pose" [bool], "bumper_travel_m" [m]} or null,
       "physics_grading": how physics runs were graded (rollouts per test and final) or null,
+      "optimum_at_fidelity": V* above exact {"expected_primitives", "p_goal_within_budget",
+                             "budget", "tolerance"} or null (physics runs then carry
+                             "optimal_at_fidelity": their drives match it),
       "episodes": int,
       "optimal_route_length": int,            # BFS moves S -> G on the grid model
       "runs": [ {"key", "method", "method_name", "seed", "world", "fidelity", "config",
@@ -115,6 +118,9 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, dict[str, dict[str, Any]]
                                                             for p in pols])
             entry["final_policy_contacts_mean"] = _stats([p["contacts_mean"] for p in pols])
             entry["final_policy_rollouts"] = int(pols[0]["rollouts"])
+            if all("optimal_at_fidelity" in r for r in rs):
+                entry["optimal_at_fidelity_fraction"] = float(np.mean(
+                    [r["optimal_at_fidelity"] for r in rs]))
         out[method][world] = entry
     return dict(out)
 
@@ -173,12 +179,13 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
                 f"{_fmt(e['epsilon_route_length'], missing='no G')} | "
                 f"{_fmt(e['success_rate'], 2)} | {_fmt(e['reward_per_step'], 3)} | "
                 f"{_fmt(e['wall_time_s'], 2)} |")
-    lines += _policy_table(summ, methods, fid)
+    lines += _policy_table(summ, methods, fid, results.get("optimum_at_fidelity"))
     lines += ["", *verdict(results)]
     return "\n".join(lines) + "\n"
 
 
-def _policy_table(summ: dict[str, Any], methods: list[str], fid: str | None) -> list[str]:
+def _policy_table(summ: dict[str, Any], methods: list[str], fid: str | None,
+                  optimum: dict[str, Any] | None = None) -> list[str]:
     """Physics runs: the final policy driven in the world it trained in."""
     rows = [(m, e) for m in methods for w, e in summ.get(m, {}).items()
             if w == "physics" and "final_policy_p_goal" in e]
@@ -189,12 +196,19 @@ def _policy_table(summ: dict[str, Any], methods: list[str], fid: str | None) -> 
            f"`{fid or 'exact'}` (own noise stream per drive, common across methods); "
            "above `exact` the route lengths above are the median primitives of these drives. "
            f"*Reliable*: seeds whose P(G) ≥ {RELIABLE_P_GOAL}. Primitives: mean over the "
-           "drives that reached G.", "",
-           "| method | P(G) | reliable seeds | primitives | contacts per drive |",
-           "|---|---|---|---|---|"]
+           "drives that reached G."
+           + (f" The yardstick at this fidelity, V*(S) (`rnhql optimum`): "
+              f"{optimum['expected_primitives']:.2f} expected primitives, P(G within "
+              f"{optimum['budget']}) {optimum['p_goal_within_budget']:.3f}; *optimal at F*: "
+              "seeds whose drives match it (P(G) within 0.05, mean primitives within "
+              "max(1, 5 %))." if optimum else ""), "",
+           "| method | P(G) | reliable seeds | optimal at F | primitives | contacts per drive |",
+           "|---|---|---|---|---|---|"]
     for m, e in rows:
+        at_f = e.get("optimal_at_fidelity_fraction")
         out.append(f"| {m} | {_fmt(e['final_policy_p_goal'], 2)} | "
                    f"{e['final_policy_reliable_fraction']:.0%} | "
+                   f"{'–' if at_f is None else f'{at_f:.0%}'} | "
                    f"{_fmt(e['final_policy_primitives_mean'], 1, missing='no G')} | "
                    f"{_fmt(e['final_policy_contacts_mean'], 1)} |")
     return out

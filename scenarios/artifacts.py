@@ -41,6 +41,7 @@ RESULTS_DIR = ROOT / "docs" / "results"
 GOLDEN = ROOT / "tests" / "data" / "golden_sweep.json"
 PARTS = ("grid", "physics-exact", "physics-noisy")
 FORMAT = "rnhql-artifact-1"
+CODE_PATHS = ("sim", "learning", "scenarios", "pyproject.toml")  # "+dirty" if these changed
 
 
 class ArtifactError(ValueError):
@@ -69,8 +70,9 @@ def code_version() -> str:
     try:
         rev = subprocess.run(["git", "rev-parse", "--short=12", "HEAD"], cwd=ROOT,
                              capture_output=True, text=True, timeout=10, check=True).stdout
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
-                               cwd=ROOT, capture_output=True, text=True, timeout=10).stdout
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no", "--",
+                                *CODE_PATHS], cwd=ROOT, capture_output=True, text=True,
+                               timeout=10).stdout
         return rev.strip() + ("+dirty" if dirty.strip() else "")
     except (OSError, subprocess.SubprocessError):
         return "unknown"

@@ -9,7 +9,8 @@ import pytest
 from scenarios.experiments.compare import PARTIAL, make_specs, run_sweep
 from scenarios.runs.backends import SweepError, run_local
 from scenarios.runs.results import summarise
-from scenarios.runs.spec import RecordOptions, RunSpec, run_one
+from scenarios.runs.run import run_one
+from scenarios.runs.spec import RecordOptions, RunSpec
 
 RUN_KEYS = {"method", "seed", "world", "episodes_to_stable_optimal", "episodes_to_optimal",
             "optimal_test_fraction", "final_route_length", "epsilon_route_length",

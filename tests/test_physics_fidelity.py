@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from scenarios.runs.physics_batch import run_physics_batch
-from scenarios.runs.spec import RunSpec, run_one
+from scenarios.runs.run import run_one
+from scenarios.runs.spec import RunSpec
 from sim.errors import ScenarioError
 from sim.grid import build_model
 from sim.physics.batch import RouteBatch

@@ -55,7 +55,8 @@ def test_cache_round_trip_and_a_corrupt_file_is_rebuilt(paper40, private_cache):
 
 
 def test_a_physics_run_is_graded_against_the_physics_optimum():
-    from scenarios.runs.spec import RunSpec, run_one
+    from scenarios.runs.run import run_one
+    from scenarios.runs.spec import RunSpec
 
     rec = run_one(RunSpec("paper-40", "haql", 0, 20, world="physics"))
     assert rec["physics_optimal_route_length"] == rec["optimal_route_length"]

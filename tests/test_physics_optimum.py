@@ -30,7 +30,8 @@ def test_an_open_arena_is_the_straight_line(tmp_path):
 
 
 def test_physics_records_carry_it():
-    from scenarios.runs.spec import RunSpec, run_one
+    from scenarios.runs.run import run_one
+    from scenarios.runs.spec import RunSpec
 
     rec = run_one(RunSpec("paper-40", "haql", 0, 3, world="physics"))
     assert rec["continuous_optimal_route_m"] == pytest.approx(

@@ -6,7 +6,8 @@ import pytest
 
 from learning.registry import METHODS
 from scenarios.runs.physics_batch import MAX_BATCH, plan_tasks, run_physics_batch
-from scenarios.runs.spec import RecordOptions, RunSpec, run_one
+from scenarios.runs.run import run_one
+from scenarios.runs.spec import RecordOptions, RunSpec
 
 WALL = ("wall_time_s", "wall_time_per_episode_s")
 

@@ -7,7 +7,8 @@ from pathlib import Path
 
 from scenarios.cli import main
 from scenarios.recording.recorder import verify_recording
-from scenarios.runs.spec import RecordOptions, RunSpec, run_one
+from scenarios.runs.run import run_one
+from scenarios.runs.spec import RecordOptions, RunSpec
 
 
 def test_recorded_run_equals_unrecorded_run(tmp_path):

@@ -63,7 +63,8 @@ def stable_optimal(test_episodes: list[int], lengths: list[int], optimal: int) -
 
 
 def _run(job: tuple[str, str, str, str, tuple, int, int]) -> dict[str, Any]:
-    from scenarios.runs.spec import RunSpec, load, run_one
+    from scenarios.runs.run import run_one
+    from scenarios.runs.spec import RunSpec, load
 
     map_name, path, label, method, overrides, seed, episodes = job
     rec = run_one(RunSpec(path, method, seed, episodes, overrides=overrides))

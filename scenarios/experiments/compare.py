@@ -29,6 +29,7 @@ from typing import Any
 from scenarios.runs.outdir import check_out_dir, sweep_lock
 from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
 from scenarios.runs.spec import RecordOptions, RunSpec, load
+from scenarios.signals import sigint_handled_by
 
 ALL_METHODS = ("rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt",
                "q-lambda", "dyna-q")
@@ -387,6 +388,19 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     write_results(out_dir, results, list(dict.fromkeys(s.method for s in specs)))
     if figures:
         sc, model = load(*specs[0].problem)
-        all_figures(results, sc, model, out_dir)
+        # a Ctrl-C while matplotlib builds its lazy parsers (pyparsing, on the first label)
+        # can leave them half made and surface as an AttributeError: hold it to the end of
+        # the figures (seconds), then act on it; a second Ctrl-C acts at once
+        pressed: list[bool] = []
+
+        def hold(_sig: int, _frame: Any) -> None:
+            if pressed:
+                raise KeyboardInterrupt
+            pressed.append(True)
+
+        with sigint_handled_by(hold):
+            all_figures(results, sc, model, out_dir)
+        if pressed:
+            raise KeyboardInterrupt
     (out_dir / PARTIAL).unlink(missing_ok=True)
     return results

@@ -13,15 +13,14 @@ import shutil
 import signal
 import subprocess
 import sys
-import threading
 import uuid
 import warnings
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Protocol
 
 import rerun as rr
 
+from scenarios.signals import sigint_handled_by
 from sim.files import move_into_place
 
 
@@ -45,17 +44,9 @@ def verify_recording(path: str | Path, check_footers: bool = True) -> tuple[bool
     return out.returncode == 0, (out.stdout + out.stderr).strip()
 
 
-@contextlib.contextmanager
-def _no_sigint() -> Iterator[None]:
+def _no_sigint() -> contextlib.AbstractContextManager[None]:
     """Ignore Ctrl-C for the moment it takes to finish a file (main thread only)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
+    return sigint_handled_by(signal.SIG_IGN, unless_ignored=False)
 
 
 FLUSH_TIMEOUT_S = 600.0  # a flush that takes longer has hung (Rerun's writer on a full disk)

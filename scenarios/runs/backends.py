@@ -20,7 +20,8 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
 
-from scenarios.runs.physics_batch import plan_tasks, run_task
+from scenarios.runs.physics_batch import plan_tasks
+from scenarios.runs.run import run_task
 from scenarios.runs.spec import RunSpec
 from sim.errors import InputError
 

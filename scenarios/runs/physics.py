@@ -24,10 +24,8 @@ world the run trained in (:mod:`scenarios.runs.physics_grading`).
 from __future__ import annotations
 
 import contextlib
-import signal
-import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -40,6 +38,7 @@ from learning.generator_handle import handles
 from learning.geometry import geometry_of
 from learning.metrics import episodes_to_first_optimal
 from scenarios.runs.physics_grading import Grader
+from scenarios.signals import sigint_handled_by
 from sim.grid import TabularModel
 from sim.physics.vector import PhysicsRouteVectorEnv
 from sim.scenario import Scenario
@@ -116,18 +115,9 @@ class StopFlag:
         self.requested = True
 
 
-@contextlib.contextmanager
-def sigint_to(stopper: StopFlag) -> Iterator[None]:
+def sigint_to(stopper: StopFlag) -> contextlib.AbstractContextManager[None]:
     """SIGINT goes to ``stopper.request`` while the block runs (main thread only)."""
-    if threading.current_thread() is not threading.main_thread() or \
-            signal.getsignal(signal.SIGINT) is signal.SIG_IGN:  # e.g. a pool worker
-        yield
-        return
-    old = signal.signal(signal.SIGINT, stopper.request)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
+    return sigint_handled_by(stopper.request)
 
 
 class _Logs:

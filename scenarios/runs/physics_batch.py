@@ -119,12 +119,3 @@ def _open_recorder(spec: Any, cfg: Any, sc: Any, model: Any,
         blueprint=not opts.prefix, with_scene=opts.detail,
         fidelity=spec.fidelity_spec.label))
     return RecordedRun(rec, plan)
-
-
-def run_task(specs: Sequence[Any]) -> list[dict[str, Any]]:
-    """One task of :func:`plan_tasks`: a single run, or a physics batch."""
-    from scenarios.runs.spec import run_one
-
-    if len(specs) == 1 and not batchable(specs[0]):
-        return [run_one(specs[0])]
-    return run_physics_batch(specs)

@@ -3,7 +3,7 @@
 Each spec is run in a worker process (the scenario is resolved again there:
 specs are small and picklable, models are cached per process), and becomes one
 ``runs[]`` record of ``results.json`` (see :mod:`scenarios.runs.results`). The
-backend only decides *where* :func:`run_one` executes, so the local pool and
+backend only decides *where* :func:`scenarios.runs.run.run_one` executes, so the local pool and
 Ray produce the same records for the same seeds.
 """
 
@@ -250,62 +250,3 @@ def _median_route(lengths: np.ndarray) -> float | None:
 
     v = quantile([None if x < 0 else float(x) for x in lengths], 0.5)
     return None if not np.isfinite(v) else v
-
-
-def run_one(spec: RunSpec) -> dict[str, Any]:
-    """Train one run in this process and return its results.json record."""
-    sc, model = load(*spec.problem)
-    cfg = make_config(spec.method, spec.overrides)
-    if spec.world not in WORLDS:
-        raise ExperimentError("command line", "--world", f"unknown world {spec.world!r}",
-                              f"use one of: {', '.join(WORLDS)}")
-    if spec.world == "physics":  # one physics loop: a single run is a batch of one
-        from scenarios.runs.physics_batch import run_physics_batch
-
-        return run_physics_batch([spec])[0]
-    opts = spec.recording
-    if opts is None or not opts.detail:
-        # a curves-only run of a comparison records nothing itself: the comparison logs its
-        # curves from this record when it gathers the recording (a stream and a part file
-        # per run cost ~0.05 s each, a quarter of a 0.2 s run)
-        return run_record(spec, cfg, _train(spec, sc, model, cfg))
-    from scenarios.recording.hooks import RecordPlan
-    from scenarios.recording.recorder import Recorder
-
-    plan = RecordPlan(spec.episodes, every=max(1, opts.every),
-                      values_every=max(1, opts.values_every), detail=opts.detail)
-    with Recorder.create(opts.path, sc, model, method=spec.method, config=cfg,
-                         seed=spec.seed, world=spec.world, prefix=opts.prefix,
-                         recording_id=opts.recording_id, blueprint=not opts.prefix,
-                         with_scene=opts.detail,
-                         fidelity=None) as rec:
-        outcome = _train(spec, sc, model, cfg, rec, plan)
-        if opts.detail:
-            rec.log_route("final route", outcome.final_route)
-        return run_record(spec, cfg, outcome)
-
-
-def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder: Any = None,
-           plan: Any = None) -> RunOutcome:
-    """A grid run (physics runs go through :mod:`scenarios.runs.physics_batch`)."""
-    from learning.streams import streams
-    from learning.train import epsilon_route_lengths, train_tabular
-
-    rs = streams(spec.seed)  # starts, learner, evaluation: independent (common random numbers)
-    rng = rs.learner
-
-    observer = None
-    if recorder is not None:
-        from scenarios.recording.hooks import GridRecorder
-
-        observer = GridRecorder(recorder, plan)
-    result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every,
-                           observer=observer, start_rng=rs.starts)
-    # the paper's test, on its own stream so it never changes the training run
-    eps_routes = epsilon_route_lengths(result.state, model, cfg.eps, rs.evaluation)
-    extras = None
-    if spec.drive_final:  # the grid-learned policy, graded in the physics world
-        from scenarios.runs.physics_grading import Grader
-
-        extras = Grader(sc, spec.fidelity_spec).final(result.state, spec.seed).extras
-    return RunOutcome.of(result, eps_routes, extras)

@@ -21,7 +21,7 @@ import numpy as np
 
 from learning.free_space import bfs_distances, distances_change, repair_distances
 from scenarios.experiments.large_maps import KINDS, generate
-from scenarios.experiments.suite import far_pair
+from sim.grid.planning import far_start_goal
 
 
 def neighbours(n: int) -> np.ndarray:
@@ -39,7 +39,7 @@ def bench_map(free: np.ndarray, seed: int = 0, max_walls: int = 4000) -> dict:
     n = free.shape[0]
     nb = neighbours(n)
     flat = free.ravel()
-    _, goal_rc, _ = far_pair(free)
+    _, goal_rc, _ = far_start_goal(free)
     goal = goal_rc[0] * n + goal_rc[1]
     # the true walls: a move from a free cell to a blocked one (or off the map)
     walls = [(s, a) for s in np.flatnonzero(flat) for a in range(4)

@@ -24,6 +24,7 @@ import numpy as np
 
 from scenarios.experiments.suite import room_grid, spanning_tree
 from sim.grid.planning import grid_distances
+from sim.maps import read_free_grid
 
 KINDS = ("city", "maze", "rooms", "random", "caves")
 
@@ -97,9 +98,9 @@ def caves(size: int, seed: int, fill: float = 0.45, rounds: int = 5) -> np.ndarr
 def city(size: int, seed: int = 0) -> np.ndarray:
     """Berlin_1_256 (the seed is unused: the streets are the map's), scaled up by whole
     cells to ``size`` (256 or a multiple)."""
-    from scenarios.experiments.suite import MAPS_DIR, read_map
+    from scenarios.experiments.suite import MAPS_DIR
 
-    free = read_map(MAPS_DIR / "Berlin_1_256.map")
+    free = read_free_grid(MAPS_DIR / "Berlin_1_256.map")
     f = size // free.shape[0]
     if f < 1 or f * free.shape[0] != size:
         raise ValueError(f"city maps come in multiples of {free.shape[0]} cells, not {size}")

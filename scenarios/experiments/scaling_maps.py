@@ -32,10 +32,10 @@ from typing import Any
 
 from scenarios.experiments.compare import make_specs, run_sweep
 from scenarios.experiments.large_maps import KINDS, generate
-from scenarios.experiments.suite import far_pair, write_map
 from scenarios.runs.backends import Progress, run_local
 from sim.files import atomic_write_text
-from sim.maps import movingai_to_cell
+from sim.grid.planning import far_start_goal
+from sim.maps import movingai_to_cell, write_free_grid
 
 METHODS = ("rnh-ql+", "haql", "dyna-q")
 # (label, method, overrides, uniform starts only)
@@ -50,8 +50,8 @@ def write_problem(kind: str, size: int, seed: int, share: float, folder: Path
     free = generate(kind, size, seed)
     folder.mkdir(parents=True, exist_ok=True)
     mp = folder / f"{kind}-{size}-s{seed}.map"
-    write_map(free, mp)
-    (sr, sc), (gr, gc), route = far_pair(free)
+    write_free_grid(free, mp)
+    (sr, sc), (gr, gc), route = far_start_goal(free)
     sx, sy = movingai_to_cell(sc, sr, size)
     gx, gy = movingai_to_cell(gc, gr, size)
     steps = max(600, 4 * route)

@@ -5,9 +5,8 @@ built-ins, as scenario TOMLs with a chosen reward scheme, start and goal far apa
 maps), ``DIR/*.toml`` (one scenario per suite map) and ``DIR/suite.json`` (name, kind, file,
 optimal route, steps per episode, whether the map is held out from tuning).
 
-* Start and goal: a double BFS sweep over the map's free cells (farthest cell from a
-  cell of the largest component, then the farthest from that), so the route is
-  about the map's diameter.
+* Start and goal: :func:`sim.grid.planning.far_start_goal`, a double BFS sweep over
+  the map's free cells, so the route is about the map's diameter.
 * ``steps_per_episode`` = max(600, 4 x the optimal route): an episode from a random
   start can still reach the goal after exploring.
 * Rewards default to ``goal-only`` (+100 goal, -1 bump, 0 free step).
@@ -21,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sim.grid.planning import grid_distances
-from sim.maps import load_map, movingai_to_cell
+from sim.grid.planning import far_start_goal
+from sim.maps import load_map, movingai_to_cell, read_free_grid, write_free_grid
 from sim.scenario import REWARD_SCHEMES
 from sim.scenario_io import builtin_dir
 
@@ -112,36 +111,6 @@ def rooms(seed: int) -> np.ndarray:
     return room_grid(k * (room + 1) + 1, k, room, 2, rng)
 
 
-# ---------------------------------------------------------------- maps and start/goal
-
-
-def read_map(path: Path) -> np.ndarray:
-    """free[row, col] of a Moving AI map, row 0 at the top as in the file (and as the
-    generators draw): sim's reader, flipped back from rnhql's y-up frame."""
-    return ~load_map(path).blocked[::-1]
-
-
-def write_map(free: np.ndarray, path: Path) -> None:
-    h, w = free.shape
-    rows = ["".join("." if f else "@" for f in row) for row in free]
-    path.write_text(f"type octile\nheight {h}\nwidth {w}\nmap\n" + "\n".join(rows) + "\n")
-
-
-def far_pair(free: np.ndarray) -> tuple[tuple[int, int], tuple[int, int], int]:
-    """(start, goal, moves) as (row, col) in the map's frame: a double BFS sweep from a cell
-    of the largest component."""
-    cells = np.argwhere(free)
-    best = None
-    for r, c in cells[np.linspace(0, len(cells) - 1, 8).astype(int)]:
-        d = grid_distances(free, (int(c), int(r)))  # BFS moves from (row r, col c)
-        if best is None or (d >= 0).sum() > (best >= 0).sum():
-            best = d
-    a = tuple(int(x) for x in np.unravel_index(np.argmax(best), best.shape))
-    da = grid_distances(free, a[::-1])
-    b = tuple(int(x) for x in np.unravel_index(np.argmax(da), da.shape))
-    return b, a, int(da[b])
-
-
 def _toml(name: str, desc: str, map_path: Path, start, goal, steps: int,
           rewards: tuple[float, float, float], scheme: str) -> str:
     g, b, s = rewards
@@ -206,8 +175,8 @@ def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True,
         for prefix, gen, kind in gens:
             free = gen(seed)
             mp = out / "maps" / f"{prefix}-{seed}.map"
-            write_map(free, mp)
-            s, g, _ = far_pair(free)
+            write_free_grid(free, mp)
+            s, g, _ = far_start_goal(free)
             add(f"{prefix}-{seed}", kind,
                 _toml(f"{prefix}-{seed}", f"generated {prefix}, seed {seed}", mp, s, g, 600,
                       rewards, scheme), held_out=seed not in TUNE_SEEDS)
@@ -216,7 +185,7 @@ def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True,
                   "lak307d": "large obstacles", "ost003d": "large"}
         for name in MOVINGAI:
             mp = MAPS_DIR / f"{name}.map"
-            s, g, _ = far_pair(read_map(mp))
+            s, g, _ = far_start_goal(read_free_grid(mp))
             add(name, mkinds[name], _toml(name, f"Moving AI {name}, far start and goal", mp, s,
                                           g, 600, rewards, scheme))
     (out / "suite.json").write_text(json.dumps(entries, indent=1))
@@ -231,7 +200,7 @@ def shipped_suite_tomls() -> dict[str, tuple[str, np.ndarray | None]]:
     out: dict[str, tuple[str, np.ndarray | None]] = {}
 
     def toml(name: str, desc: str, free: np.ndarray) -> str:
-        s, g, d = far_pair(free)
+        s, g, d = far_start_goal(free)
         h = free.shape[0]
         (sx, sy), (gx, gy) = (movingai_to_cell(c, r, h) for r, c in (s, g))
         steps = max(600, 4 * int(d))
@@ -248,8 +217,8 @@ def shipped_suite_tomls() -> dict[str, tuple[str, np.ndarray | None]]:
             out[f"{prefix}-{seed}"] = (toml(f"{prefix}-{seed}",
                                             f"generated {prefix} map, seed {seed}", free), free)
     for name in MOVINGAI:
-        out[name] = (toml(name, f"Moving AI map '{name}'", read_map(MAPS_DIR / f"{name}.map")),
-                     None)
+        free = read_free_grid(MAPS_DIR / f"{name}.map")
+        out[name] = (toml(name, f"Moving AI map '{name}'", free), None)
     return out
 
 

@@ -2,7 +2,7 @@
 
     python -m scenarios.bench.model_repair            # 256 and 512 cells a side
 
-On generated maps of each kind (:mod:`scenarios.experiments.large_maps`, seed 7, G at
+On generated maps of each kind (:mod:`sim.map_generators`, seed 7, G at
 one end of the diameter), the agent's free space starts empty (every move believed
 free) and learns the map's walls one blocked move at a time, in a seeded random order,
 as bumps would find them. Each new wall that changes a distance is handled twice, by
@@ -20,8 +20,8 @@ import time
 import numpy as np
 
 from learning.free_space import bfs_distances, distances_change, repair_distances
-from scenarios.experiments.large_maps import KINDS, generate
 from sim.grid.planning import far_start_goal
+from sim.map_generators import KINDS, generate
 
 
 def neighbours(n: int) -> np.ndarray:

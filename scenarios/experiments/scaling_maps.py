@@ -3,7 +3,7 @@
     python -m scenarios.experiments.scaling_maps --out results/scaling-maps       # 10 seeds
     python -m scenarios.experiments.scaling_maps --out /tmp/sm --seeds 2 --kinds city
 
-Maps (:mod:`scenarios.experiments.large_maps`, generator seed ``--map-seed``, not a
+Maps (:mod:`sim.map_generators`, generator seed ``--map-seed``, not a
 seed anything was tuned on): a city (``Berlin_1_256``, 2 x 2 per cell at 512), a
 braided maze with 3-cell corridors, rooms of 15 cells with 1-3 cell doors, 20 %
 random blocked cells, and caves (open areas, narrow passages). S and G are the
@@ -31,10 +31,10 @@ from pathlib import Path
 from typing import Any
 
 from scenarios.experiments.compare import make_specs, run_sweep
-from scenarios.experiments.large_maps import KINDS, generate
 from scenarios.runs.backends import Progress, run_local
 from sim.files import atomic_write_text
 from sim.grid.planning import far_start_goal
+from sim.map_generators import KINDS, generate
 from sim.maps import movingai_to_cell, write_free_grid
 
 METHODS = ("rnh-ql+", "haql", "dyna-q")

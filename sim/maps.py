@@ -133,6 +133,23 @@ def load_map(path: str | Path) -> GridMap:
     return parse_map(text, str(path))
 
 
+def read_free_grid(path: str | Path) -> np.ndarray:
+    """``free[row, col]`` of a ``.map`` file, row 0 at the top as in the file (the frame
+    the map generators draw in, :mod:`sim.map_generators`): :func:`load_map`, flipped
+    back from rnhql's y-up frame and inverted to True = free."""
+    return ~load_map(path).blocked[::-1]
+
+
+def write_free_grid(free: np.ndarray, path: str | Path) -> None:
+    """Write ``free[row, col]`` (row 0 at the top) as a Moving AI ``.map`` file, '.' free
+    and '@' blocked, so a generated map is read back by :func:`load_map` like a
+    downloaded one."""
+    h, w = free.shape
+    rows = ["".join("." if f else "@" for f in row) for row in free]
+    Path(path).write_text(f"type octile\nheight {h}\nwidth {w}\nmap\n" + "\n".join(rows)
+                          + "\n")
+
+
 def load_scen(path: str | Path) -> list[ScenProblem]:
     """Read a ``.scen`` file (``version 1`` then tab-separated problems)."""
     path = Path(path)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scenarios.experiments.large_maps import GENERATORS, generate
 from sim.grid.planning import grid_distances
+from sim.map_generators import GENERATORS, generate
 
 
 @pytest.mark.parametrize("kind", [k for k in GENERATORS if k != "city"])

@@ -7,7 +7,8 @@ import sys
 
 import numpy as np
 
-from scenarios.experiments.suite import read_map, shipped_suite_tomls
+from scenarios.experiments.suite import shipped_suite_tomls
+from sim.maps import read_free_grid
 from sim.scenario_io import builtin_dir, builtin_names, resolve_scenario
 
 
@@ -17,7 +18,8 @@ def test_shipped_suite_scenarios_are_what_the_generator_writes():
     for name, (text, free) in shipped_suite_tomls().items():
         assert (builtin_dir() / f"{name}.toml").read_text() == text, name
         if free is not None:
-            assert np.array_equal(read_map(builtin_dir() / "maps" / f"{name}.map"), free), name
+            shipped = read_free_grid(builtin_dir() / "maps" / f"{name}.map")
+            assert np.array_equal(shipped, free), name
 
 
 def test_suite_maps_resolve_by_name():

@@ -19,6 +19,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from sim.grid.planning import far_start_goal
+from sim.maps import read_free_grid
 from sim.scenario_io import builtin_dir
 
 MAPS = builtin_dir() / "maps"
@@ -82,10 +84,9 @@ def run_bench() -> dict[str, dict]:
         for n in SIZES:
             out[f"arena {n}x{n}, {round(DENSITY * n * n)} circles"] = measure(
                 str(arena_toml(n, folder)))
-        from scenarios.experiments.suite import far_pair, read_map
-
         for name in ("lak307d", "ost003d", "Berlin_1_256"):
-            (sr, sc), (gr, gc), _ = far_pair(read_map(MAPS / f"{name}.map"))  # (row, col)
+            free = read_free_grid(MAPS / f"{name}.map")
+            (sr, sc), (gr, gc), _ = far_start_goal(free)  # (row, col)
             out[f"{name}.map"] = measure(str(MAPS / f"{name}.map"), (sc, sr), (gc, gr))
         out["Berlin tiled 1024x1024 .map"] = measure(str(tiled_berlin(folder)), (0, 0),
                                                      (1023, 1023))

@@ -40,7 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--sizes", default="64,128,256,512", help="map sizes [cells a side]")
-    p.add_argument("--kind", default="rooms", help="map kind (scenarios.experiments.large_maps)")
+    p.add_argument("--kind", default="rooms", help="map kind (sim.map_generators)")
     p.add_argument("--methods", default=",".join(METHODS), help="methods")
     p.add_argument("--episodes", type=int, default=20, help="training episodes per run")
     p.add_argument("--map-seed", type=int, default=7, help="generator seed of the maps")

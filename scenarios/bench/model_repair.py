@@ -2,7 +2,7 @@
 
     python -m scenarios.bench.model_repair            # 256 and 512 cells a side
 
-On generated maps of each kind (:mod:`scenarios.experiments.large_maps`, seed 7, G at
+On generated maps of each kind (:mod:`sim.map_generators`, seed 7, G at
 one end of the diameter), the agent's free space starts empty (every move believed
 free) and learns the map's walls one blocked move at a time, in a seeded random order,
 as bumps would find them. Each new wall that changes a distance is handled twice, by
@@ -20,8 +20,8 @@ import time
 import numpy as np
 
 from learning.free_space import bfs_distances, distances_change, repair_distances
-from scenarios.experiments.large_maps import KINDS, generate
-from scenarios.experiments.suite import far_pair
+from sim.grid.planning import far_start_goal
+from sim.map_generators import KINDS, generate
 
 
 def neighbours(n: int) -> np.ndarray:
@@ -39,7 +39,7 @@ def bench_map(free: np.ndarray, seed: int = 0, max_walls: int = 4000) -> dict:
     n = free.shape[0]
     nb = neighbours(n)
     flat = free.ravel()
-    _, goal_rc, _ = far_pair(free)
+    _, goal_rc, _ = far_start_goal(free)
     goal = goal_rc[0] * n + goal_rc[1]
     # the true walls: a move from a free cell to a blocked one (or off the map)
     walls = [(s, a) for s in np.flatnonzero(flat) for a in range(4)

@@ -3,7 +3,7 @@
     python -m scenarios.experiments.scaling_maps --out results/scaling-maps       # 10 seeds
     python -m scenarios.experiments.scaling_maps --out /tmp/sm --seeds 2 --kinds city
 
-Maps (:mod:`scenarios.experiments.large_maps`, generator seed ``--map-seed``, not a
+Maps (:mod:`sim.map_generators`, generator seed ``--map-seed``, not a
 seed anything was tuned on): a city (``Berlin_1_256``, 2 x 2 per cell at 512), a
 braided maze with 3-cell corridors, rooms of 15 cells with 1-3 cell doors, 20 %
 random blocked cells, and caves (open areas, narrow passages). S and G are the
@@ -31,11 +31,11 @@ from pathlib import Path
 from typing import Any
 
 from scenarios.experiments.compare import make_specs, run_sweep
-from scenarios.experiments.large_maps import KINDS, generate
-from scenarios.experiments.suite import far_pair, write_map
 from scenarios.runs.backends import Progress, run_local
 from sim.files import atomic_write_text
-from sim.maps import movingai_to_cell
+from sim.grid.planning import far_start_goal
+from sim.map_generators import KINDS, generate
+from sim.maps import movingai_to_cell, write_free_grid
 
 METHODS = ("rnh-ql+", "haql", "dyna-q")
 # (label, method, overrides, uniform starts only)
@@ -50,8 +50,8 @@ def write_problem(kind: str, size: int, seed: int, share: float, folder: Path
     free = generate(kind, size, seed)
     folder.mkdir(parents=True, exist_ok=True)
     mp = folder / f"{kind}-{size}-s{seed}.map"
-    write_map(free, mp)
-    (sr, sc), (gr, gc), route = far_pair(free)
+    write_free_grid(free, mp)
+    (sr, sc), (gr, gc), route = far_start_goal(free)
     sx, sy = movingai_to_cell(sc, sr, size)
     gx, gy = movingai_to_cell(gc, gr, size)
     steps = max(600, 4 * route)

@@ -5,9 +5,9 @@ built-ins, as scenario TOMLs with a chosen reward scheme, start and goal far apa
 maps), ``DIR/*.toml`` (one scenario per suite map) and ``DIR/suite.json`` (name, kind, file,
 optimal route, steps per episode, whether the map is held out from tuning).
 
-* Start and goal: a double BFS sweep over the map's free cells (farthest cell from a
-  cell of the largest component, then the farthest from that), so the route is
-  about the map's diameter.
+* Maps: :func:`sim.map_generators.small_maze` and ``small_rooms`` from each seed.
+* Start and goal: :func:`sim.grid.planning.far_start_goal`, a double BFS sweep over
+  the map's free cells, so the route is about the map's diameter.
 * ``steps_per_episode`` = max(600, 4 x the optimal route): an episode from a random
   start can still reach the goal after exploring.
 * Rewards default to ``goal-only`` (+100 goal, -1 bump, 0 free step).
@@ -21,8 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-from sim.grid.planning import grid_distances
-from sim.maps import load_map, movingai_to_cell
+from sim.grid.planning import far_start_goal
+from sim.map_generators import small_maze, small_rooms
+from sim.maps import load_map, movingai_to_cell, read_free_grid, write_free_grid
 from sim.scenario import REWARD_SCHEMES
 from sim.scenario_io import builtin_dir
 
@@ -31,115 +32,6 @@ BUILTIN = ("paper-40", "paper-50", "zigzag-50", "arena")
 MOVINGAI = ("room-32-32-8", "random-64-64-20", "lak307d", "ost003d")
 TUNE_SEEDS = (1, 2)
 HELD_OUT_SEEDS = (101, 102)
-
-
-# ---------------------------------------------------------------- generators (True = free)
-
-
-def spanning_tree(n: int, rng: np.random.Generator) -> list[tuple[tuple[int, int],
-                                                                   tuple[int, int]]]:
-    """The edges (cell, neighbour) of a random depth-first spanning tree of an n x n
-    lattice, from a random cell: a perfect maze's corridors (every maze generator here)."""
-    seen = np.zeros((n, n), dtype=bool)
-    stack = [(int(rng.integers(n)), int(rng.integers(n)))]
-    seen[stack[0]] = True
-    edges = []
-    while stack:
-        r, c = stack[-1]
-        nbrs = [(r + dr, c + dc) for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1))
-                if 0 <= r + dr < n and 0 <= c + dc < n and not seen[r + dr, c + dc]]
-        if not nbrs:
-            stack.pop()
-            continue
-        nr, nc = nbrs[int(rng.integers(len(nbrs)))]
-        seen[nr, nc] = True
-        edges.append(((r, c), (nr, nc)))
-        stack.append((nr, nc))
-    return edges
-
-
-def maze(seed: int, braid: float = 0.1) -> np.ndarray:
-    """A seeded maze, 1-cell corridors and walls, 25-39 cells a side; ``braid`` of the
-    remaining inner walls between two corridors are knocked out (loops: several routes)."""
-    rng = np.random.default_rng(seed)
-    n = int(rng.integers(12, 20))  # lattice cells per side -> 2n + 1 map cells
-    size = 2 * n + 1
-    free = np.zeros((size, size), dtype=bool)
-    free[1::2, 1::2] = True  # every lattice cell is reached by the spanning tree
-    for (r, c), (nr, nc) in spanning_tree(n, rng):
-        free[r + nr + 1, c + nc + 1] = True
-    walls = [(r, c) for r in range(1, size - 1) for c in range(1, size - 1)
-             if not free[r, c] and (r % 2) != (c % 2)]
-    for i in rng.permutation(len(walls))[:int(braid * len(walls))]:
-        free[walls[i]] = True
-    return free
-
-
-def room_grid(size: int, k: int, room: int, max_door: int, rng: np.random.Generator
-              ) -> np.ndarray:
-    """k x k rooms of ``room`` cells a side from the corner of a ``size``-cell square, 1-cell
-    walls, one or two doors of 1 to ``max_door`` cells in each wall between neighbouring
-    rooms (drawn from ``rng``); cells beyond the k x k rooms are blocked."""
-    pitch = room + 1
-    free = np.zeros((size, size), dtype=bool)
-    free[1:k * pitch, 1:k * pitch] = True
-    for j in range(1, k):
-        free[j * pitch, :] = False
-        free[:, j * pitch] = False
-    for a in range(k):
-        for b in range(k):
-            for vertical in (True, False):
-                if (vertical and b == k - 1) or (not vertical and a == k - 1):
-                    continue
-                for _ in range(int(rng.integers(1, 3))):
-                    w = int(rng.integers(1, max_door + 1))
-                    o = int(rng.integers(0, room - w + 1))
-                    lo = (a if vertical else b) * pitch + 1 + o
-                    wall = ((b + 1) if vertical else (a + 1)) * pitch
-                    if vertical:
-                        free[lo:lo + w, wall] = True
-                    else:
-                        free[wall, lo:lo + w] = True
-    return free
-
-
-def rooms(seed: int) -> np.ndarray:
-    """Seeded rooms: a grid of rooms 5-8 cells wide, 1-cell walls, one or two doors
-    (1-2 cells) per wall between neighbouring rooms, 25-40 cells a side."""
-    rng = np.random.default_rng(seed)
-    room = int(rng.integers(5, 9))
-    k = int(rng.integers(max(3, 25 // (room + 1)), 40 // (room + 1) + 1))
-    return room_grid(k * (room + 1) + 1, k, room, 2, rng)
-
-
-# ---------------------------------------------------------------- maps and start/goal
-
-
-def read_map(path: Path) -> np.ndarray:
-    """free[row, col] of a Moving AI map, row 0 at the top as in the file (and as the
-    generators draw): sim's reader, flipped back from rnhql's y-up frame."""
-    return ~load_map(path).blocked[::-1]
-
-
-def write_map(free: np.ndarray, path: Path) -> None:
-    h, w = free.shape
-    rows = ["".join("." if f else "@" for f in row) for row in free]
-    path.write_text(f"type octile\nheight {h}\nwidth {w}\nmap\n" + "\n".join(rows) + "\n")
-
-
-def far_pair(free: np.ndarray) -> tuple[tuple[int, int], tuple[int, int], int]:
-    """(start, goal, moves) as (row, col) in the map's frame: a double BFS sweep from a cell
-    of the largest component."""
-    cells = np.argwhere(free)
-    best = None
-    for r, c in cells[np.linspace(0, len(cells) - 1, 8).astype(int)]:
-        d = grid_distances(free, (int(c), int(r)))  # BFS moves from (row r, col c)
-        if best is None or (d >= 0).sum() > (best >= 0).sum():
-            best = d
-    a = tuple(int(x) for x in np.unravel_index(np.argmax(best), best.shape))
-    da = grid_distances(free, a[::-1])
-    b = tuple(int(x) for x in np.unravel_index(np.argmax(da), da.shape))
-    return b, a, int(da[b])
 
 
 def _toml(name: str, desc: str, map_path: Path, start, goal, steps: int,
@@ -201,13 +93,13 @@ def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True,
              "arena": "rooms"}
     for name in BUILTIN:
         add(name, kinds[name], _builtin_toml(name, rewards, scheme))
-    gens = [("maze", maze, "maze"), ("rooms", rooms, "rooms")]
+    gens = [("maze", small_maze, "maze"), ("rooms", small_rooms, "rooms")]
     for seed in (*TUNE_SEEDS, *held_out_seeds):
         for prefix, gen, kind in gens:
             free = gen(seed)
             mp = out / "maps" / f"{prefix}-{seed}.map"
-            write_map(free, mp)
-            s, g, _ = far_pair(free)
+            write_free_grid(free, mp)
+            s, g, _ = far_start_goal(free)
             add(f"{prefix}-{seed}", kind,
                 _toml(f"{prefix}-{seed}", f"generated {prefix}, seed {seed}", mp, s, g, 600,
                       rewards, scheme), held_out=seed not in TUNE_SEEDS)
@@ -216,7 +108,7 @@ def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True,
                   "lak307d": "large obstacles", "ost003d": "large"}
         for name in MOVINGAI:
             mp = MAPS_DIR / f"{name}.map"
-            s, g, _ = far_pair(read_map(mp))
+            s, g, _ = far_start_goal(read_free_grid(mp))
             add(name, mkinds[name], _toml(name, f"Moving AI {name}, far start and goal", mp, s,
                                           g, 600, rewards, scheme))
     (out / "suite.json").write_text(json.dumps(entries, indent=1))
@@ -231,7 +123,7 @@ def shipped_suite_tomls() -> dict[str, tuple[str, np.ndarray | None]]:
     out: dict[str, tuple[str, np.ndarray | None]] = {}
 
     def toml(name: str, desc: str, free: np.ndarray) -> str:
-        s, g, d = far_pair(free)
+        s, g, d = far_start_goal(free)
         h = free.shape[0]
         (sx, sy), (gx, gy) = (movingai_to_cell(c, r, h) for r, c in (s, g))
         steps = max(600, 4 * int(d))
@@ -243,13 +135,13 @@ def shipped_suite_tomls() -> dict[str, tuple[str, np.ndarray | None]]:
                 f'map = "maps/{name}.map"\ncell_size_m = 1.0\n')
 
     for seed in (*TUNE_SEEDS, *HELD_OUT_SEEDS):
-        for prefix, gen in (("maze", maze), ("rooms", rooms)):
+        for prefix, gen in (("maze", small_maze), ("rooms", small_rooms)):
             free = gen(seed)
             out[f"{prefix}-{seed}"] = (toml(f"{prefix}-{seed}",
                                             f"generated {prefix} map, seed {seed}", free), free)
     for name in MOVINGAI:
-        out[name] = (toml(name, f"Moving AI map '{name}'", read_map(MAPS_DIR / f"{name}.map")),
-                     None)
+        free = read_free_grid(MAPS_DIR / f"{name}.map")
+        out[name] = (toml(name, f"Moving AI map '{name}'", free), None)
     return out
 
 

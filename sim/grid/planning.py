@@ -3,7 +3,8 @@
 * :func:`breadth_first`: the one BFS; :func:`bfs_distances` (the grid world's
   passable moves, what the learners can do), :func:`distances_to` (any transition
   table, e.g. the physics world's) and :func:`grid_distances` (a plain free-cell
-  grid) are its uses; :func:`bfs_route` walks a shortest route down the distances.
+  grid) are its uses; :func:`bfs_route` walks a shortest route down the distances;
+  :func:`far_start_goal` puts a start and goal about a map's diameter apart.
 * :func:`astar`: A* with a binary heap on a plain blocked grid, 4-connected
   (Manhattan) or 8-connected (octile, no corner cutting), to check maps against
   the Moving AI ``.scen`` optimal lengths.
@@ -81,6 +82,24 @@ def grid_distances(free: np.ndarray, source: tuple[int, int]) -> np.ndarray:
     """int32[ny, nx]: 4-connected moves over the free cells of ``free[iy, ix]`` from
     cell ``source`` = (ix, iy) to every cell, -1 where unreachable."""
     return bfs_distances(free_moves(free), free.shape[1], source).reshape(free.shape)
+
+
+def far_start_goal(free: np.ndarray) -> tuple[tuple[int, int], tuple[int, int], int]:
+    """(start, goal, moves) as (row, col) indices of ``free``, about the map's diameter
+    apart, so the route crosses the map: a double BFS sweep (the farthest cell from a cell
+    of the largest component, then the farthest from that). Eight evenly spaced free
+    cells are tried as the first source, and the one reaching most cells is kept, so a
+    small island cannot hold the pair."""
+    cells = np.argwhere(free)
+    best = None
+    for r, c in cells[np.linspace(0, len(cells) - 1, 8).astype(int)]:
+        d = grid_distances(free, (int(c), int(r)))  # BFS moves from (row r, col c)
+        if best is None or (d >= 0).sum() > (best >= 0).sum():
+            best = d
+    a = tuple(int(x) for x in np.unravel_index(np.argmax(best), best.shape))
+    da = grid_distances(free, a[::-1])
+    b = tuple(int(x) for x in np.unravel_index(np.argmax(da), da.shape))
+    return b, a, int(da[b])
 
 
 def distances_to(next_state: np.ndarray, goal: int) -> np.ndarray:

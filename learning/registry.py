@@ -65,4 +65,4 @@ def config_from_fields(cli: str, fields: dict[str, object]) -> MethodConfig:
     """Rebuild a config from its CLI name and field values (e.g. from a checkpoint)."""
     if cli not in METHODS:
         raise ValueError(f"unknown method {cli!r}; known: {', '.join(METHODS)}")
-    return METHODS[cli](**fields)
+    return METHODS[cli].from_fields(fields)

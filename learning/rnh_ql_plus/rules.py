@@ -67,6 +67,16 @@ def action_values(par, q, out, y, succ, nb, goal, r_free, r_goal, s):
                                       par.gamma)
 
 
+@njit(**HOOK)
+def known_route_move(nb, works, known_d, known_q, known_stale, goal, s):
+    """The first move of a shortest route from s over moves seen to work (-1: s has none),
+    the routes brought up to date first if a move worked for the first time since."""
+    if known_stale[0]:
+        known_distances(nb, works, known_d, known_q, goal)
+        known_stale[0] = False
+    return known_move(nb, works, known_d, s)
+
+
 # Every hook below first reads each array it or its callees use into a local, one field per
 # statement, before any branch or loop; callees inside branches get arrays, never the state.
 # numba reference-counts each read of a named tuple's field, and prunes the count only
@@ -121,10 +131,7 @@ def exploit(st, s):
     known_stale = st.known.stale
     a = -1
     if par.known_route:
-        if known_stale[0]:
-            known_distances(nb, works, known_d, known_q, goal)
-            known_stale[0] = False
-        a = known_move(nb, works, known_d, s)
+        a = known_route_move(nb, works, known_d, known_q, known_stale, goal, s)
     if a >= 0:
         pass
     elif par.lookahead and shaping[0]:

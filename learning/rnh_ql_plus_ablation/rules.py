@@ -23,10 +23,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from learning.known_routes import known_distances, known_move
 from learning.rnh_ql_plus.optimism import ensure_values, goal_reward
-from learning.rnh_ql_plus.planning import model_shaping, replay, sweep
-from learning.rnh_ql_plus.rules import learn_move, untried_value
+from learning.rnh_ql_plus.planning import plan as plus_plan
+from learning.rnh_ql_plus.planning import replay, sweep
+from learning.rnh_ql_plus.rules import action_values as plus_action_values
+from learning.rnh_ql_plus.rules import known_route_move, learn_move, untried_value
 from learning.rnh_ql_plus_ablation.features import leak_free_edge, leak_free_enter
 from learning.rnh_ql_plus_ablation.potential import (
     LOG_OPTIMISTIC,
@@ -59,33 +60,22 @@ HOOK = dict(cache=True, inline="always")
 def action_values(par, q, out, y, phi_row, w, on, centre, succ, nb, goal, r_free, r_goal,
                   direct, based, s):
     """Row s's action values (in re-based units, Q + Phi - Phi(s)) into the scratch row
-    ``out[0]``: a tried action its Q; an untried one
-    :func:`~learning.rnh_ql_plus.rules.untried_value`. ``direct``: Phi is scale * y
-    (:func:`model_phi`); ``based``: rows are re-based."""
-    scale = par.scale
+    ``out[0]``: rnh-ql+'s (:func:`learning.rnh_ql_plus.rules.action_values`) when ``direct``
+    (Phi is scale * y, :func:`model_phi`); else a tried action its Q, an untried one
+    :func:`~learning.rnh_ql_plus.rules.untried_value` on :func:`potential` (``based``: rows
+    are re-based, Phi(s) is the row's)."""
     if direct:
-        phi_s = scale * y[s]
-    elif based:
-        phi_s = phi_row[s]
+        plus_action_values(par, q, out, y, succ, nb, goal, r_free, r_goal, s)
     else:
-        phi_s = potential(par, w, on, centre, y, s)
-    for a in range(q.shape[1]):
-        if succ[s, a] >= 0:
-            out[0, a] = q[s, a]
-            continue
-        u = nb[s, a]
-        v = max(u, 0)
-        phi_u = scale * y[v] if direct else potential(par, w, on, centre, y, v)
-        out[0, a] = untried_value(u, goal, phi_s, phi_u, r_free, r_goal, par.gamma)
-
-
-# Every hook below first reads each array it or its callees use into a local, one field per
-# statement, before any branch or loop; callees inside branches get arrays, never the state.
-# numba reference-counts each read of a named tuple's field, and prunes the count only
-# where the read is on every path through the hook: a read inside a branch costs two atomic
-# operations per call even when the branch never runs (measured: the rnh-ql+ kernel at 0.7M
-# env steps/s with reads in branches, 5M+ with them hoisted). Nested tuples (``st.model``,
-# ``st.free``) are read through once, at the top, for the same reason.
+        phi_s = phi_row[s] if based else potential(par, w, on, centre, y, s)
+        for a in range(q.shape[1]):
+            u = nb[s, a]
+            if succ[s, a] >= 0:
+                out[0, a] = q[s, a]
+            else:
+                out[0, a] = untried_value(u, goal, phi_s,
+                                          potential(par, w, on, centre, y, max(u, 0)), r_free,
+                                          r_goal, par.gamma)
 
 
 @njit(**HOOK)
@@ -146,10 +136,7 @@ def exploit(st, s):
     based = par.rebase
     a = -1
     if par.known_route:
-        if known_stale[0]:
-            known_distances(nb, works, known_d, known_q, goal)
-            known_stale[0] = False
-        a = known_move(nb, works, known_d, s)
+        a = known_route_move(nb, works, known_d, known_q, known_stale, goal, s)
     if a >= 0:
         pass
     elif par.lookahead and shaping[0]:
@@ -170,24 +157,24 @@ def exploit(st, s):
 def plan(par, q, w, on, centre, y, phi_row, succ, to_goal, reward, works, fails, seen, n_seen,
          r_fail, direct, based, shaping, n_updates, rng):
     """``n_updates`` shaped Q updates on seen pairs drawn uniformly, each replaying a drawn
-    outcome (:func:`learning.rnh_ql_plus.planning.plan`, with any potential)."""
-    gamma = par.gamma
-    alpha = par.alpha
-    n = n_seen[0]
-    for _ in range(n_updates):
-        ps, pa, ps2, pterm, pr = replay(seen[draw_below(rng, n)], succ, to_goal, reward,
-                                        works, fails, r_fail, rng)
-        pf = 0.0
-        if based:
-            p1 = rebase(par, q, w, on, centre, y, phi_row, succ, ps)
-            p2 = 0.0 if pterm else rebase(par, q, w, on, centre, y, phi_row, succ, ps2)
-            pf = gamma * p2 - p1
-        elif shaping and direct:
-            pf = model_shaping(y, par.scale, gamma, ps, ps2, pterm)
-        elif shaping:
-            p2 = 0.0 if pterm else potential(par, w, on, centre, y, ps2)
-            pf = gamma * p2 - potential(par, w, on, centre, y, ps)
-        q_learning(q, ps, pa, pr, ps2, pterm, alpha, gamma, pf)
+    outcome: rnh-ql+'s (:func:`learning.rnh_ql_plus.planning.plan`) when Phi is scale * y
+    or shaping is off; else shaped by :func:`potential` or by re-based rows (``based``)."""
+    if direct or not shaping:
+        plus_plan(par, q, y, succ, to_goal, reward, works, fails, seen, n_seen, r_fail,
+                  shaping, n_updates, rng)
+    else:
+        gamma = par.gamma
+        n = n_seen[0]
+        for _ in range(n_updates):
+            ps, pa, ps2, pterm, pr = replay(seen[draw_below(rng, n)], succ, to_goal, reward,
+                                            works, fails, r_fail, rng)
+            if based:
+                p1 = rebase(par, q, w, on, centre, y, phi_row, succ, ps)
+                p2 = 0.0 if pterm else rebase(par, q, w, on, centre, y, phi_row, succ, ps2)
+            else:
+                p1 = potential(par, w, on, centre, y, ps)
+                p2 = 0.0 if pterm else potential(par, w, on, centre, y, ps2)
+            q_learning(q, ps, pa, pr, ps2, pterm, par.alpha, gamma, gamma * p2 - p1)
 
 
 @njit(**HOOK)

@@ -158,36 +158,24 @@ def repair_model(nb, blocked, dist, queue, goal, y, stamp, gamma, s):
         revalue(y, stamp, dist, changed, gamma)
 
 
-@njit(**HOOK)
-def learn_move(succ, to_goal, reward, works, fails, seen, n_seen, r_fail, nb, blocked, dist,
-               queue, goal, y, stamp, r_goal_seen, r_free_seen, known_stale, s, a, r, s2,
-               terminated, gamma, optimistic):
-    """The real step s -a-> s2 (reward r) into the learned model, the known routes and, when
-    ``optimistic``, the optimistic model and its values. Returns whether (s, a) was new."""
-    stale = observe_rewards(r_goal_seen, r_free_seen, s, r, s2, terminated)
-    was_fail = blocked[s, a]
-    first_work = works[s, a] == 0
-    new_pair = note_pair(succ, seen, n_seen, s, a)
-    observe_outcome(succ, to_goal, reward, works, fails, r_fail, s, a, r, s2, terminated,
-                    s2 == nb[s, a])
-    now_fail = never_worked(succ, works, s, a)
-    if first_work and works[s, a] > 0:
-        known_stale[0] = True  # a move worked for the first time: known routes may shorten
-    blocked[s, a] = now_fail
-    # the optimistic model changed: a move now known to fail (BFS only if a distance
-    # changes), or one known to fail that moved after all (noisy physics worlds; on the
-    # grid and at the exact fidelity a move's outcome never changes)
-    if optimistic and now_fail != was_fail and (
-            was_fail or distances_change(nb, dist, blocked, s, a)):
+@njit(cache=True)
+def revise_optimism(nb, blocked, dist, queue, goal, y, stamp, r_goal_seen, r_free_seen, s, a,
+                    was_fail, now_fail, stale, gamma):
+    """The optimistic model after a step that changed what it rests on: a move now known to
+    fail (BFS only if a distance changes), one known to fail that moved after all (noisy
+    physics worlds; on the grid and at the exact fidelity a move's outcome never changes),
+    or a reward (``stale``). A real call, made only then (rnh-ql+ and its ablation share it;
+    the steps before it stay written out in each hook: as an inlined helper taking the
+    model's arrays they cost the kernel ~8 % of its speed, measured)."""
+    if now_fail != was_fail and (was_fail or distances_change(nb, dist, blocked, s, a)):
         if was_fail:  # a wall that moved after all (noisy worlds): distances may fall
             bfs_distances(nb, blocked, dist, queue, goal)
             mark_stale(stamp)
         else:
             repair_model(nb, blocked, dist, queue, goal, y, stamp, gamma, s)
         stale = True
-    if stale and optimistic:
+    if stale:
         ensure_values(y, stamp, r_goal_seen, r_free_seen, dist, queue, gamma)
-    return new_pair
 
 
 @njit(**HOOK)
@@ -225,9 +213,19 @@ def update(st, s, a, r, s2, terminated, rng):
     sweep_size = st.sweep.size
     gamma = par.gamma
     shaping = shaping_on[0]
-    learn_move(succ, to_goal, reward, works, fails, seen, n_seen, r_fail, nb, blocked, dist,
-               queue, goal, y, stamp, r_goal_seen, r_free_seen, known_stale, s, a, r, s2,
-               terminated, gamma, True)
+    stale = observe_rewards(r_goal_seen, r_free_seen, s, r, s2, terminated)
+    was_fail = blocked[s, a]
+    first_work = works[s, a] == 0
+    note_pair(succ, seen, n_seen, s, a)
+    observe_outcome(succ, to_goal, reward, works, fails, r_fail, s, a, r, s2, terminated,
+                    s2 == nb[s, a])
+    now_fail = never_worked(succ, works, s, a)
+    if first_work and works[s, a] > 0:
+        known_stale[0] = True  # a move worked for the first time: known routes may shorten
+    blocked[s, a] = now_fail
+    if stale or now_fail != was_fail:  # the optimistic model's ground changed
+        revise_optimism(nb, blocked, dist, queue, goal, y, stamp, r_goal_seen, r_free_seen, s,
+                        a, was_fail, now_fail, stale, gamma)
     phi_s2 = 0.0 if terminated else par.scale * y[s2]
     f = gamma * phi_s2 - phi_here[0] if shaping else 0.0
     record_shaping(f_sum, f_sq, n_shaped, f, shaping)

@@ -23,11 +23,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from learning.rnh_ql_plus.optimism import ensure_values, goal_reward
+from learning.move_model import never_worked, note_pair, observe_outcome
+from learning.rnh_ql_plus.optimism import ensure_values, goal_reward, observe_rewards
 from learning.rnh_ql_plus.planning import plan as plus_plan
 from learning.rnh_ql_plus.planning import replay, sweep
 from learning.rnh_ql_plus.rules import action_values as plus_action_values
-from learning.rnh_ql_plus.rules import known_route_move, learn_move, untried_value
+from learning.rnh_ql_plus.rules import (
+    known_route_move,
+    revise_optimism,
+    untried_value,
+)
 from learning.rnh_ql_plus_ablation.features import leak_free_edge, leak_free_enter
 from learning.rnh_ql_plus_ablation.potential import (
     LOG_OPTIMISTIC,
@@ -237,10 +242,20 @@ def update(st, s, a, r, s2, terminated, rng):
     if based:
         rebase(par, q, w, on, centre, y, phi_row, succ, s)
     # model first: a new move may join s' to supports before Phi(s') is read
-    if learn_move(succ, to_goal, reward, works, fails, seen, n_seen, r_fail, nb, blocked,
-                  dist, queue, goal, y, stamp, r_goal_seen, r_free_seen, known_stale, s, a, r,
-                  s2, terminated, gamma, optimistic) and leak_free and s2 != s:
+    stale = observe_rewards(r_goal_seen, r_free_seen, s, r, s2, terminated)
+    was_fail = blocked[s, a]
+    first_work = works[s, a] == 0
+    if note_pair(succ, seen, n_seen, s, a) and leak_free and s2 != s:
         leak_free_edge(on, base, centre, preds, anchor, stack, succ, s, s2, par.normalise)
+    observe_outcome(succ, to_goal, reward, works, fails, r_fail, s, a, r, s2, terminated,
+                    s2 == nb[s, a])
+    now_fail = never_worked(succ, works, s, a)
+    if first_work and works[s, a] > 0:
+        known_stale[0] = True  # a move worked for the first time: known routes may shorten
+    blocked[s, a] = now_fail
+    if optimistic and (stale or now_fail != was_fail):
+        revise_optimism(nb, blocked, dist, queue, goal, y, stamp, r_goal_seen, r_free_seen, s,
+                        a, was_fail, now_fail, stale, gamma)
     if leak_free and not terminated:
         leak_free_enter(on, base, centre, preds, anchor, stack, succ, s2, par.normalise)
     if terminated:

@@ -1,11 +1,11 @@
 """The learners: RNH-QL and its baselines over grid states. numpy + numba only.
 
 One module per method (``q_learning``, ``q_lambda``, ``dyna_q``, ``pfh_rl``,
-``sarsa_rs``, ``haql``, ``rn_ql``, ``rnh_ql``, ``rnh_ql_plus``), each with its
-config, named state and hooks; :mod:`learning.registry` lists them. Never
-imports sim, scenarios, pymunk or rerun: worlds reach the learners as a
-duck-typed :class:`TabularMDP` (fused kernels) or a gymnasium env plus a
-:class:`Geometry` (step-by-step agent).
+``sarsa_rs``, ``haql``, ``rn_ql``, ``rnh_ql``, ``rnh_ql_plus``, and the RNH-QL+
+ablation's ``rnh_ql_plus_ablation``), each with its config, named state and hooks;
+:mod:`learning.registry` lists them. Never imports sim, scenarios, pymunk or rerun:
+worlds reach the learners as a duck-typed :class:`TabularMDP` (fused kernels) or a
+gymnasium env plus a :class:`Geometry` (step-by-step agent).
 """
 
 from learning.jitcache import drop_stale_cache, prefer_quick_compile
@@ -25,6 +25,7 @@ from learning.registry import METHODS, config_from_fields
 from learning.rn_ql import RNQL
 from learning.rnh_ql import RNHQL
 from learning.rnh_ql_plus import RNHQLPlus
+from learning.rnh_ql_plus_ablation import RNHQLPlusAblation
 from learning.sarsa_rs import SarsaRS
 from learning.state import copy_state, init_state
 from learning.train import TrainResult, greedy_test, train_tabular
@@ -34,7 +35,7 @@ drop_stale_cache()  # numba reads its cache at a function's first call, which is
 __all__ = [
     "HAQL", "METHODS", "PFHRL", "RNHQL", "RNQL", "STQL", "Checkpoint", "CheckpointError",
     "DynaQ", "EpisodeLog", "Geometry", "MethodConfig", "QLambda", "QOpt", "RNHQLPlus",
-    "SarsaRS", "StepAgent", "TabularMDP", "TrainResult", "config_from_fields", "copy_state",
-    "geometry_of", "greedy_test", "init_state", "load_checkpoint", "make_agent",
-    "run_env_episodes", "save_checkpoint", "train_tabular",
+    "RNHQLPlusAblation", "SarsaRS", "StepAgent", "TabularMDP", "TrainResult",
+    "config_from_fields", "copy_state", "geometry_of", "greedy_test", "init_state",
+    "load_checkpoint", "make_agent", "run_env_episodes", "save_checkpoint", "train_tabular",
 ]

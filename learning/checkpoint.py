@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from learning.config import MethodConfig
+from learning.config import FieldMovedError, MethodConfig
 from learning.geometry import Geometry
 from learning.named_state import arrays, episodes_done, rebuild
 from learning.registry import METHODS, config_from_fields, family_of, n_states_of
@@ -220,8 +220,8 @@ def _stored(data, path: Path, name: str, want: np.ndarray) -> np.ndarray:
                               f"expected {want.dtype}[{want.ndim}d]; the file is corrupt, "
                               "delete it and train again")
     if want.size == 0 and arr.shape != want.shape:
-        # a field this configuration keeps empty because nothing reads it (rnh-ql+'s RBF
-        # features without a network): a checkpoint from before that stored it full
+        # a field this configuration keeps empty because nothing reads it (the RNH-QL+
+        # ablation's RBF features without a network): a checkpoint from before stored it full
         return want
     return np.ascontiguousarray(arr).copy()
 
@@ -250,6 +250,9 @@ def _read(data, path: Path, method: str | None, geometry: Geometry | None,
                    if "problem" in data.files else None)
         if problem is not None and not isinstance(problem, dict):
             raise ValueError("problem is not a table")
+    except FieldMovedError as exc:  # a setting that has moved to another method since
+        raise CheckpointError(f"{path}: field 'config': {exc}; this checkpoint cannot be "
+                              "resumed: train that variant again with that method") from None
     except (ValueError, TypeError) as exc:
         raise CheckpointError(f"{path}: field 'config' or 'rng_state' is invalid ({exc}); "
                               "the file is corrupt, delete it and train again") from None

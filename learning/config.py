@@ -46,6 +46,11 @@ _VALID = {
 }
 
 
+class FieldMovedError(ValueError):
+    """A config field a method no longer has, set to a value it no longer runs: the setting
+    now belongs to another method (the message names it)."""
+
+
 class BaseParams(NamedTuple):
     """The parameters every method reads (methods with more declare their own tuple)."""
 
@@ -81,3 +86,13 @@ class MethodConfig:
 
     def fields(self) -> dict[str, object]:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    def record_fields(self) -> dict[str, object]:
+        """What a run's record lists as its config: the fields (a method may add settings it
+        has fixed, see :meth:`learning.rnh_ql_plus.RNHQLPlus.record_fields`)."""
+        return self.fields()
+
+    @classmethod
+    def from_fields(cls, values: dict[str, object]) -> MethodConfig:
+        """The config of these field values (e.g. a checkpoint's)."""
+        return cls(**values)

@@ -61,33 +61,14 @@ def exploit(st, s):
     raise NotImplementedError("compiled code only")
 
 
-def _is_lean(st, fam) -> bool:
-    lean = getattr(fam, "LEAN_PARAMS", None)
-    par = st.types[st.fields.index("par")]
-    return lean is not None and getattr(par, "instance_class", None) is lean
-
-
 def _hook(st, name: str):
-    """The hook's own body (its Python function), to be inlined: no call between. A family
-    with a lean configuration (``LEAN_PARAMS``, ``LEAN_HOOKS``) gets its lean copy when the
-    state's ``par`` is of that type (see :mod:`learning.rnh_ql_plus.rules`)."""
-    fam = _family(st)
-    return fam.LEAN_HOOKS[name] if _is_lean(st, fam) else getattr(fam, name).py_func
-
-
-_LEAN_JIT: dict[tuple[str, str], object] = {}
+    """The hook's own body (its Python function), to be inlined: no call between."""
+    return getattr(_family(st), name).py_func
 
 
 def _compiled_hook(st, name: str):
-    """The hook as a compiled function (lean copy or the family's own), for callers that
-    call it rather than inline it."""
-    fam = _family(st)
-    if not _is_lean(st, fam):
-        return getattr(fam, name)
-    key = (fam.__name__, name)
-    if key not in _LEAN_JIT:
-        _LEAN_JIT[key] = njit(inline="always")(fam.LEAN_HOOKS[name])
-    return _LEAN_JIT[key]
+    """The hook as a compiled function, for callers that call it rather than inline it."""
+    return getattr(_family(st), name)
 
 
 @overload(act, inline="always")

@@ -19,6 +19,7 @@ from learning import (
     rn_ql,
     rnh_ql,
     rnh_ql_plus,
+    rnh_ql_plus_ablation,
     sarsa_rs,
 )
 from learning.config import MethodConfig
@@ -30,13 +31,14 @@ from learning.q_learning import STQL, QOpt
 from learning.rn_ql import RNQL
 from learning.rnh_ql import RNHQL
 from learning.rnh_ql_plus import RNHQLPlus
+from learning.rnh_ql_plus_ablation import RNHQLPlusAblation
 from learning.sarsa_rs import SarsaRS
 
 # in the order every table and figure lists them
 FAMILY_OF_CONFIG: dict[type[MethodConfig], ModuleType] = {
     STQL: q_learning, RNQL: rn_ql, PFHRL: pfh_rl, SarsaRS: sarsa_rs, HAQL: haql,
     RNHQL: rnh_ql, QOpt: q_learning, QLambda: q_lambda, DynaQ: dyna_q,
-    RNHQLPlus: rnh_ql_plus,
+    RNHQLPlus: rnh_ql_plus, RNHQLPlusAblation: rnh_ql_plus_ablation,
 }
 METHODS: dict[str, type[MethodConfig]] = {c.cli: c for c in FAMILY_OF_CONFIG}
 FAMILY_OF_STATE: dict[type, ModuleType] = {m.State: m for m in FAMILY_OF_CONFIG.values()}
@@ -65,4 +67,4 @@ def config_from_fields(cli: str, fields: dict[str, object]) -> MethodConfig:
     """Rebuild a config from its CLI name and field values (e.g. from a checkpoint)."""
     if cli not in METHODS:
         raise ValueError(f"unknown method {cli!r}; known: {', '.join(METHODS)}")
-    return METHODS[cli](**fields)
+    return METHODS[cli].from_fields(fields)

@@ -67,3 +67,16 @@ def test_verdict_without_the_open_maps_says_nothing_about_them():
     summary = {"x": {"maze-103": _cell(10, 50)}}
     (ours,) = verdict(summary, maps, "x", "dyna-q", 9)
     assert ours == "- `x`: ≥ 9 optimal seeds on 1/1 maps"
+
+
+def test_every_variant_is_a_config_of_its_method_and_the_ablations_rows_need_it():
+    """A row runs on rnh-ql+ablation only where it turns a switch rnh-ql+ has not."""
+    from learning import METHODS
+    from scenarios.experiments.ablation import VARIANTS
+    from scenarios.runs.spec import make_config
+
+    plus = set(METHODS["rnh-ql+"]().fields())
+    for label, method, overrides in VARIANTS:
+        make_config(method, overrides)
+        if method == "rnh-ql+ablation":
+            assert {k for k, _ in overrides} - plus, label

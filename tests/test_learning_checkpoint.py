@@ -201,21 +201,57 @@ def test_more_episodes_than_asked(saved, paper50_model):
         train_tabular(RNHQL(), paper50_model, 10, np.random.default_rng(0), resume=ck)
 
 
-def test_rnh_ql_plus_keeps_no_rbf_features_it_never_reads_and_loads_older_checkpoints(
+def test_rnh_ql_plus_ablation_keeps_no_rbf_features_it_never_reads_and_loads_older_ones(
         tmp_path, paper50_model):
-    from learning import RNHQLPlus
-    from learning.rnh_ql_plus.features import new_features
+    from learning import RNHQLPlusAblation
+    from learning.rnh_ql_plus_ablation.features import new_features
 
     geom = geometry_of(paper50_model)
-    agent = make_agent(RNHQLPlus(), geom, np.random.default_rng(0))
+    agent = make_agent(RNHQLPlusAblation(), geom, np.random.default_rng(0))
     assert agent.state.feat.on.size == 0 and agent.state.w.size == 0  # no network: no features
-    with_net = make_agent(RNHQLPlus(v_target=3), geom, np.random.default_rng(0))
+    with_net = make_agent(RNHQLPlusAblation(v_target=3), geom, np.random.default_rng(0))
     assert with_net.state.feat.on.shape[0] == geom.n_states and with_net.state.w.size > 0
     # a checkpoint of the default configuration written before: its unused features stored full
-    old_feat = new_features(RNHQLPlus(v_target=3), geom)
+    old_feat = new_features(RNHQLPlusAblation(v_target=3), geom)
     agent.state = agent.state._replace(feat=old_feat, w=np.zeros(old_feat.anchor.shape[0]),
                                        v_trace=np.zeros(old_feat.anchor.shape[0]))
     agent.state.q[5, 1] = 3.0
     path = save_checkpoint(tmp_path / "old.npz", Checkpoint.of_agent(agent))
-    ck = load_checkpoint(path, method="rnh-ql+", geometry=geom)
+    ck = load_checkpoint(path, method="rnh-ql+ablation", geometry=geom)
     assert ck.state.q[5, 1] == 3.0 and ck.state.feat.on.size == 0 and ck.state.w.size == 0
+
+
+def _as_written_before_the_split(path, **config):
+    """Rewrite a checkpoint of rnh-ql+ablation as rnh-ql+'s checkpoints were written before
+    the ablation's switches left rnh-ql+: the same state arrays (the ablation's state is
+    rnh-ql+'s of then) and config fields, under the method name rnh-ql+."""
+    import json
+
+    with np.load(path) as data:
+        fields = {k: data[k] for k in data.files}
+    fields["method"] = np.array("rnh-ql+")
+    fields["config"] = np.array(json.dumps({**json.loads(str(fields["config"])), **config}))
+    np.savez(path, **fields)
+
+
+def test_rnh_ql_plus_loads_its_checkpoints_from_before_the_ablation_split(tmp_path,
+                                                                           paper50_model):
+    """Such a checkpoint lists the ablation's switches in its config, at their defaults, and
+    holds their arrays: it loads as rnh-ql+ (the switches and arrays dropped) and resumes
+    as if never stopped; a switch at another value names the method that has it now."""
+    from learning import RNHQLPlus, RNHQLPlusAblation
+
+    geom = geometry_of(paper50_model)
+    rng = np.random.default_rng(4)
+    half = train_tabular(RNHQLPlusAblation(), paper50_model, 20, rng)
+    path = save_checkpoint(tmp_path / "old.npz", Checkpoint.of_result(half, rng))
+    _as_written_before_the_split(path)
+    ck = load_checkpoint(path, method="rnh-ql+", n_states=geom.n_states, geometry=geom)
+    assert ck.config == RNHQLPlus() and "w" not in ck.state._fields
+    rest = train_tabular(RNHQLPlus(), paper50_model, 40, np.random.default_rng(0), resume=ck)
+    full = train_tabular(RNHQLPlus(), paper50_model, 40, np.random.default_rng(4))
+    assert_same_state(full.state, rest.state)
+    np.testing.assert_array_equal(full.steps[20:], rest.steps[20:])
+    _as_written_before_the_split(path, v_target=1)
+    with pytest.raises(CheckpointError, match=r"field 'config': v_target = 1 .*rnh-ql\+ablation"):
+        load_checkpoint(path, method="rnh-ql+", geometry=geom)

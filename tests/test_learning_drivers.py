@@ -16,7 +16,7 @@ import sim.envs  # noqa: F401  (registers rnhql/GridRoute-v0)
 from learning import METHODS, RNHQL, geometry_of, init_state, make_agent, run_env_episodes
 from learning.kernels import run_episodes
 from learning.named_state import arrays
-from learning.rnh_ql_plus import RNHQLPlus
+from learning.rnh_ql_plus_ablation import RNHQLPlusAblation as Ablation
 
 EPISODES = 50
 
@@ -30,12 +30,12 @@ def env():
 
 CONFIGS = [cls() for cls in METHODS.values()] + [
     RNHQL(warmup_episodes=20, freeze_after_episodes=40),  # shaping and freezing inside 50 eps
-    # rnh-ql+ ingredients one by one (the default is in METHODS above)
-    RNHQLPlus(leak_free=1, normalise=1), RNHQLPlus(lam_q=0.8, n_planning=2),
-    RNHQLPlus(v_target=0, rebase=0, warmup_episodes=20, freeze_after_episodes=40),
-    RNHQLPlus(v_target=2, spacing=0, cutoff=0),
-    RNHQLPlus(v_target=3, spacing=2, sigma=0.5, n_fit=3), RNHQLPlus(v_target=5),
-    RNHQLPlus(v_target=1, rebase=1, shaping_scale=0.25),  # look-ahead on re-based rows
+    # the rnh-ql+ ablation's switches one by one (its default is in METHODS above)
+    Ablation(leak_free=1, normalise=1), Ablation(lam_q=0.8, n_planning=2),
+    Ablation(v_target=0, rebase=0, warmup_episodes=20, freeze_after_episodes=40),
+    Ablation(v_target=2, spacing=0, cutoff=0),
+    Ablation(v_target=3, spacing=2, sigma=0.5, n_fit=3), Ablation(v_target=5),
+    Ablation(v_target=1, rebase=1, shaping_scale=0.25),  # look-ahead on re-based rows
 ]
 
 

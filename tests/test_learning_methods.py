@@ -14,7 +14,7 @@ from learning.registry import FAMILY_OF_CONFIG
 
 def test_registry_names():
     assert list(METHODS) == ["st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "rnh-ql", "q-opt",
-                             "q-lambda", "dyna-q", "rnh-ql+"]
+                             "q-lambda", "dyna-q", "rnh-ql+", "rnh-ql+ablation"]
     assert METHODS["rnh-ql"].name == "RNH-QL" and METHODS["st-ql"].name == "ST-QL"
     for cli, cls in METHODS.items():
         assert cls.cli == cli and cls in FAMILY_OF_CONFIG
@@ -60,24 +60,34 @@ def test_unknown_method():
 
 
 def test_rnh_ql_plus_defaults_packing_and_validation():
-    from learning.rnh_ql_plus import LeanParams, Params, Potential, RNHQLPlus
+    from learning.rnh_ql_plus import Params, RNHQLPlus
 
     cfg = RNHQLPlus()
     assert cfg.cli == "rnh-ql+"
     p = cfg.params()
-    assert p.n_planning == cfg.n_planning and p.scale == cfg.shaping_scale
-    assert math.isinf(p.freeze) and p.rebase is False and p.lookahead is True
-    assert p.v_target == Potential.OPTIMISTIC and p.n_fit == cfg.n_fit
-    # the default compiles the lean kernel; any switch it leaves off compiles the general one
-    assert type(p) is LeanParams
-    for variant in (dict(rebase=1), dict(leak_free=1), dict(lam_q=0.5), dict(v_target=0)):
-        q = RNHQLPlus(**variant).params()
-        assert type(q) is Params and q._fields == p._fields
+    assert type(p) is Params and p.n_planning == cfg.n_planning == 10
+    assert p.scale == cfg.shaping_scale and p.warmup == 0.0
+    assert p.lookahead is True and p.known_route is True and p.sweeping is False
     assert config_from_fields("rnh-ql+", cfg.fields()) == cfg
-    for bad in (dict(v_target=6), dict(lookahead=2), dict(leak_free=2), dict(sigma=0.0),
-                dict(lam_q=1.5)):
+    for bad in (dict(lookahead=2), dict(n_planning=-1), dict(shaping_scale=-1.0)):
         with pytest.raises(ValueError, match=f"RNHQLPlus.{next(iter(bad))}"):
             RNHQLPlus(**bad)
+
+
+def test_rnh_ql_plus_ablation_defaults_packing_and_validation():
+    from learning.rnh_ql_plus_ablation import Params, Potential, RNHQLPlusAblation
+
+    cfg = RNHQLPlusAblation()
+    assert cfg.cli == "rnh-ql+ablation"
+    p = cfg.params()
+    assert type(p) is Params and p.n_planning == cfg.n_planning
+    assert math.isinf(p.freeze) and p.rebase is False and p.lookahead is True
+    assert p.v_target == Potential.OPTIMISTIC and p.n_fit == cfg.n_fit
+    assert config_from_fields("rnh-ql+ablation", cfg.fields()) == cfg
+    for bad in (dict(v_target=6), dict(lookahead=2), dict(leak_free=2), dict(sigma=0.0),
+                dict(lam_q=1.5)):
+        with pytest.raises(ValueError, match=f"RNHQLPlusAblation.{next(iter(bad))}"):
+            RNHQLPlusAblation(**bad)
 
 
 def test_haql_route_follows_what_it_learned_about_the_walls():

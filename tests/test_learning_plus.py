@@ -1,12 +1,13 @@
-"""RNH-QL+: sparse features, leak-free supports, the optimistic model, the Dyna-Q limit."""
+"""RNH-QL+: the optimistic model, look-ahead, known routes, the Dyna-Q limit; and the
+ablation's sparse features and leak-free supports."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from learning import METHODS, RNHQLPlus, geometry_of, train_tabular
-from learning.rnh_ql_plus.features import sparse_features
+from learning import METHODS, RNHQLPlus, RNHQLPlusAblation, geometry_of, train_tabular
+from learning.rnh_ql_plus_ablation.features import sparse_features
 
 
 def test_sparse_features_match_dense_within_cutoff(paper50_model):
@@ -32,7 +33,7 @@ def test_scale_zero_is_dyna_q(paper50_model):
 
 
 def test_leak_free_supports_only_grow_along_seen_moves(paper50_model):
-    r = train_tabular(RNHQLPlus(leak_free=1), paper50_model, 20, np.random.default_rng(0))
+    r = train_tabular(RNHQLPlusAblation(leak_free=1), paper50_model, 20, np.random.default_rng(0))
     feat = r.state.feat
     on = feat.on > 0
     assert on.any() and np.all(feat.on[on] == feat.base[on])
@@ -46,23 +47,24 @@ def test_leak_free_supports_only_grow_along_seen_moves(paper50_model):
 
 
 def test_readout_potential_is_the_potential_the_rules_shape_with():
-    """The recorder's potential heat map for rnh-ql+ is Phi as the rules compute it, for the
-    default (the optimistic model's value) and for a network potential."""
+    """The recorder's potential heat map is Phi as the rules compute it: rnh-ql+'s (the
+    optimistic model's value) and a network potential of the ablation's."""
     from learning.readout import potential
-    from learning.rnh_ql_plus.rules import potential as rule_potential
+    from learning.rnh_ql_plus_ablation.potential import potential as rule_potential
     from scenarios.runs.spec import load
 
     _, m = load("paper-40", None, None, "goal-only")
-    refs = []
-    for cfg in (RNHQLPlus(), RNHQLPlus(v_target=1, shaping_scale=0.25, rebase=1)):
-        st = train_tabular(cfg, m, 100, np.random.default_rng(0)).state
-        ref = np.array([rule_potential(st.par, st.w, st.feat.on, st.feat.centre, st.opt.y, s)
-                        for s in range(m.n_states)])
-        np.testing.assert_allclose(potential(st), ref, atol=1e-12)
-        assert np.abs(ref).max() > 0
-        refs.append(ref)
+    st = train_tabular(RNHQLPlus(), m, 100, np.random.default_rng(0)).state
+    default = potential(st)
+    np.testing.assert_array_equal(default, st.par.scale * st.opt.y)
     # the default's potential: the goal reward next to G, 0 at G, gamma per move further
-    assert refs[0].max() == 100.0 and refs[0][m.goal] == 0.0
+    assert default.max() == 100.0 and default[m.goal] == 0.0
+    cfg = RNHQLPlusAblation(v_target=1, shaping_scale=0.25, rebase=1)
+    st = train_tabular(cfg, m, 100, np.random.default_rng(0)).state
+    ref = np.array([rule_potential(st.par, st.w, st.feat.on, st.feat.centre, st.opt.y, s)
+                    for s in range(m.n_states)])
+    np.testing.assert_allclose(potential(st), ref, atol=1e-12)
+    assert np.abs(ref).max() > 0
 
 
 def test_optimistic_distances_are_free_space_bfs_then_go_round_a_seen_bump():
@@ -170,9 +172,12 @@ def test_rnh_ql_plus_learns_paper_50_under_the_paper_rewards():
 
 
 def test_optimistic_model_needs_a_discount():
-    with pytest.raises(ValueError, match=r"RNHQLPlus\.gamma = 1\.0 must be < 1 with v_target = 4"):
+    with pytest.raises(ValueError, match=r"RNHQLPlus\.gamma = 1\.0 must be < 1 .*rnh-ql\+ablation"):
         RNHQLPlus(gamma=1.0)
-    assert RNHQLPlus(gamma=1.0, v_target=0).gamma == 1.0
+    with pytest.raises(ValueError,
+                       match=r"RNHQLPlusAblation\.gamma = 1\.0 must be < 1 with v_target = 4"):
+        RNHQLPlusAblation(gamma=1.0)
+    assert RNHQLPlusAblation(gamma=1.0, v_target=0).gamma == 1.0
 
 
 def test_known_routes_are_bfs_over_moves_seen_to_work():

@@ -39,7 +39,7 @@ def test_rnh_ql_plus_sweeping_learns_the_optimal_route(paper50_model):
 
 
 def test_sweeping_needs_the_optimistic_potential():
-    from learning import RNHQLPlus
+    from learning import RNHQLPlusAblation
 
     with pytest.raises(ValueError, match="sweeping"):
-        RNHQLPlus(sweeping=1, v_target=1)
+        RNHQLPlusAblation(sweeping=1, v_target=1)

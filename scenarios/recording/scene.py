@@ -333,6 +333,8 @@ def value_title(method: str | None) -> str:
     """The upper-layer panel's title: what the method's potential is."""
     if method == "rnh-ql+":
         return "Phi: the optimistic model's value"
+    if method == "rnh-ql+ablation":
+        return "Phi: the optimistic model's value or V_NN (v_target)"
     return "V_NN (RBF upper layer)"
 
 

@@ -138,8 +138,12 @@ def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
     kwargs: dict[str, Any] = {}
     for k, v in overrides:
         if k not in names:
+            wider = [c.cli for c in METHODS.values()  # e.g. rnh-ql+ablation, for rnh-ql+
+                     if issubclass(c, cls) and k in {f.name for f in dataclasses.fields(c)}]
             raise ExperimentError("command line", f"--set {k}", f"{method} has no field {k!r}",
-                                  f"use one of: {', '.join(names)}")
+                                  f"use one of: {', '.join(names)}"
+                                  + (f"; or --method {wider[0]}, which has {k}" if wider
+                                     else ""))
         if names[k].type in (int, "int", bool, "bool"):
             if not float(v).is_integer():
                 raise ExperimentError("command line", f"--set {k}={v:g}",
@@ -218,7 +222,7 @@ def run_record(spec: RunSpec, cfg: Any, result: RunOutcome) -> dict[str, Any]:
         # physics runs: the world trained in; grid runs: the world their policy was driven in
         "fidelity": (spec.fidelity_spec.label
                      if spec.world == "physics" or spec.drive_final else None),
-        "config": cfg.fields(),
+        "config": cfg.record_fields(),
         "optimal_route_length": optimal,
         "episodes_to_stable_optimal": episodes_to_stable_optimal(test_e, test_l, optimal),
         "episodes_to_optimal": episodes_to_first_optimal(test_e, test_l, optimal),

@@ -1,4 +1,5 @@
-"""RNH-QL+'s features: a map-sized lattice, sparse Gaussian features, leak-free supports.
+"""The RNH-QL+ ablation's features: a map-sized lattice, sparse Gaussian features,
+leak-free supports.
 
 Built once per agent in numpy (:func:`new_features`); the leak-free flood fill
 runs in numba when the agent sees a new move succeed.

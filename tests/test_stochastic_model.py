@@ -166,7 +166,9 @@ def test_noisy_model_of_a_small_map_and_its_rollouts():
     assert 5.0 <= opt.start.expected_primitives < 7.0 and opt.start.p_goal_within_budget > 0.99
     pi = shortest_route_policy(physics_model(GRAZE))
     bfs = evaluate_cell_policy(m, pi, budget)
-    assert 0.8 < bfs.p_goal_within_budget < 0.99  # the model sees the trap beside the circle
+    # with the bumper (a resting robot is held, a turn in place turns) nothing traps the
+    # robot beside the circle any more: the old rule's trap held it there in 6-12 % of drives
+    assert bfs.p_goal_within_budget > 0.9
     driven = drive_cell_policy(GRAZE, NOISY, pi, n=400, seed=5)
     assert abs(driven.p_goal - bfs.p_goal_within_budget) < 2 * P_TOL
     assert abs(driven.mean_primitives - bfs.mean_primitives_within_budget) < 1.0

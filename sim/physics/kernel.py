@@ -331,7 +331,8 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
                                                    radius_m, fs[i, X], fs[i, Y])
                             if depth1 > depth0 + 1e-12:  # pushes into what it rests on
                                 into = _held(fs, i, circles, walls, boxes, cell_m, nx, ny,
-                                             grid_start, grid_items, seen, stamp, radius_m)
+                                             grid_start, grid_items, seen, stamp, radius_m,
+                                             depth0)
                                 k_now = ist[i, CMD]
                                 turning = ist[i, NTURN] > 0 and k_now <= ist[i, NTURN]
                                 if not turning:
@@ -381,29 +382,46 @@ def advance(fs, ist, active, dt, substeps, period, tol_m, tol_rad, timeout_steps
 
 @njit(cache=True)
 def _held(fs, i, circles, walls, boxes, cell_m, nx, ny, grid_start, grid_items, seen, stamp,
-          radius_m):
+          radius_m, depth0):
     """The surface holds the disc: take away the part of the last step that went into it
     (along the surface normal, from central differences of the overlap depth) and return
-    how far that was [m] (the bumper's press)."""
+    how far that was [m] (the bumper's press). If the disc would still end deeper than
+    ``depth0`` (a corner, where the deepest surface changes within the step), the step's
+    translation is taken away whole: a resting robot never sinks into what holds it."""
     h = 1e-5
     x, y = fs[i, X], fs[i, Y]
-    d = np.empty(4)
+    d0 = d1 = d2 = d3 = 0.0
     for j in range(4):
-        px = x + (h if j == 0 else -h if j == 1 else 0.0)
-        py = y + (h if j == 2 else -h if j == 3 else 0.0)
+        qx = x + (h if j == 0 else -h if j == 1 else 0.0)
+        qy = y + (h if j == 2 else -h if j == 3 else 0.0)
         stamp[0] += 1
-        d[j] = overlap_depth(circles, walls, boxes, cell_m, nx, ny, grid_start, grid_items,
-                             seen, stamp[0], radius_m, px, py)
-    gx, gy = d[0] - d[1], d[2] - d[3]  # grows into the surface
+        d = overlap_depth(circles, walls, boxes, cell_m, nx, ny, grid_start, grid_items,
+                          seen, stamp[0], radius_m, qx, qy)
+        if j == 0:
+            d0 = d
+        elif j == 1:
+            d1 = d
+        elif j == 2:
+            d2 = d
+        else:
+            d3 = d
+    gx, gy = d0 - d1, d2 - d3  # grows into the surface
     g = math.hypot(gx, gy)
-    if g == 0.0:
-        return 0.0
-    nx_, ny_ = gx / g, gy / g
-    into = (x - fs[i, PX]) * nx_ + (y - fs[i, PY]) * ny_
-    if into <= 0.0:
-        return 0.0
-    fs[i, X] = x - into * nx_
-    fs[i, Y] = y - into * ny_
+    into = 0.0
+    if g > 0.0:
+        ux, uy = gx / g, gy / g
+        into = (x - fs[i, PX]) * ux + (y - fs[i, PY]) * uy
+        if into > 0.0:
+            fs[i, X] = x - into * ux
+            fs[i, Y] = y - into * uy
+        else:
+            into = 0.0
+    stamp[0] += 1
+    after = overlap_depth(circles, walls, boxes, cell_m, nx, ny, grid_start, grid_items,
+                          seen, stamp[0], radius_m, fs[i, X], fs[i, Y])
+    if after > depth0 + 1e-12:  # still deeper: hold the disc where it was
+        into = max(into, math.hypot(x - fs[i, PX], y - fs[i, PY]))
+        fs[i, X], fs[i, Y] = fs[i, PX], fs[i, PY]
     return into
 
 

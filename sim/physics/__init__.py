@@ -3,8 +3,9 @@ the fast primitive kernel, the batched world, the transition model and the envs.
 
 Modules, in import order (each imports only those above it):
 
-- :mod:`sim.physics.static`: collision types, :class:`PhysicsConfig`, contacts, static shapes;
 - :mod:`sim.physics.sigint`: Ctrl-C while Chipmunk calls back into Python;
+- :mod:`sim.physics.static`: collision types, :class:`PhysicsConfig`, contacts, static shapes,
+  a Space, a robot's bodies;
 - :mod:`sim.physics.world`: one robot in a ``pymunk.Space``, every step through Chipmunk
   (the reference world, and ``DiffDrive``'s);
 - :mod:`sim.physics.controller`: diff-drive kinematics, discrete profiles, the primitive;

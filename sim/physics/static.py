@@ -33,6 +33,9 @@ class CollisionType(IntEnum):
 STATIC_KINDS = (CollisionType.OBSTACLE, CollisionType.WALL, CollisionType.CELL)
 ROBOT_CATEGORY = 0b01
 STATIC_CATEGORY = 0b10
+# carried pose (sim.physics.fidelity), the same in the reference world and the kernel:
+HOLD_STEP_M = 1e-5  # central-difference step of a surface's normal [m]
+DEEPER_M = 1e-12  # a step that deepens the robot's overlap by more pushes into the surface [m]
 
 
 @dataclass(frozen=True)

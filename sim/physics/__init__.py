@@ -10,6 +10,7 @@ Modules, in import order (each imports only those above it):
   (the reference world, and ``DiffDrive``'s);
 - :mod:`sim.physics.controller`: diff-drive kinematics, discrete profiles and the leg plan
   (compiled, shared with the kernel), the reference primitive controller at every fidelity;
+- :mod:`sim.physics.kernel_state`: the kernel's state by name (robot records, constants);
 - :mod:`sim.physics.kernel`: the primitive for many robots in compiled code, free motion
   integrated as Chipmunk integrates it, contact steps handed back to Chipmunk;
 - :mod:`sim.physics.batch`: N robots in one ``pymunk.Space`` driven by that kernel;

@@ -37,7 +37,7 @@ from sim.physics import kernel as K
 from sim.physics import sigint
 from sim.physics.controller import DriveLimits, PrimitiveOutcome, profiles
 from sim.physics.fidelity import Fidelity
-from sim.physics.kernel import Status
+from sim.physics.kernel_state import ROBOT, Geometry, Params, Scratch, Status, by_name
 from sim.physics.static import (
     STATIC_CATEGORY,
     CollisionType,
@@ -52,14 +52,17 @@ from sim.physics.sweep import static_geometry
 from sim.scenario import Scenario
 
 NOISE_BLOCK = 4096  # normals drawn per refill of a robot's wheel-noise buffer
-_BLANK = np.zeros((), K.ROBOT)
+_BLANK = np.zeros((), ROBOT)
+_DONE, _NOISE, _CHECK, _CONTACT = (int(c) for c in (Status.DONE, Status.NOISE, Status.CHECK,
+                                                     Status.CONTACT))
 
 
 class RouteBatch:
     """N robots in one Space, each driving grid actions as motion primitives.
 
-    :attr:`robots` is every robot's state by name (:data:`sim.physics.kernel.ROBOT`;
-    ``robots["x"]``, ``robots[i]``). ``guards`` may be shared between batches of one
+    :attr:`robots` is every robot's state, records of :data:`sim.physics.kernel_state.ROBOT`;
+    :attr:`r` the same by name, a :class:`sim.physics.kernel_state.Robots` of 1-D views
+    (``r.x[i]``). ``guards`` may be shared between batches of one
     scenario and config (a pure function of the static geometry). ``trajectories=True``
     keeps the pose after every physics step of the last primitive (:meth:`trajectory`), as
     the env's ``info`` wants.
@@ -96,24 +99,26 @@ class RouteBatch:
         self.geometry = g = static_geometry(sc)
         pivot, gear = robot_bodies(sc, cfg, x0, y0, 0.0)[3:]  # the joints' force limits
         body = self.bodies[0]
-        self.params = K.Params(
+        self.params = Params(
             cfg.dt_s, cfg.substeps, cfg.control_period_s, cfg.tolerance_m, cfg.tolerance_rad,
             timeout_steps, cfg.contact_depth_m, pivot.max_force * cfg.dt_s / body.mass,
             gear.max_force * cfg.dt_s / body.moment, self.cell_m, self.nx, self.ny, self.radius_m,
-            lim.wheel_base_m, fid.wheel_noise, fid.carried_pose, fid.bumper_travel_m, *prof,
-            g.circles, g.walls, g.boxes, g.start, g.items)
-        self._pt = tuple(self.params)
+            lim.wheel_base_m, fid.wheel_noise, fid.carried_pose, fid.bumper_travel_m)
+        self.profiles = prof
+        self.static = Geometry(g.circles, g.walls, g.boxes, g.start, g.items)
         n_s = self.nx * self.ny
         if guards is None:
             guards = np.full((n_s, 4), np.nan)
         elif guards.shape != (n_s, 4):
             raise ValueError(f"guards must have shape {(n_s, 4)}, got {guards.shape}")
         self.guards = guards
-        self.scratch = K.Scratch(guards, np.zeros(len(g.circles) + len(g.boxes), np.int64),
+        self.scratch = Scratch(guards, np.zeros(len(g.circles) + len(g.boxes), np.int64),
                                  np.zeros(2, np.int64))
-        self._st = tuple(self.scratch)
-        self.robots = np.zeros(n_robots, K.ROBOT)
-        self.robots["x"], self.robots["y"] = x0, y0
+        # numba types plain tuples fast, NamedTuples slowly (see sim.physics.kernel)
+        self._args = (tuple(self.params), tuple(prof), tuple(self.static), tuple(self.scratch))
+        self.robots = np.zeros(n_robots, ROBOT)
+        self.r = r = by_name(self.robots)
+        r.x[:], r.y[:] = x0, y0
         cap = (timeout_steps + 2 * (prof.drive_sums.size + prof.turn_sums.size) + 8
                if trajectories else 0)
         self._traj = np.zeros((n_robots, cap, 3))
@@ -141,10 +146,10 @@ class RouteBatch:
               resting: bool = False) -> None:
         """Put robot ``i`` at rest at a pose: a new episode (its step clock and contacts
         reset); ``resting``: against a surface (carried pose, as ``PhysicsWorld.place``)."""
-        rb = self.robots
-        rb[i] = _BLANK
-        rb[i]["x"], rb[i]["y"], rb[i]["th"] = x_m, y_m, heading_rad
-        rb[i]["resting"] = resting
+        r = self.r
+        self.robots[i] = _BLANK
+        r.x[i], r.y[i], r.th[i] = x_m, y_m, heading_rad
+        r.resting[i] = resting
         self.contacts[i] = []
         self.contact_counts[i] = dict.fromkeys(CollisionType, 0)
         body = self.bodies[i]
@@ -153,31 +158,31 @@ class RouteBatch:
 
     def pose(self, i: int) -> tuple[float, float, float]:
         """(x [m], y [m], heading [rad], not wrapped) of robot ``i``."""
-        rb = self.robots[i]
-        return float(rb["x"]), float(rb["y"]), float(rb["th"])
+        r = self.r
+        return float(r.x[i]), float(r.y[i]), float(r.th[i])
 
     def poses(self) -> np.ndarray:
         """float64[N, 3]: every robot's (x [m], y [m], heading [rad], not wrapped)."""
-        rb = self.robots
-        return np.stack([rb["x"], rb["y"], rb["th"]], axis=1)
+        r = self.r
+        return np.stack([r.x, r.y, r.th], axis=1)
 
     def steps(self, i: int) -> int:
         """Physics steps robot ``i`` has driven since it was placed."""
-        return int(self.robots[i]["steps"])
+        return int(self.r.steps[i])
 
     def time_s(self, i: int) -> float:
         return self.steps(i) * self.config.dt_s
 
     def trajectory(self, i: int) -> np.ndarray:
         """float64[n, 3]: robot ``i``'s pose before its last primitive, then after each step."""
-        n = int(self.robots[i]["ntraj"])
+        n = int(self.r.ntraj[i])
         return np.concatenate([self._traj_start[i][None], self._traj[i, :n]])
 
     def sync_body(self, i: int) -> pymunk.Body:
         """Robot ``i``'s body in the Space, moved to the robot's pose (for queries, drawing)."""
-        body, rb = self.bodies[i], self.robots[i]
-        body.position = (float(rb["x"]), float(rb["y"]))
-        body.angle = float(rb["th"])
+        body, r = self.bodies[i], self.r
+        body.position = (float(r.x[i]), float(r.y[i]))
+        body.angle = float(r.th[i])
         self.space.reindex_shapes_for_body(body)
         return body
 
@@ -195,32 +200,31 @@ class RouteBatch:
         """Drive ``actions[i]`` for every robot ``i`` with ``active[i]`` (default: all)."""
         act = self._all if active is None else np.asarray(active, dtype=np.bool_)
         acts = np.asarray(actions, dtype=np.int64)
-        rb = self.robots
+        rb, r = self.robots, self.r
         if self._traj.shape[1]:
             self._traj_start[:] = self.poses()
         K.begin_all(rb, acts, act, self.cell_m, self.nx, self.ny)
         clock = time.perf_counter
         while True:
             t0 = clock()
-            K.advance(rb, self._noise, self._npos, self._traj, self._pt, self._st, act)
+            K.advance(rb, self._noise, self._npos, self._traj, *self._args, act)
             t1 = clock()
             self.kernel_s += t1 - t0
-            status = rb["status"]
-            waiting = np.flatnonzero(act & (status != Status.DONE))
+            status = r.status
+            waiting = np.flatnonzero(act & (status != _DONE))
             if waiting.size == 0:
                 break
             for i in waiting:
-                if status[i] == Status.NOISE:
+                if status[i] == _NOISE:
                     self._refill(int(i))
-                elif status[i] == Status.CHECK:
+                elif status[i] == _CHECK:
                     self._check(int(i))
             self.chipmunk_s += clock() - t1
             sigint.raise_if_deferred()
         return PrimitiveOutcome(
-            state=np.where(act, rb["state"], 0), bumped=act & rb["bumped"],
-            reached=act & rb["reached"], timeout=act & rb["timeout"],
-            steps=np.where(act, rb["steps"] - rb["steps0"], 0),
-            contacts=np.where(act, rb["ncontact"], 0))
+            state=np.where(act, r.state, 0), bumped=act & r.bumped, reached=act & r.reached,
+            timeout=act & r.timeout, steps=np.where(act, r.steps - r.steps0, 0),
+            contacts=np.where(act, r.ncontact, 0))
 
     @property
     def casts(self) -> int:
@@ -245,28 +249,28 @@ class RouteBatch:
         shape the disc touches now and did not touch before the step (when it rested against
         one); or, when the step pressed the bumper home, whatever it rests against."""
         self.checks += 1
-        rb = self.robots[i]
+        r = self.r
         shape = self.shapes[i]
-        forced = bool(rb["forced"])
+        forced = bool(r.forced[i])
         self.sync_body(i)
         found = self.space.shape_query(shape)
-        if not forced and rb["resting"] and found:
+        if not forced and r.resting[i] and found:
             # resting contacts are not new ones: only shapes it did not touch before the step
             body = self.bodies[i]
-            body.position, body.angle = (float(rb["px"]), float(rb["py"])), 0.0
+            body.position, body.angle = (float(r.px[i]), float(r.py[i])), 0.0
             self.space.reindex_shapes_for_body(body)
             before = {info.shape for info in self.space.shape_query(shape)}
             self.sync_body(i)
             found = [info for info in found if info.shape not in before]
         if not found and not forced:
             return  # still CHECK: the kernel finishes the step
-        step = int(rb["steps"])
+        step = int(r.steps[i])
         for info in found:
             c = contact_of(step, info.shape.collision_type, info.contact_point_set)
             self.contacts[i].append(c)
             self.contact_counts[i][c.kind] += 1
-        rb["ncontact"] += len(found)
-        rb["status"] = Status.CONTACT  # the kernel ends the primitive in a bump
+        r.ncontact[i] += len(found)
+        r.status[i] = _CONTACT  # the kernel ends the primitive in a bump
 
 
 class RobotView:

@@ -70,13 +70,13 @@ def twist_to_wheels(v_m_s: float, omega_rad_s: float,
     return v_m_s - half, v_m_s + half
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def wrap_angle(a_rad: float) -> float:
     """Angle wrapped into [-pi, pi)."""
     return (a_rad + math.pi) % (2.0 * math.pi) - math.pi
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def cell_of(x_m: float, y_m: float, cell_m: float, nx: int, ny: int) -> tuple[int, int]:
     """The cell (ix, iy) holding the point, clamped into the grid (as Discretiser.cell_of)."""
     ix = min(max(int(math.floor(x_m / cell_m)), 0), nx - 1)  # noqa: RUF046 (numba)
@@ -185,7 +185,7 @@ def profiles(limits: DriveLimits, period_s: float, cell_m: float) -> Profiles:
     return Profiles(turn.caps, turn.sums, drive.caps, drive.sums)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def profile_index(sums: np.ndarray, total: float) -> int:
     """bisect_left(sums, total): the profile of ``index + 1`` periods; -1 if none is long enough."""
     lo, hi = 0, sums.shape[0]
@@ -215,9 +215,10 @@ class Leg(NamedTuple):
     dist: float  # drive length [m] (0: no drive)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def plan_leg(x: float, y: float, th: float, tx: float, ty: float, heading: float,
-             tol_m: float, period_s: float, prof: Profiles) -> Leg:
+             tol_m: float, period_s: float, turn_sums: np.ndarray, drive_sums: np.ndarray
+             ) -> Leg:
     """From the pose (x, y, th): turn to face the target (tx, ty) and drive to it when it is
     further than ``tol_m``; otherwise only turn to ``heading``. Nothing to do: both 0."""
     dx, dy = tx - x, ty - y
@@ -227,34 +228,35 @@ def plan_leg(x: float, y: float, th: float, tx: float, ty: float, heading: float
     nturn, tsign, tscale = 0, 1.0, 0.0
     if abs(turn) > MIN_TURN_RAD:
         total = abs(turn) / period_s
-        n = profile_index(prof.turn_sums, total)
+        n = profile_index(turn_sums, total)
         if n < 0:
             raise ValueError("turn longer than the profile table")
-        nturn, tscale = n + 1, total / prof.turn_sums[n]
+        nturn, tscale = n + 1, total / turn_sums[n]
         tsign = -1.0 if turn < 0.0 else 1.0
     if not drive:
         return Leg(nturn, tsign, tscale, 0, 0.0, 0.0, 0.0, 0.0)
     total = dist / period_s
-    n = profile_index(prof.drive_sums, total)
+    n = profile_index(drive_sums, total)
     if n < 0:
         raise ValueError("drive longer than the profile table")
-    return Leg(nturn, tsign, tscale, n + 1, total / prof.drive_sums[n], dx / dist, dy / dist,
-               dist)
+    return Leg(nturn, tsign, tscale, n + 1, total / drive_sums[n], dx / dist, dy / dist, dist)
 
 
-@njit(cache=True)
-def leg_command(leg: Leg, k: int, prof: Profiles) -> tuple[float, float, float]:
+@njit(cache=True, inline="always")
+def leg_command(leg: Leg, k: int, turn_caps: np.ndarray, drive_caps: np.ndarray
+                ) -> tuple[float, float, float]:
     """Control-body twist (vx [m/s], vy [m/s], omega [rad/s]) of period ``k`` of the leg;
-    nan past its end."""
+    nan past its end. (Tables as arrays, not :class:`Profiles`: numba increfs every array of
+    a tuple argument at each call, and this runs once per control period.)"""
     if leg.nturn > 0:
         if k < leg.nturn:
-            return 0.0, 0.0, leg.tsign * (prof.turn_caps[leg.nturn - 1, k] * leg.tscale)
+            return 0.0, 0.0, leg.tsign * (turn_caps[leg.nturn - 1, k] * leg.tscale)
         if k == leg.nturn:
             return 0.0, 0.0, 0.0
         k -= leg.nturn + 1
     if leg.ndrive > 0:
         if k < leg.ndrive:
-            u = prof.drive_caps[leg.ndrive - 1, k] * leg.dscale
+            u = drive_caps[leg.ndrive - 1, k] * leg.dscale
             return u * leg.ex, u * leg.ey, 0.0
         if k == leg.ndrive:
             return 0.0, 0.0, 0.0
@@ -266,16 +268,15 @@ def plan_commands(x: float, y: float, th: float, tx: float, ty: float, heading: 
                   tol_m: float, period_s: float, turn_caps: np.ndarray, turn_sums: np.ndarray,
                   drive_caps: np.ndarray, drive_sums: np.ndarray) -> tuple[Leg, np.ndarray]:
     """:func:`plan_leg` and every :func:`leg_command` of it (float64[n, 3]) in one call."""
-    prof = Profiles(turn_caps, turn_sums, drive_caps, drive_sums)
-    leg = plan_leg(x, y, th, tx, ty, heading, tol_m, period_s, prof)
+    leg = plan_leg(x, y, th, tx, ty, heading, tol_m, period_s, turn_sums, drive_sums)
     n = (leg.nturn + 1 if leg.nturn > 0 else 0) + (leg.ndrive + 1 if leg.ndrive > 0 else 0)
     cmds = np.empty((n, 3))
     for k in range(cmds.shape[0]):
-        cmds[k, 0], cmds[k, 1], cmds[k, 2] = leg_command(leg, k, prof)
+        cmds[k, 0], cmds[k, 1], cmds[k, 2] = leg_command(leg, k, turn_caps, drive_caps)
     return leg, cmds
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def at_target(x: float, y: float, th: float, tx: float, ty: float, heading: float,
               tol_m: float, tol_rad: float) -> bool:
     """A leg that ends here has reached the primitive's target centre and heading."""

@@ -205,7 +205,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
         pose = b.poses()
         pose[:, 2] = (pose[:, 2] + np.pi) % (2.0 * np.pi) - np.pi  # as wrap_angle
         infos: dict[str, Any] = {
-            "pose": pose, "time_s": b.robots["steps"] * self.config.dt_s,
+            "pose": pose, "time_s": b.r.steps * self.config.dt_s,
             "bumped": np.zeros(self.num_envs, bool) if out is None else out.bumped,
             "reached": np.zeros(self.num_envs, bool) if out is None else out.reached,
             "timeout": np.zeros(self.num_envs, bool) if out is None else out.timeout,

@@ -71,6 +71,22 @@ def test_batch_robot_equals_the_reference_world(name, fid):
         assert resting_starts > 50 and 20 < resting_bumps < resting_starts
 
 
+def test_the_joints_limit_the_velocity_change_as_in_the_reference_world():
+    """Three physics steps per control period: the first step of each period asks the joints
+    for 3 a_max dt of speed change, more than their force limits give (2 a_max dt); the robot
+    lags the control body there, in Chipmunk and in the kernel alike (heading included)."""
+    sc = resolve_scenario("arena")
+    cfg = PhysicsConfig(dt_s=0.05, substeps=3)
+    world, ctl, batch = PhysicsWorld(sc, cfg), PrimitiveController(sc, cfg), RouteBatch(sc, 1, cfg)
+    rng = np.random.default_rng(1)
+    for _ in range(300):
+        a = int(rng.integers(0, 4))
+        ref = ctl.run(world, a)
+        out = batch.step(np.array([a]))
+        assert ref == tuple(int(v[0]) for v in out)
+        np.testing.assert_allclose(batch.pose(0), world.pose, rtol=0, atol=POSE_TOL_M)
+
+
 def test_a_robot_in_a_batch_is_the_single_robot():
     """Eight robots with their own actions in one Space == eight batches of one."""
     sc = resolve_scenario("paper-50")

@@ -145,7 +145,7 @@ class RouteBatch:
     def place(self, i: int, x_m: float, y_m: float, heading_rad: float = 0.0, *,
               resting: bool = False) -> None:
         """Put robot ``i`` at rest at a pose: a new episode (its step clock and contacts
-        reset); ``resting``: against a surface (carried pose, as ``PhysicsWorld.place``)."""
+        reset); ``resting``: against a surface (as ``PhysicsWorld.place``)."""
         r = self.r
         self.robots[i] = _BLANK
         r.x[i], r.y[i], r.th[i] = x_m, y_m, heading_rad

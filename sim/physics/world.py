@@ -32,9 +32,10 @@ continuous collision detector, for one query per leg.
 :meth:`PhysicsWorld.advance` (free driving, for ``DiffDrive``, and every fidelity above
 ``exact``) casts every step.
 
-Carried pose (:mod:`sim.physics.fidelity`): a robot at rest against a surface
-(:attr:`PhysicsWorld.resting`) is held by the fidelity's rule (:meth:`PhysicsWorld.hold`),
-not by Chipmunk's contact impulses: with :attr:`PhysicsWorld.solve_contacts` off, contacts
+Above ``exact`` (:mod:`sim.physics.fidelity`) a robot at rest against a surface
+(:attr:`PhysicsWorld.resting`: carried pose, or placed back on a start centre that overlaps
+a shape) is held by the fidelity's rule (:meth:`PhysicsWorld.hold`), not by Chipmunk's
+contact impulses: the controller turns :attr:`PhysicsWorld.solve_contacts` off, so contacts
 are still detected but take no part in the velocity solve (Chipmunk's own response would
 also brake the slide by friction; the rule slides freely).
 
@@ -86,7 +87,7 @@ class PhysicsWorld:
     (kinematic body), :attr:`steps` (physics steps since built), :attr:`contacts`
     (every contact that began, in order), :attr:`contact_counts`, :attr:`trajectory`
     (the last primitive's: its start pose, then the pose after each step), :attr:`resting`
-    (carried pose: at rest against a surface) and :attr:`solve_contacts`.
+    (at rest against a surface, see :meth:`hold`) and :attr:`solve_contacts`.
     """
 
     def __init__(self, scenario: Scenario, config: PhysicsConfig | None = None,
@@ -128,7 +129,7 @@ class PhysicsWorld:
         self.contacts: list[Contact] = []
         self.contact_counts = dict.fromkeys(STATIC_KINDS, 0)
         self.trajectory: list[tuple[float, float, float]] = [(x, y, th)]
-        self.resting = False  # carried pose: at rest against a surface (see hold)
+        self.resting = False  # at rest against a surface (see hold)
         self.solve_contacts = True  # False: contacts take no part in the velocity solve
         self._pending: list[Contact] = []
         self._bind_fast()
@@ -209,7 +210,7 @@ class PhysicsWorld:
     def place(self, x_m: float, y_m: float, heading_rad: float, *,
               resting: bool = False) -> None:
         """Put the robot (and the control body) at rest at a pose; ``resting``: against a
-        surface (carried pose, see :meth:`hold`).
+        surface (see :meth:`hold`).
 
         Only between motions: this is the "return to the start cell" of a
         bumped primitive, not a way of moving the robot. Exact only with

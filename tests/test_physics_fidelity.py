@@ -48,7 +48,7 @@ def _walk(sc, fid, seeds, n_steps=250, actions_seed=0):
         states.append(out.state.copy())
         bumps += int(out.bumped.sum())
         deepest = max(deepest, max(batch.overlap_m(i) for i in range(n)))
-    return np.array(states), batch.fs[:, :3].copy(), bumps, deepest
+    return np.array(states), batch.poses(), bumps, deepest
 
 
 def test_noisy_is_deterministic_per_seed_and_differs_from_exact():
@@ -75,7 +75,7 @@ def test_a_noisy_robot_in_a_batch_is_the_robot_alone():
     alone.place(0, x, y, 0.0)
     states = [alone.step(acts[k, :1]).state[0] for k in range(250)]
     assert np.array_equal(np.array(states), together[0][:, 0])
-    assert np.array_equal(alone.fs[0, :3], together[1][0])
+    assert np.array_equal(alone.poses()[0], together[1][0])
 
 
 def test_carried_pose_never_passes_through_what_it_touches():

@@ -1,6 +1,8 @@
-"""The static side of the physics world: collision types, its config, contacts, the shapes.
+"""The parts of the physics world around its drive loop: collision types, the config,
+contacts, the static shapes, an empty Space (or one shared by several robots' worlds), a
+robot's bodies and joints, and the swept-disc query over static shapes.
 
-Split from :mod:`sim.physics` (the world and its drive loop) so each file has one job.
+Split from :mod:`sim.physics.world` (the robot's drive loop) so each file has one job.
 Walls are thick segments whose inner surface is the arena boundary; circles are
 the scenario's obstacles; blocked map cells become boxes, merged into runs along
 each row so a large map adds thousands of shapes, not hundreds of thousands.
@@ -11,10 +13,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import pymunk
 
+from sim.physics import sigint
 from sim.scenario import Scenario
 
 
@@ -30,6 +33,9 @@ class CollisionType(IntEnum):
 STATIC_KINDS = (CollisionType.OBSTACLE, CollisionType.WALL, CollisionType.CELL)
 ROBOT_CATEGORY = 0b01
 STATIC_CATEGORY = 0b10
+# carried pose (sim.physics.fidelity), the same in the reference world and the kernel:
+HOLD_STEP_M = 1e-5  # central-difference step of a surface's normal [m]
+DEEPER_M = 1e-12  # a step that deepens the robot's overlap by more pushes into the surface [m]
 
 
 @dataclass(frozen=True)
@@ -87,6 +93,17 @@ class Contact(NamedTuple):
     depth_m: float  # overlap when detected [m]
 
 
+def contact_of(step: int, kind: int, cps: pymunk.ContactPointSet) -> Contact:
+    """The :class:`Contact` of a contact point set (an arbiter's, or a shape query's with the
+    robot's shape first): its deepest point, the normal, the depth. No point: nan, depth 0."""
+    if not cps.points:  # pragma: no cover - Chipmunk always reports a point for these shapes
+        return Contact(step, CollisionType(kind), math.nan, math.nan, cps.normal.x,
+                       cps.normal.y, 0.0)
+    deepest = min(cps.points, key=lambda p: p.distance)
+    return Contact(step, CollisionType(kind), deepest.point_a.x, deepest.point_a.y,
+                   cps.normal.x, cps.normal.y, -deepest.distance)
+
+
 def merged_boxes(cells: tuple[tuple[int, int], ...]) -> list[tuple[int, int, int]]:
     """Blocked cells as horizontal runs ``(iy, ix_first, ix_last)``: fewer shapes, same area."""
     runs: list[tuple[int, int, int]] = []
@@ -122,3 +139,83 @@ def typed(shape: pymunk.Shape, kind: CollisionType) -> pymunk.Shape:
     shape.elasticity = 0.0
     shape.filter = pymunk.ShapeFilter(categories=STATIC_CATEGORY)
     return shape
+
+
+def new_space(cfg: PhysicsConfig) -> pymunk.Space:
+    """An empty top-down Space with the config's solver and contact settings."""
+    space = pymunk.Space()
+    space.gravity = (0.0, 0.0)
+    space.damping = 1.0
+    space.iterations = cfg.iterations
+    space.collision_slop = cfg.collision_slop_m
+    space.collision_bias = cfg.collision_bias
+    return space
+
+
+def sweep_alpha(space: pymunk.Space, query_filter: pymunk.ShapeFilter, radius_m: float,
+                x0: float, y0: float, x1: float, y1: float) -> float | None:
+    """Fraction of (x0, y0) -> (x1, y1) a disc of ``radius_m`` sweeps before touching a shape
+    that ``query_filter`` lets through; None if it touches none. See
+    :meth:`sim.physics.world.PhysicsWorld.cast_alpha` (one implementation for every world)."""
+    r = radius_m
+    bb = pymunk.BB(min(x0, x1) - r, min(y0, y1) - r, max(x0, x1) + r, max(y0, y1) + r)
+    alpha = math.inf
+    for shape in space.bb_query(bb, query_filter):
+        info = shape.segment_query((x0, y0), (x1, y1), r)
+        if info is not None and 0.0 < info.alpha < alpha:
+            alpha = info.alpha
+    return None if alpha == math.inf else alpha
+
+
+def robot_bodies(sc: Scenario, cfg: PhysicsConfig, x: float, y: float, th: float
+                 ) -> tuple[pymunk.Body, pymunk.Circle, pymunk.Body, pymunk.PivotJoint,
+                            pymunk.GearJoint]:
+    """A robot disc and its control body at rest at a pose, joined as in pymunk's tank.py:
+    (body, shape, control body, pivot joint, gear joint), not yet in a Space. The shape is
+    filtered to touch static geometry only (robots in one Space never touch)."""
+    rb = sc.robot
+    moment = pymunk.moment_for_circle(rb.mass_kg, 0.0, rb.radius_m)
+    robot = pymunk.Body(rb.mass_kg, moment)
+    robot.position, robot.angle = (x, y), th
+    shape = pymunk.Circle(robot, rb.radius_m)
+    shape.collision_type = CollisionType.ROBOT
+    shape.friction = cfg.friction
+    shape.elasticity = 0.0
+    shape.filter = pymunk.ShapeFilter(categories=ROBOT_CATEGORY, mask=STATIC_CATEGORY)
+    control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+    control.position, control.angle = (x, y), th
+    pivot = pymunk.PivotJoint(control, robot, (0.0, 0.0), (0.0, 0.0))
+    pivot.max_bias = 0.0  # match velocities only; positions are the controller's job
+    pivot.max_force = cfg.traction_margin * rb.mass_kg * rb.max_wheel_accel_m_s2
+    gear = pymunk.GearJoint(control, robot, 0.0, 1.0)
+    gear.max_bias = 0.0
+    gear.max_force = (cfg.traction_margin * moment * 2.0 * rb.max_wheel_accel_m_s2
+                      / rb.wheel_base_m)
+    return robot, shape, control, pivot, gear
+
+
+class SharedSpace:
+    """One ``pymunk.Space`` with a scenario's static shapes, for several robots' worlds.
+
+    Each :class:`sim.physics.world.PhysicsWorld` built with ``shared=`` adds its robot here
+    (robots are filtered so they never touch each other) and gets the contacts its own shape
+    begins; :meth:`step` advances all of them at once (DiffDrive's vector env).
+    """
+
+    def __init__(self, scenario: Scenario, config: PhysicsConfig) -> None:
+        config.validate()
+        self.space = new_space(config)
+        self.space.add(*static_shapes(scenario, self.space.static_body))
+        self.owners: dict[pymunk.Shape, Any] = {}  # shape -> its PhysicsWorld
+        for kind in STATIC_KINDS:
+            self.space.on_collision(CollisionType.ROBOT, kind, begin=self._on_begin, data=kind)
+        sigint.install(SharedSpace._on_begin)
+
+    def _on_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, kind: Any) -> None:
+        a, b = arbiter.shapes
+        owner = self.owners.get(a) or self.owners.get(b)
+        if owner is not None:
+            owner._on_begin(arbiter, space, kind)
+
+    def step(self, dt_s: float) -> None:
+        self.space.step(dt_s)

@@ -44,7 +44,6 @@ import pymunk
 from sim.files import atomic_path
 from sim.grid.actions import N_ACTIONS
 from sim.grid.discretiser import Discretiser
-from sim.physics import kernel as K
 from sim.physics.batch import RouteBatch
 from sim.physics.fidelity import Fidelity
 from sim.physics.static import PhysicsConfig
@@ -218,7 +217,7 @@ class _Builder:
             f = cell * N_CONTEXTS + next_context(out, acts, fid)[:n]
             fam[lo:lo + n] = np.where(cell == self.goal, -1, f)
             steps[lo:lo + n] = out.steps[:n]
-            end[lo:lo + n] = batch.fs[:n, K.X:K.TH + 1]
+            end[lo:lo + n] = batch.poses()[:n]
             self.timeouts += int(out.timeout[:n].sum())
             self.pool(fam[lo:lo + n])
         self.primitives += n_jobs
@@ -234,8 +233,7 @@ class _Builder:
         rows = np.flatnonzero(keep)
         if rows.size == 0:
             return
-        fs, ist = self.batch.fs, self.batch.ist
-        poses = np.column_stack([fs[rows, K.X:K.TH + 1], ist[rows, K.INCONTACT]])
+        poses = np.column_stack([self.batch.poses()[rows], self.batch.r.resting[rows]])
         order = np.argsort(fam[rows], kind="stable")
         uniq, first = np.unique(fam[rows][order], return_index=True)
         for f, chunk in zip(uniq.tolist(), np.split(poses[order], first[1:]), strict=True):
@@ -316,11 +314,12 @@ def cache_dir() -> Path:
 def _code_digest() -> str:
     """A hash of the source of every module a drive runs through: a change to the world
     (the kernel's contact rule, the controller) must not be answered from an old model."""
-    from sim.physics import batch, controller, static, sweep, world
+    from sim.physics import batch, controller, kernel_state, static, sweep, world
+    from sim.physics import kernel as K
     from sim.physics import stochastic_model as model
 
     h = hashlib.sha256()
-    for mod in (K, batch, controller, static, sweep, world, model):
+    for mod in (K, kernel_state, batch, controller, static, sweep, world, model):
         h.update(Path(mod.__file__).read_bytes())
     h.update(Path(__file__).read_bytes())
     return h.hexdigest()

@@ -26,7 +26,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.grid.discretiser import Discretiser
-from sim.physics import kernel as K
 from sim.physics.batch import RouteBatch
 from sim.physics.fidelity import Fidelity
 from sim.physics.static import PhysicsConfig
@@ -133,7 +132,7 @@ def _drive(sc: Scenario, fidelity: Fidelity | None, choose: Chooser, n: int, see
         for t in range(1, budget + 1):
             if not active.any():
                 break
-            acts, missed = choose(cell, ctx, world.fs[:, K.X:K.TH + 1], active)
+            acts, missed = choose(cell, ctx, world.poses(), active)
             off += missed
             out = world.step(acts, active)
             contacts[lo:lo + m] += out.contacts[:m]

@@ -34,7 +34,6 @@ from gymnasium.vector.utils import batch_space
 
 from sim.grid import build_model
 from sim.grid.env import start_state_from_options
-from sim.physics import kernel as K
 from sim.physics.batch import RouteBatch
 from sim.physics.envs import DIFFDRIVE_CONFIG, DiffDriveEnv, _scenario
 from sim.physics.fidelity import Fidelity, parse_fidelity
@@ -203,10 +202,10 @@ class PhysicsRouteVectorEnv(VectorEnv):
 
     def _infos(self, mask: np.ndarray, out: Any) -> dict[str, Any]:
         b = self.batch
-        pose = b.fs[:, K.X:K.TH + 1].copy()
+        pose = b.poses()
         pose[:, 2] = (pose[:, 2] + np.pi) % (2.0 * np.pi) - np.pi  # as wrap_angle
         infos: dict[str, Any] = {
-            "pose": pose, "time_s": b.ist[:, K.STEPS] * self.config.dt_s,
+            "pose": pose, "time_s": b.r.steps * self.config.dt_s,
             "bumped": np.zeros(self.num_envs, bool) if out is None else out.bumped,
             "reached": np.zeros(self.num_envs, bool) if out is None else out.reached,
             "timeout": np.zeros(self.num_envs, bool) if out is None else out.timeout,

@@ -1,5 +1,10 @@
 """The Pymunk world of a scenario: walls, obstacles, blocked cells and a diff-drive disc robot.
 
+This is the **reference world**: every physics step is a ``cpSpaceStep``. Driven by
+:class:`sim.physics.controller.PrimitiveController` it is the oracle the batched kernel
+(:mod:`sim.physics.kernel`) is tested against at every fidelity; ``DiffDrive`` drives it
+directly.
+
 Frames and units as in :mod:`sim.scenario`: metres, seconds, radians, x right,
 y up, origin at the arena's bottom-left corner. Top-down: no gravity.
 
@@ -24,7 +29,15 @@ leg once; the drive loop then shortens the one step that would cross the first
 surface so the disc enters it by at most ``contact_depth_m`` -- enough for
 Chipmunk to report the contact, never more: the time-of-impact clamp of a
 continuous collision detector, for one query per leg.
-:meth:`PhysicsWorld.advance` (free driving, for ``DiffDrive``) casts every step.
+:meth:`PhysicsWorld.advance` (free driving, for ``DiffDrive``, and every fidelity above
+``exact``) casts every step.
+
+Above ``exact`` (:mod:`sim.physics.fidelity`) a robot at rest against a surface
+(:attr:`PhysicsWorld.resting`: carried pose, or placed back on a start centre that overlaps
+a shape) is held by the fidelity's rule (:meth:`PhysicsWorld.hold`), not by Chipmunk's
+contact impulses: the controller turns :attr:`PhysicsWorld.solve_contacts` off, so contacts
+are still detected but take no part in the velocity solve (Chipmunk's own response would
+also brake the slide by friction; the rule slides freely).
 
 Hot path: :meth:`PhysicsWorld.drive` calls Chipmunk through pymunk's cffi
 ``lib`` directly (``cpSpaceStep``, body getters/setters): the public
@@ -43,13 +56,18 @@ import pymunk
 
 from sim.physics import sigint
 from sim.physics.static import (
-    ROBOT_CATEGORY,
+    HOLD_STEP_M,
     STATIC_CATEGORY,
     STATIC_KINDS,
     CollisionType,
     Contact,
     PhysicsConfig,
+    SharedSpace,
+    contact_of,
+    new_space,
+    robot_bodies,
     static_shapes,
+    sweep_alpha,
 )
 from sim.scenario import Scenario
 
@@ -67,7 +85,9 @@ class PhysicsWorld:
 
     Public state: :attr:`space`, :attr:`robot` (dynamic body), :attr:`control`
     (kinematic body), :attr:`steps` (physics steps since built), :attr:`contacts`
-    (every contact that began, in order) and :attr:`contact_counts`.
+    (every contact that began, in order), :attr:`contact_counts`, :attr:`trajectory`
+    (the last primitive's: its start pose, then the pose after each step), :attr:`resting`
+    (at rest against a surface, see :meth:`hold`) and :attr:`solve_contacts`.
     """
 
     def __init__(self, scenario: Scenario, config: PhysicsConfig | None = None,
@@ -108,7 +128,10 @@ class PhysicsWorld:
         self.steps = 0
         self.contacts: list[Contact] = []
         self.contact_counts = dict.fromkeys(STATIC_KINDS, 0)
-        self._pending: list[tuple[Any, ...]] = []
+        self.trajectory: list[tuple[float, float, float]] = [(x, y, th)]
+        self.resting = False  # at rest against a surface (see hold)
+        self.solve_contacts = True  # False: contacts take no part in the velocity solve
+        self._pending: list[Contact] = []
         self._bind_fast()
 
     def respawn(self, pose: tuple[float, float, float]) -> None:
@@ -145,19 +168,14 @@ class PhysicsWorld:
                     lambda b: b.position, lambda b: b.angle, lambda b: b.velocity)
 
     def _on_begin(self, arbiter: pymunk.Arbiter, _space: pymunk.Space, kind: Any) -> None:
-        cps = arbiter.contact_point_set
-        pts = cps.points
-        if not pts:  # pragma: no cover - Chipmunk always reports a point for these shapes
-            self._pending.append((kind, math.nan, math.nan, cps.normal.x, cps.normal.y, 0.0))
-            return
-        deepest = min(pts, key=lambda p: p.distance)
-        self._pending.append((kind, deepest.point_a.x, deepest.point_a.y, cps.normal.x,
-                              cps.normal.y, -deepest.distance))
+        if not self.solve_contacts:
+            arbiter.process_collision = False  # until the shapes separate
+        self._pending.append(contact_of(-1, kind, arbiter.contact_point_set))
 
     def _flush_contacts(self) -> None:
-        for kind, x, y, nx, ny, depth in self._pending:
-            self.contacts.append(Contact(self.steps, CollisionType(kind), x, y, nx, ny, depth))
-            self.contact_counts[CollisionType(kind)] += 1
+        for c in self._pending:
+            self.contacts.append(c._replace(step=self.steps))
+            self.contact_counts[c.kind] += 1
         self._pending.clear()
         sigint.raise_if_deferred()
 
@@ -189,8 +207,10 @@ class PhysicsWorld:
         return any(info.shape.collision_type in STATIC_KINDS
                    for info in self.space.shape_query(self.robot_shape))
 
-    def place(self, x_m: float, y_m: float, heading_rad: float) -> None:
-        """Put the robot (and the control body) at rest at a pose.
+    def place(self, x_m: float, y_m: float, heading_rad: float, *,
+              resting: bool = False) -> None:
+        """Put the robot (and the control body) at rest at a pose; ``resting``: against a
+        surface (see :meth:`hold`).
 
         Only between motions: this is the "return to the start cell" of a
         bumped primitive, not a way of moving the robot. Exact only with
@@ -202,6 +222,7 @@ class PhysicsWorld:
             body.position, body.angle = (x_m, y_m), heading_rad
             body.velocity, body.angular_velocity = (0.0, 0.0), 0.0
         self.space.reindex_shapes_for_body(self.robot)
+        self.resting = resting
 
     # --------------------------------------------------------- collision queries
     def cast_free_distance(self, x0: float, y0: float, x1: float, y1: float,
@@ -243,11 +264,48 @@ class PhysicsWorld:
 
     def overlap_m(self) -> float:
         """Deepest overlap of the robot with static geometry right now [m] (0 if none)."""
-        worst = 0.0
-        for info in self.space.shape_query(self.robot_shape):
-            for p in info.contact_point_set.points:
-                worst = max(worst, -p.distance)
-        return worst
+        return self.deepest(self.touching_shapes())
+
+    def touching_shapes(self) -> list[pymunk.ShapeQueryInfo]:
+        """What the robot's disc touches now (Chipmunk's narrow phase, ``cpSpaceShapeQuery``)."""
+        return self.space.shape_query(self.robot_shape)
+
+    @staticmethod
+    def deepest(infos: list[pymunk.ShapeQueryInfo]) -> float:
+        """Deepest overlap among shape-query answers [m] (0 if none)."""
+        return max((-p.distance for info in infos for p in info.contact_point_set.points),
+                   default=0.0)
+
+    def record_contacts(self, infos: list[pymunk.ShapeQueryInfo]) -> None:
+        """Book shape-query answers as contacts that began in the last step."""
+        for info in infos:
+            c = contact_of(self.steps, info.shape.collision_type, info.contact_point_set)
+            self.contacts.append(c)
+            self.contact_counts[c.kind] += 1
+
+    def hold(self, x0: float, y0: float) -> float:
+        """The carried-pose rule: the surface the robot rests against holds it. The part of
+        the last step (from (x0, y0)) that went into the surface, along its normal, is taken
+        away; returns how far that was [m]. The normal is the gradient of the deepest overlap
+        (central differences, :data:`HOLD_STEP_M` apart, Chipmunk's narrow phase)."""
+        body, h = self.robot, HOLD_STEP_M
+        x, y = (p := body.position).x, p.y
+        d = []
+        for px, py in ((x + h, y), (x - h, y), (x, y + h), (x, y - h)):
+            body.position = (px, py)
+            d.append(self.overlap_m())
+        body.position = (x, y)
+        gx, gy = d[0] - d[1], d[2] - d[3]  # grows into the surface
+        g = math.hypot(gx, gy)
+        if g == 0.0:
+            return 0.0
+        nx, ny = gx / g, gy / g
+        into = (x - x0) * nx + (y - y0) * ny
+        if into <= 0.0:
+            return 0.0
+        body.position = (x - into * nx, y - into * ny)
+        self.space.reindex_shapes_for_body(body)
+        return into
 
     # ------------------------------------------------------------- stepping
     def drive(self, commands: list[tuple[float, float, float]],
@@ -329,6 +387,18 @@ class PhysicsWorld:
             self.after_step(trajectory)
         return len(self.contacts) - before
 
+    def step(self, trajectory: list[tuple[float, float, float]] | None = None, *,
+             book: bool = True) -> None:
+        """One ``cpSpaceStep``: the clock advances, the pose is appended to ``trajectory``;
+        contacts that began are booked, or with ``book=False`` dropped (carried pose decides
+        them at the pose its rule leaves, see ``PrimitiveController._held_step``)."""
+        self._fn[0](self._S, self._h)
+        if book:
+            self.after_step(trajectory)
+        else:
+            self.steps += 1
+            self._pending.clear()
+
     def before_step(self) -> None:
         """The time-of-impact clamp of :meth:`advance` for the coming step: casts the disc
         along the displacement the step will make and shortens it to ``contact_depth_m``
@@ -350,86 +420,6 @@ class PhysicsWorld:
             trajectory.append((q.x, q.y, self.robot.angle))
         if self._pending:
             self._flush_contacts()
-
-
-class SharedSpace:
-    """One ``pymunk.Space`` with a scenario's static shapes, for several robots' worlds.
-
-    Each :class:`PhysicsWorld` built with ``shared=`` adds its robot here (robots are
-    filtered so they never touch each other) and gets the contacts its own shape begins;
-    :meth:`step` advances all of them at once (DiffDrive's vector env).
-    """
-
-    def __init__(self, scenario: Scenario, config: PhysicsConfig) -> None:
-        config.validate()
-        self.space = new_space(config)
-        self.space.add(*static_shapes(scenario, self.space.static_body))
-        self.owners: dict[pymunk.Shape, PhysicsWorld] = {}
-        for kind in STATIC_KINDS:
-            self.space.on_collision(CollisionType.ROBOT, kind, begin=self._on_begin, data=kind)
-        sigint.install(SharedSpace._on_begin)
-
-    def _on_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, kind: Any) -> None:
-        a, b = arbiter.shapes
-        owner = self.owners.get(a) or self.owners.get(b)
-        if owner is not None:
-            owner._on_begin(arbiter, space, kind)
-
-    def step(self, dt_s: float) -> None:
-        self.space.step(dt_s)
-
-
-def new_space(cfg: PhysicsConfig) -> pymunk.Space:
-    """An empty top-down Space with the config's solver and contact settings."""
-    space = pymunk.Space()
-    space.gravity = (0.0, 0.0)
-    space.damping = 1.0
-    space.iterations = cfg.iterations
-    space.collision_slop = cfg.collision_slop_m
-    space.collision_bias = cfg.collision_bias
-    return space
-
-
-def robot_bodies(sc: Scenario, cfg: PhysicsConfig, x: float, y: float, th: float
-                 ) -> tuple[pymunk.Body, pymunk.Circle, pymunk.Body, pymunk.PivotJoint,
-                            pymunk.GearJoint]:
-    """A robot disc and its control body at rest at a pose, joined as in pymunk's tank.py:
-    (body, shape, control body, pivot joint, gear joint), not yet in a Space. The shape is
-    filtered to touch static geometry only (robots in one Space never touch)."""
-    rb = sc.robot
-    moment = pymunk.moment_for_circle(rb.mass_kg, 0.0, rb.radius_m)
-    robot = pymunk.Body(rb.mass_kg, moment)
-    robot.position, robot.angle = (x, y), th
-    shape = pymunk.Circle(robot, rb.radius_m)
-    shape.collision_type = CollisionType.ROBOT
-    shape.friction = cfg.friction
-    shape.elasticity = 0.0
-    shape.filter = pymunk.ShapeFilter(categories=ROBOT_CATEGORY, mask=STATIC_CATEGORY)
-    control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-    control.position, control.angle = (x, y), th
-    pivot = pymunk.PivotJoint(control, robot, (0.0, 0.0), (0.0, 0.0))
-    pivot.max_bias = 0.0  # match velocities only; positions are the controller's job
-    pivot.max_force = cfg.traction_margin * rb.mass_kg * rb.max_wheel_accel_m_s2
-    gear = pymunk.GearJoint(control, robot, 0.0, 1.0)
-    gear.max_bias = 0.0
-    gear.max_force = (cfg.traction_margin * moment * 2.0 * rb.max_wheel_accel_m_s2
-                      / rb.wheel_base_m)
-    return robot, shape, control, pivot, gear
-
-
-def sweep_alpha(space: pymunk.Space, query_filter: pymunk.ShapeFilter, radius_m: float,
-                x0: float, y0: float, x1: float, y1: float) -> float | None:
-    """Fraction of (x0, y0) -> (x1, y1) a disc of ``radius_m`` sweeps before touching a shape
-    that ``query_filter`` lets through; None if it touches none. See
-    :meth:`PhysicsWorld.cast_alpha` (one implementation for the world and the batch)."""
-    r = radius_m
-    bb = pymunk.BB(min(x0, x1) - r, min(y0, y1) - r, max(x0, x1) + r, max(y0, y1) + r)
-    alpha = math.inf
-    for shape in space.bb_query(bb, query_filter):
-        info = shape.segment_query((x0, y0), (x1, y1), r)
-        if info is not None and 0.0 < info.alpha < alpha:
-            alpha = info.alpha
-    return None if alpha == math.inf else alpha
 
 
 def _centre(sc: Scenario, cell: tuple[int, int]) -> tuple[float, float]:

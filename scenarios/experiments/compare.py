@@ -391,16 +391,12 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
         # a Ctrl-C while matplotlib builds its lazy parsers (pyparsing, on the first label)
         # can leave them half made and surface as an AttributeError: hold it to the end of
         # the figures (seconds), then act on it; a second Ctrl-C acts at once
-        pressed: list[bool] = []
+        from scenarios.runs.physics import StopFlag
 
-        def hold(_sig: int, _frame: Any) -> None:
-            if pressed:
-                raise KeyboardInterrupt
-            pressed.append(True)
-
-        with sigint_handled_by(hold):
+        stop = StopFlag()
+        with sigint_handled_by(stop.request):
             all_figures(results, sc, model, out_dir)
-        if pressed:
+        if stop.requested:
             raise KeyboardInterrupt
     (out_dir / PARTIAL).unlink(missing_ok=True)
     return results

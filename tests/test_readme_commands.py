@@ -1,10 +1,12 @@
-"""Every command the README shows parses as written: its subcommand and every flag exist.
+"""Every command the README and the docs/ pages show parses as written: its subcommand and
+every flag exist.
 
 The README's commands are what a new user types first; a flag renamed in the code
 and not in the README (``--resume DIR`` once) fails them on their first try. Each
 ``rnhql ...`` and ``python -m scenarios....`` command, in fenced blocks and in inline
-code, is parsed by the real argument parser (the command's own ``main`` is stopped
-right after parsing, so nothing runs). Placeholders in capitals (``DIR``, ``N``,
+code, in README.md and in every ``docs/*.md`` page, is parsed by the real argument
+parser (the command's own ``main`` is stopped right after parsing, so nothing runs; a
+module that takes no arguments is only imported). Placeholders in capitals (``DIR``, ``N``,
 ``FIELD=VALUE``) are filled with a value of the right kind first, and optional parts
 in brackets (``[--web]``) are taken.
 """
@@ -13,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import inspect
 import re
 import runpy
 import shlex
@@ -45,8 +48,11 @@ def segments(text: str) -> list[str]:
     return out
 
 
-def readme_commands() -> list[str]:
-    text = (REPO / "README.md").read_text(encoding="utf-8")
+PAGES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+
+
+def page_commands(text: str) -> list[str]:
+    """The commands of one Markdown page: fenced blocks and inline code spans."""
     found: list[str] = []
     for block in re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S):
         found += segments(block)
@@ -55,6 +61,19 @@ def readme_commands() -> list[str]:
         if len(span.split()) > 2:  # `rnhql compare` alone names a command, it is not one
             found += segments(span)
     return list(dict.fromkeys(found))
+
+
+def readme_commands() -> list[str]:
+    return page_commands((REPO / "README.md").read_text(encoding="utf-8"))
+
+
+def docs_commands() -> list[tuple[str, str]]:
+    """(page, command) for every page, each command once (at its first page)."""
+    seen: dict[str, str] = {}
+    for page in PAGES:
+        for command in page_commands(page.read_text(encoding="utf-8")):
+            seen.setdefault(command, page.relative_to(REPO).as_posix())
+    return [(page, command) for command, page in seen.items()]
 
 
 def argv_of(command: str) -> list[str]:
@@ -67,16 +86,18 @@ class Parsed(Exception):
     """Raised right after a successful parse: the command itself never runs."""
 
 
-COMMANDS = readme_commands()
+COMMANDS = docs_commands()
 
 
-def test_the_readme_shows_commands():
+def test_the_readme_and_the_docs_show_commands():
+    readme = readme_commands()
+    assert any(c.startswith("rnhql compare") for c in readme)
     assert len(COMMANDS) >= 20
-    assert any(c.startswith("rnhql compare") for c in COMMANDS)
+    assert {page for page, _ in COMMANDS} > {"README.md"}, "no command found in docs/*.md"
 
 
-@pytest.mark.parametrize("command", COMMANDS)
-def test_readme_command_parses(command, monkeypatch, capsys):
+@pytest.mark.parametrize(("page", "command"), COMMANDS, ids=[f"{p}: {c}" for p, c in COMMANDS])
+def test_readme_command_parses(page, command, monkeypatch, capsys):
     argv = argv_of(command)
     original = argparse.ArgumentParser.parse_args
 
@@ -92,8 +113,15 @@ def test_readme_command_parses(command, monkeypatch, capsys):
             main(argv[1:])
         else:
             module = importlib.import_module(argv[2])
-            if hasattr(module, "main"):
+            if "argparse" not in inspect.getsource(module):
+                # takes no arguments (a benchmark run as is): it exists; running it would run it
+                assert len(argv) == 3, f"{page}: {argv[2]} takes no arguments: {command}"
+                return
+            if hasattr(module, "main") and inspect.signature(module.main).parameters:
                 module.main(argv[3:])
+            elif hasattr(module, "main"):  # main() reads sys.argv
+                monkeypatch.setattr(sys, "argv", [argv[2], *argv[3:]])
+                module.main()
             else:  # a module that parses in its __main__ block
                 monkeypatch.setattr(sys, "argv", [argv[2], *argv[3:]])
                 with warnings.catch_warnings():  # it may be imported already: that is fine
@@ -102,6 +130,6 @@ def test_readme_command_parses(command, monkeypatch, capsys):
     except Parsed:
         return
     except SystemExit as exc:
-        pytest.fail(f"README command does not parse (exit {exc.code}): {command}\n"
+        pytest.fail(f"{page}: command does not parse (exit {exc.code}): {command}\n"
                     f"{capsys.readouterr().err}")
-    pytest.fail(f"README command ran without parsing arguments: {command}")
+    pytest.fail(f"{page}: command ran without parsing arguments: {command}")

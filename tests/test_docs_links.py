@@ -57,7 +57,7 @@ def relative_links() -> list[tuple[str, str]]:
             if re.match(r"[a-z][a-z0-9+.-]*:", target):  # https:, mailto:, ...
                 continue
             out.append((page.relative_to(REPO).as_posix(), target))
-    return out
+    return list(dict.fromkeys(out))
 
 
 LINKS = relative_links()

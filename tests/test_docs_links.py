@@ -1,5 +1,5 @@
-"""Every relative link in README.md and the docs/ pages resolves: the file exists, and a
-``#section`` anchor into a Markdown page names one of its headings.
+"""Every relative link in README.md, BENCHMARKS.md and the docs/ pages resolves: the file
+exists, and a ``#section`` anchor into a Markdown page names one of its headings.
 
 Moving text between the README and docs/ changes what a relative path is relative to
 (an image is ``docs/x.png`` from the README and ``x.png`` from a docs page); a link
@@ -15,7 +15,7 @@ import pytest
 
 from tests.conftest import REPO
 
-PAGES = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+PAGES = [REPO / "README.md", REPO / "BENCHMARKS.md", *sorted((REPO / "docs").glob("*.md"))]
 LINK = re.compile(r"!?\[(?:[^\[\]]|\[[^\]]*\])*\]\(\s*<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\s*\)")
 
 

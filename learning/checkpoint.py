@@ -3,6 +3,9 @@
 The state is stored by name (``state_tally.episode``, ``state_q``, ...), without
 the arrays a method derives from its config and the scenario (its ``DERIVED``,
 e.g. RNH-QL's dense feature matrix): loading rebuilds those from the geometry.
+A field a method gained after a checkpoint was written (its ``ADDED``) loads with a
+fresh agent's value when the file lacks it; the method's module says why that is
+right for it.
 
 Files are written atomically (a temporary file in the same directory, then
 ``os.replace``), so a crash mid-write leaves the old checkpoint intact. Loading
@@ -205,9 +208,14 @@ def _state(data, cfg: MethodConfig, path: Path, geometry: Geometry | None,
                               f"scenario for {cfg.cli}; load it with the scenario's geometry")
     fresh = init_state(cfg, geometry if geometry is not None else _tiny_geometry(),
                        np.random.default_rng(0))
+    added = set(getattr(family_of(cfg), "ADDED", ()))
 
-    return rebuild(fresh, lambda name, want: want if name in derived
-                   else _stored(data, path, name, want))
+    def field_of(name: str, want: np.ndarray) -> np.ndarray:
+        if name in derived or (name in added and f"state_{name}" not in data.files):
+            return want  # rebuilt, or added after the file was written: the fresh value
+        return _stored(data, path, name, want)
+
+    return rebuild(fresh, field_of)
 
 
 def _stored(data, path: Path, name: str, want: np.ndarray) -> np.ndarray:

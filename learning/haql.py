@@ -16,6 +16,10 @@ carried pose a free move can fail now and then, and a move past an obstacle's
 edge can get through now and then: one unlucky bump does not wall off a route,
 one lucky pass does not open a wall. In a deterministic world a move's outcome
 never changes, and this is the original rule (blocked from its first bump).
+
+An arrival paid the bump's reward (a grazing move with carried pose, read from the
+reward by :mod:`learning.move_reading`) counts as a bump, not as an arrival: a route
+through moves that get through by scraping an obstacle is not a free route.
 """
 
 from __future__ import annotations
@@ -29,11 +33,15 @@ from numba import njit
 from learning.config import MethodConfig
 from learning.free_space import FreeSpace, bfs_distances, new_free_space
 from learning.geometry import Geometry
+from learning.move_reading import MoveReading, new_move_reading, read_move
 from learning.tabular import q_learning, row_max
 from learning.tally import Tally, begin_tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
 COUNT_CAP = 1 << 30  # bumps minus arrivals saturate here (int32)
+# Added after checkpoints were written: a file without them loads the fresh values (no reward
+# seen yet), relearnt at the next stay and clean arrival (see learning.checkpoint).
+ADDED = ("reading.r_stay", "reading.r_clean")
 
 
 @dataclass(frozen=True)
@@ -82,6 +90,7 @@ class State(NamedTuple):
     pi_h: np.ndarray  # int32[nS]; the heuristic move of each state
     balance: np.ndarray  # int32[nS, nA]; bumps minus arrivals seen (blocked when > 0)
     free: FreeSpace  # the free-space model pi_H is derived from
+    reading: MoveReading  # the rewards of a stay and of a clean arrival (bumps from rewards)
 
 
 def heuristic_actions(geom: Geometry) -> np.ndarray:
@@ -101,7 +110,7 @@ def heuristic_actions(geom: Geometry) -> np.ndarray:
 def init_state(cfg: HAQL, geom: Geometry, rng: np.random.Generator) -> State:
     n_s, n_a = geom.n_states, geom.n_actions
     st = State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), np.zeros(n_s, np.int32),
-               np.zeros((n_s, n_a), np.int32), new_free_space(geom))
+               np.zeros((n_s, n_a), np.int32), new_free_space(geom), new_move_reading())
     if cfg.explored:
         fs = st.free
         rederive(st.pi_h, fs.neighbour, fs.blocked, fs.distance, fs.queue, int(fs.goal[0]))
@@ -129,14 +138,15 @@ def rederive(pi_h, nb, blocked, dist, queue, goal):
 
 
 @njit(cache=True, inline="always")
-def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated):
-    """After a move: a bump (stayed in s) counts up, a move that reached its neighbour
-    down; when the sign flips (the move's most likely outcome changed), re-derive pi_H.
-    (A move that drifted into another cell tells nothing about this one.)"""
-    if s2 == nb[s, a]:
+def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, clean):
+    """After a move: a bump (stayed in s, or arrived paid the bump's reward: ``clean`` is
+    False) counts up, a move that reached its neighbour cleanly down; when the sign flips
+    (the move's most likely outcome changed), re-derive pi_H. (A move that drifted into
+    another cell without a bump tells nothing about this one.)"""
+    if s2 == nb[s, a] and clean:
         if bal[s, a] > -COUNT_CAP:  # int32: a long run must not wrap round
             bal[s, a] -= 1
-    elif s2 == s and not terminated:
+    elif not clean:
         if bal[s, a] < COUNT_CAP:
             bal[s, a] += 1
     else:
@@ -216,9 +226,12 @@ def update(st, s, a, r, s2, terminated, rng):
     dist = st.free.distance
     queue = st.free.queue
     goal = st.free.goal[0]
+    r_stay = st.reading.r_stay
+    r_clean = st.reading.r_clean
     q_learning(st.q, s, a, r, s2, terminated, st.par.alpha, st.par.gamma, 0.0)
     if st.par.explored:
-        observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated)
+        clean = read_move(r_stay, r_clean, s, r, s2, terminated)
+        observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, clean)
 
 
 @njit(**HOOK)

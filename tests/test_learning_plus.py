@@ -189,15 +189,39 @@ def test_known_routes_are_bfs_over_moves_seen_to_work():
         nb[s, 2] = s - 1 if s > 0 else -1
         nb[s, 3] = s + 1 if s < 3 else -1
     works = np.zeros((4, 4), np.int32)
+    fails = np.zeros((4, 4), np.int32)
     kr = new_known_routes(4)
     works[1, 3] = works[2, 3] = 1  # 1 -> 2 -> 3 seen to work, 0 -> 1 not yet
-    known_distances(nb, works, kr.distance, kr.queue, 3)
+    known_distances(nb, works, fails, kr.distance, kr.queue, 3)
     assert kr.distance.tolist() == [-1, 2, 1, 0]
-    assert known_move(nb, works, kr.distance, 1) == 3
-    assert known_move(nb, works, kr.distance, 0) == -1
+    assert known_move(nb, works, fails, kr.distance, 1) == 3
+    assert known_move(nb, works, fails, kr.distance, 0) == -1
     works[0, 3] = 1
-    known_distances(nb, works, kr.distance, kr.queue, 3)
+    known_distances(nb, works, fails, kr.distance, kr.queue, 3)
     assert kr.distance.tolist() == [3, 2, 1, 0]
+
+
+def test_a_known_route_uses_moves_that_work_more_often_than_they_fail():
+    """With noise a move can work and fail: it carries a route while clean arrivals
+    outnumber failures, leaves it when they do not, and comes back (no single failure
+    blocks it for ever, no single lucky pass opens it)."""
+    from learning.known_routes import known_distances, new_known_routes
+
+    nb = np.full((3, 4), -1, np.int32)  # a 1 x 3 corridor 0-1-2, G = 2
+    nb[0, 3], nb[1, 3], nb[1, 2], nb[2, 2] = 1, 2, 0, 1
+    works = np.zeros((3, 4), np.int32)
+    fails = np.zeros((3, 4), np.int32)
+    kr = new_known_routes(3)
+    works[1, 3] = 3
+    works[0, 3], fails[0, 3] = 1, 1  # once through, once bumped: a tie is not reliable
+    known_distances(nb, works, fails, kr.distance, kr.queue, 2)
+    assert kr.distance.tolist() == [-1, 1, 0]
+    works[0, 3] = 2
+    known_distances(nb, works, fails, kr.distance, kr.queue, 2)
+    assert kr.distance.tolist() == [2, 1, 0]
+    fails[0, 3] = 5
+    known_distances(nb, works, fails, kr.distance, kr.queue, 2)
+    assert kr.distance.tolist() == [-1, 1, 0]
 
 
 @pytest.mark.parametrize("seed", [0, 1])
@@ -214,7 +238,8 @@ def test_greedy_test_walks_moves_seen_to_work_once_s_has_a_known_route(paper50, 
     r = train_tabular(RNHQLPlus(), model, 100, np.random.default_rng(seed))
     st = r.state
     d = st.known.distance.copy()
-    known_distances(st.free.neighbour, st.model.works, d, st.known.queue.copy(), model.goal)
+    known_distances(st.free.neighbour, st.model.works, st.model.fails, d,
+                    st.known.queue.copy(), model.goal)
     assert d[model.start] > 0, "S has a known route"
     assert r.final_route_length == d[model.start]
     works = st.model.works

@@ -12,7 +12,7 @@ import numpy as np
 
 from learning.rnh_ql_plus.config import Params, RNHQLPlus
 from learning.rnh_ql_plus.rules import act, begin, exploit, potential_table, update
-from learning.rnh_ql_plus.state import DERIVED, State, init_state
+from learning.rnh_ql_plus.state import ADDED, DERIVED, State, init_state
 
 
 def potential(st: State) -> np.ndarray:
@@ -22,5 +22,5 @@ def potential(st: State) -> np.ndarray:
     return out
 
 
-__all__ = ["DERIVED", "Params", "RNHQLPlus", "State", "act", "begin", "exploit", "init_state",
-           "potential", "update"]
+__all__ = ["ADDED", "DERIVED", "Params", "RNHQLPlus", "State", "act", "begin", "exploit",
+           "init_state", "potential", "update"]

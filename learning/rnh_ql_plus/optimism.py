@@ -107,15 +107,18 @@ def mark_stale(stamp):
 
 
 @njit(cache=True, inline="always")
-def observe_rewards(r_goal_seen, r_free_seen, s, r, s2, terminated):
+def observe_rewards(r_goal_seen, r_free_seen, r, terminated, clean):
     """Remember the reward of entering G and of a free move (the optimistic model's
     rewards, :attr:`Optimism.r_goal` and :attr:`Optimism.r_free`); True if either changed
-    (the cache of y is then stale)."""
+    (the cache of y is then stale). ``clean``: the move arrived without a bump
+    (:func:`learning.move_reading.read_move`); an arrival paid the bump's reward is not a
+    free move (with carried pose r_free would otherwise flip with every grazing arrival,
+    and the potential with it)."""
     if terminated:
         if r > r_goal_seen[0]:
             r_goal_seen[0] = r
             return True
-    elif s2 != s and r_free_seen[0] != r:
+    elif clean and r_free_seen[0] != r:
         r_free_seen[0] = r
         return True
     return False

@@ -14,6 +14,10 @@ and (see :class:`learning.rnh_ql_plus.config.RNHQLPlus`):
   :mod:`learning.rnh_ql_plus.planning`), uniformly or by priority (``sweeping``);
 * ``known_route``: the greedy test follows a shortest route over moves seen to work.
 
+A move "works" when it arrives in the neighbour it heads for without a bump, read from
+its reward (:mod:`learning.move_reading`): with carried pose a grazing move can arrive
+and be paid the bump, and counting it as working made the greedy routes bump.
+
 The ablation's variants (network potentials, re-based rows, Q traces, leak-free
 features) are :mod:`learning.rnh_ql_plus_ablation`, which builds on these rules.
 """
@@ -24,8 +28,9 @@ import numpy as np
 from numba import njit
 
 from learning.free_space import bfs_distances, distances_change, repair_distances
-from learning.known_routes import known_distances, known_move
+from learning.known_routes import known_distances, known_move, reliable
 from learning.move_model import never_worked, note_pair, observe_outcome
+from learning.move_reading import read_move
 from learning.rnh_ql_plus.optimism import (
     ensure_values,
     goal_reward,
@@ -68,13 +73,13 @@ def action_values(par, q, out, y, succ, nb, goal, r_free, r_goal, s):
 
 
 @njit(**HOOK)
-def known_route_move(nb, works, known_d, known_q, known_stale, goal, s):
+def known_route_move(nb, works, fails, known_d, known_q, known_stale, goal, s):
     """The first move of a shortest route from s over moves seen to work (-1: s has none),
-    the routes brought up to date first if a move worked for the first time since."""
+    the routes brought up to date first if a move's standing changed since."""
     if known_stale[0]:
-        known_distances(nb, works, known_d, known_q, goal)
+        known_distances(nb, works, fails, known_d, known_q, goal)
         known_stale[0] = False
-    return known_move(nb, works, known_d, s)
+    return known_move(nb, works, fails, known_d, s)
 
 
 # Every hook below first reads each array it or its callees use into a local, one field per
@@ -124,6 +129,7 @@ def exploit(st, s):
     r_free_seen = st.opt.r_free
     succ = st.model.successor
     works = st.model.works
+    fails = st.model.fails
     nb = st.free.neighbour
     goal = st.free.goal[0]
     known_d = st.known.distance
@@ -131,7 +137,7 @@ def exploit(st, s):
     known_stale = st.known.stale
     a = -1
     if par.known_route:
-        a = known_route_move(nb, works, known_d, known_q, known_stale, goal, s)
+        a = known_route_move(nb, works, fails, known_d, known_q, known_stale, goal, s)
     if a >= 0:
         pass
     elif par.lookahead and shaping[0]:
@@ -207,21 +213,24 @@ def update(st, s, a, r, s2, terminated, rng):
     r_goal_seen = st.opt.r_goal
     r_free_seen = st.opt.r_free
     known_stale = st.known.stale
+    r_stay = st.reading.r_stay
+    r_clean = st.reading.r_clean
     sweep_key = st.sweep.key
     sweep_pair = st.sweep.pair
     sweep_where = st.sweep.where
     sweep_size = st.sweep.size
     gamma = par.gamma
     shaping = shaping_on[0]
-    stale = observe_rewards(r_goal_seen, r_free_seen, s, r, s2, terminated)
+    clean = read_move(r_stay, r_clean, s, r, s2, terminated)
+    stale = observe_rewards(r_goal_seen, r_free_seen, r, terminated, clean)
     was_fail = blocked[s, a]
-    first_work = works[s, a] == 0
+    was_reliable = reliable(works, fails, s, a)
     note_pair(succ, seen, n_seen, s, a)
     observe_outcome(succ, to_goal, reward, works, fails, r_fail, s, a, r, s2, terminated,
-                    s2 == nb[s, a])
+                    clean and s2 == nb[s, a])
     now_fail = never_worked(succ, works, s, a)
-    if first_work and works[s, a] > 0:
-        known_stale[0] = True  # a move worked for the first time: known routes may shorten
+    if reliable(works, fails, s, a) != was_reliable:
+        known_stale[0] = True  # a move's standing changed: known routes may change
     blocked[s, a] = now_fail
     if stale or now_fail != was_fail:  # the optimistic model's ground changed
         revise_optimism(nb, blocked, dist, queue, goal, y, stamp, r_goal_seen, r_free_seen, s,

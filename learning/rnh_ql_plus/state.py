@@ -10,6 +10,7 @@ from learning.free_space import FreeSpace, new_free_space
 from learning.geometry import Geometry
 from learning.known_routes import KnownRoutes, new_known_routes
 from learning.move_model import MoveModel, new_move_model
+from learning.move_reading import MoveReading, new_move_reading
 from learning.priority_queue import PairQueue, new_pair_queue
 from learning.rnh_ql_plus.config import Params, RNHQLPlus
 from learning.rnh_ql_plus.optimism import Optimism, new_optimism
@@ -28,9 +29,14 @@ class State(NamedTuple):
     shaping: np.ndarray  # bool[1]; shaping on this episode
     known: KnownRoutes  # routes over moves seen to work (the greedy test's, known_route)
     sweep: PairQueue  # pairs queued for planned updates (sweeping; empty without)
+    reading: MoveReading  # the rewards of a stay and of a clean arrival (bumps from rewards)
 
 
 DERIVED = ("known.distance", "known.queue", "known.stale", "free.neighbour")
+# Added to the state after checkpoints were written: a file without them loads the fresh
+# values (no reward seen), and the agent relearns both at its next stay and clean arrival;
+# until then every arrival counts as clean, the rule the file was trained under.
+ADDED = ("reading.r_stay", "reading.r_clean")
 
 
 def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> State:
@@ -38,4 +44,5 @@ def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> Stat
     return State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), new_move_model(n_s, n_a),
                  new_free_space(geom), new_optimism(n_s), np.zeros((1, n_a)), np.zeros(1),
                  np.zeros(1, np.bool_), new_known_routes(n_s),
-                 new_pair_queue(n_s * n_a) if cfg.sweeping else new_pair_queue(0, 0))
+                 new_pair_queue(n_s * n_a) if cfg.sweeping else new_pair_queue(0, 0),
+                 new_move_reading())

@@ -13,7 +13,7 @@ import numpy as np
 
 from learning.rnh_ql_plus_ablation.config import Params, Potential, RNHQLPlusAblation
 from learning.rnh_ql_plus_ablation.rules import act, begin, exploit, potential_table, update
-from learning.rnh_ql_plus_ablation.state import DERIVED, State, init_state
+from learning.rnh_ql_plus_ablation.state import ADDED, DERIVED, State, init_state
 
 
 def potential(st: State) -> np.ndarray:
@@ -23,5 +23,5 @@ def potential(st: State) -> np.ndarray:
     return out
 
 
-__all__ = ["DERIVED", "Params", "Potential", "RNHQLPlusAblation", "State", "act", "begin",
+__all__ = ["ADDED", "DERIVED", "Params", "Potential", "RNHQLPlusAblation", "State", "act", "begin",
            "exploit", "init_state", "potential", "update"]

@@ -23,7 +23,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from learning.known_routes import reliable
 from learning.move_model import never_worked, note_pair, observe_outcome
+from learning.move_reading import read_move
 from learning.rnh_ql_plus.optimism import ensure_values, goal_reward, observe_rewards
 from learning.rnh_ql_plus.planning import plan as plus_plan
 from learning.rnh_ql_plus.planning import replay, sweep
@@ -134,6 +136,7 @@ def exploit(st, s):
     nb = st.free.neighbour
     goal = st.free.goal[0]
     works = st.model.works
+    fails = st.model.fails
     known_d = st.known.distance
     known_q = st.known.queue
     known_stale = st.known.stale
@@ -141,7 +144,7 @@ def exploit(st, s):
     based = par.rebase
     a = -1
     if par.known_route:
-        a = known_route_move(nb, works, known_d, known_q, known_stale, goal, s)
+        a = known_route_move(nb, works, fails, known_d, known_q, known_stale, goal, s)
     if a >= 0:
         pass
     elif par.lookahead and shaping[0]:
@@ -225,6 +228,8 @@ def update(st, s, a, r, s2, terminated, rng):
     r_goal_seen = st.opt.r_goal
     r_free_seen = st.opt.r_free
     known_stale = st.known.stale
+    r_stay = st.reading.r_stay
+    r_clean = st.reading.r_clean
     sweep_key = st.sweep.key
     sweep_pair = st.sweep.pair
     sweep_where = st.sweep.where
@@ -242,16 +247,17 @@ def update(st, s, a, r, s2, terminated, rng):
     if based:
         rebase(par, q, w, on, centre, y, phi_row, succ, s)
     # model first: a new move may join s' to supports before Phi(s') is read
-    stale = observe_rewards(r_goal_seen, r_free_seen, s, r, s2, terminated)
+    clean = read_move(r_stay, r_clean, s, r, s2, terminated)
+    stale = observe_rewards(r_goal_seen, r_free_seen, r, terminated, clean)
     was_fail = blocked[s, a]
-    first_work = works[s, a] == 0
+    was_reliable = reliable(works, fails, s, a)
     if note_pair(succ, seen, n_seen, s, a) and leak_free and s2 != s:
         leak_free_edge(on, base, centre, preds, anchor, stack, succ, s, s2, par.normalise)
     observe_outcome(succ, to_goal, reward, works, fails, r_fail, s, a, r, s2, terminated,
-                    s2 == nb[s, a])
+                    clean and s2 == nb[s, a])
     now_fail = never_worked(succ, works, s, a)
-    if first_work and works[s, a] > 0:
-        known_stale[0] = True  # a move worked for the first time: known routes may shorten
+    if reliable(works, fails, s, a) != was_reliable:
+        known_stale[0] = True  # a move's standing changed: known routes may change
     blocked[s, a] = now_fail
     if optimistic and (stale or now_fail != was_fail):
         revise_optimism(nb, blocked, dist, queue, goal, y, stamp, r_goal_seen, r_free_seen, s,

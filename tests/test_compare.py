@@ -46,7 +46,9 @@ def test_results_json_contract(small):
     for method in ("rnh-ql", "st-ql"):
         entry = data["summary"][method]["grid"]
         assert entry["seeds"] == 2
-        assert {"median", "q25", "q75"} <= set(entry["wall_time_s"])
+        assert {"median", "q25", "q75", "ci95"} <= set(entry["wall_time_s"])
+        lo, hi = entry["wall_time_s"]["ci95"]
+        assert lo <= entry["wall_time_s"]["median"] <= hi
         assert 0.0 <= entry["optimal_route_fraction"] <= 1.0
     assert not (out / PARTIAL).exists()
 
@@ -173,7 +175,11 @@ def test_one_quantile_definition_with_never_last():
     # never (None) sorts last; interpolating towards it is never, landing on a value is it
     assert quantile([1, 2, None, None], 0.5) == float("inf")
     assert quantile([1, 2, 3, None, None], 0.5) == 3.0
-    assert _stats([100, 200, None]) == {"median": 200.0, "q25": 150.0, "q75": None}
+    stats = _stats([100, 200, None])
+    assert {k: stats[k] for k in ("median", "q25", "q75")} == {"median": 200.0, "q25": 150.0,
+                                                               "q75": None}
+    # the median's bootstrap interval: a resample's median is 100 or never in 7/27 each
+    assert stats["ci95"] == [100.0, None]
     # the same definition whether or not some seed never got there (positions 1.75 of 0..7)
     assert quantile([1, 2, 3, 4, None, None, None, None], 0.25) == 2.75
 

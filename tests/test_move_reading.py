@@ -28,7 +28,7 @@ def test_an_arrival_paid_the_bump_is_not_clean_where_bump_and_step_differ(scheme
 
 
 def test_step_cost_cannot_tell_a_grazing_arrival_and_counts_every_arrival_clean():
-    goal, bump, step = REWARD_SCHEMES["step-cost"]
+    _goal, bump, step = REWARD_SCHEMES["step-cost"]
     assert bump == step
     rd = new_move_reading()
     flags = steps(rd, [(0, bump, 0, False), (0, step, 1, False), (1, bump, 2, False)])

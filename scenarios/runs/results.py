@@ -32,12 +32,17 @@
                  "metres_mean", "sim_time_s_mean"} (the final greedy policy driven from S in
                  the run's own world: once at exact, 50 times above it; there the route
                  lengths are median primitives over drives), ...} ],
-      "summary": {method: {world: {figure: {"median", "q25", "q75"}, ...,
+      "summary": {method: {world: {figure: {"median", "q25", "q75", "ci95"}, ...,
                                    "optimal_route_fraction", "reached_goal_fraction",
                                    "seeds"}}}
     }
 
 Quantiles everywhere are :func:`quantile` (type 7, ``null`` = never sorts last).
+``ci95`` is ``[lo, hi]``, the 95 % percentile-bootstrap interval of the median over seeds
+(:func:`scenarios.runs.statistics.bootstrap_ci`, 5000 resamples, a fixed seed, so the same
+runs give the same interval); ``null`` (never) counts as +infinity there too and an end
+that is infinite is written ``null``; ``ci95`` is ``null`` with no values. Added within
+version 2: readers of ``median``/``q25``/``q75`` are unaffected.
 Version 1 had ``reward_per_step`` as a per-episode list and ranked by first hits.
 """
 
@@ -51,6 +56,14 @@ from typing import Any
 
 import numpy as np
 
+from scenarios.runs.statistics import (
+    LEVEL,
+    N_RESAMPLES,
+    Estimate,
+    bootstrap_ci,
+    generator,
+    probability_of_improvement,
+)
 from sim.files import atomic_write_text
 
 RESULTS_VERSION = 2
@@ -84,14 +97,20 @@ def quantile(values: list[float | None], q: float) -> float:
     return float(a + (b - a) * frac)
 
 
-def _stats(values: list[float | None]) -> dict[str, float | None]:
-    """Median and quartiles (:func:`quantile`); ``None`` in and out means never / no G."""
+def _finite(v: float) -> float | None:
+    return None if math.isinf(v) else v
+
+
+def _stats(values: list[float | None]) -> dict[str, Any]:
+    """Median, quartiles (:func:`quantile`) and the median's 95 % bootstrap interval
+    (``ci95``, a fresh seeded generator per figure); ``None`` in and out means never / no G.
+    """
     if not values:
-        return {"median": None, "q25": None, "q75": None}
-    out = {}
+        return {"median": None, "q25": None, "q75": None, "ci95": None}
+    out: dict[str, Any] = {}
     for name, q in (("median", 0.5), ("q25", 0.25), ("q75", 0.75)):
-        v = quantile(values, q)
-        out[name] = None if math.isinf(v) else v
+        out[name] = _finite(quantile(values, q))
+    out["ci95"] = [_finite(v) for v in bootstrap_ci(values, rng=generator())]
     return out
 
 
@@ -133,6 +152,14 @@ def _fmt(stat: dict[str, float | None] | None, digits: int = 0, missing: str = "
     return f"{one(stat['median'])} [{one(stat['q25'])}, {one(stat['q75'])}]"
 
 
+def _fmt_ci(stat: dict[str, Any] | None, digits: int = 0, missing: str = "never") -> str:
+    """The median's ``ci95`` as ``[lo, hi]`` (``–`` in results written before it existed)."""
+    ci = (stat or {}).get("ci95")
+    if ci is None:
+        return "–"
+    return "[" + ", ".join(missing if v is None else f"{v:.{digits}f}" for v in ci) + "]"
+
+
 def summary_markdown(results: dict[str, Any], method_order: list[str] | None = None) -> str:
     """A human report: one row per method and world, then the honest verdict on RNH-QL."""
     summ = results["summary"]
@@ -159,21 +186,28 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
              "test is optimal; *first optimal*: the first optimal test (a secondary figure); "
              "`never` sorts last; `no G` = the final greedy route from S does not reach the "
              "goal. *ε-route*: median length of 20 ε-greedy rollouts from S (the paper's own "
-             "test). Reward per step = total return / total steps.",
+             "test). Reward per step = total return / total steps. *95 % CI*: percentile "
+             f"bootstrap interval of the median over seeds ({N_RESAMPLES} resamples, fixed "
+             "seed; `never` counts as infinitely many episodes). In the verdict, *P(A better "
+             "than B)* is the probability of improvement: the share of (seed of A, seed of "
+             "B) pairs in which A's seed does better on the ranked figure (ties ½), with its "
+             "95 % bootstrap interval over seeds; an interval containing 0.5 is no evidence "
+             "of a difference.",
              "",
              *(["Config overrides (`--set`): " + "; ".join(
                  f"{m}: " + ", ".join(f"{k}={v:g}" for k, v in o.items())
                  for m, o in results["overrides"].items()), ""]
                if results.get("overrides") else []),
              "| method | world | seeds | final route optimal | stable optimal after | "
-             "first optimal | final route length | ε-route | success rate | "
-             "reward / step | wall time (s) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "its median's 95 % CI | first optimal | final route length | ε-route | "
+             "success rate | reward / step | wall time (s) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for m in methods:
         for world, e in summ.get(m, {}).items():
             lines.append(
                 f"| {m} | {world} | {e['seeds']} | {e['optimal_route_fraction']:.0%} | "
                 f"{_fmt(e['episodes_to_stable_optimal'])} | "
+                f"{_fmt_ci(e['episodes_to_stable_optimal'])} | "
                 f"{_fmt(e['episodes_to_optimal'])} | "
                 f"{_fmt(e['final_route_length'], missing='no G')} | "
                 f"{_fmt(e['epsilon_route_length'], missing='no G')} | "
@@ -225,8 +259,85 @@ def _score(e: dict[str, Any]) -> tuple[float, float, float, float]:
             -e["reached_goal_fraction"], -(e["success_rate"]["median"] or 0.0))
 
 
+OURS = ("rnh-ql", "rnh-ql+")  # the methods the verdict speaks for
+
+
+def _name(method: str) -> str:
+    """RNH-QL by its name (as the verdict always has); every other method by its key."""
+    return "RNH-QL" if method == "rnh-ql" else method
+
+
+def ranked_figure(summ_world: dict[str, dict[str, Any]]) -> tuple[str, bool, str]:
+    """The per-seed figure a world's ranking is decided on: (run key, lower is better, label).
+
+    Episodes to a stable optimal route (``null`` = never, the worst) while any method has
+    an optimal seed: a seed without an optimal final route never got a stable one, so
+    this one figure carries the ranking's first two keys. With no optimal seed anywhere
+    every seed ties on it, and the training success rate (the ranking's last key) is used.
+    """
+    if any(e["optimal_route_fraction"] > 0 for e in summ_world.values()):
+        return ("episodes_to_stable_optimal", True,
+                "episodes to a stable optimal route (never = last)")
+    return "success_rate", False, "training success rate"
+
+
+def improvement(results: dict[str, Any], world: str, a: str, b: str) -> Estimate | None:
+    """P(a better than b) in ``world`` on :func:`ranked_figure` over the seeds in
+    ``results["runs"]``, with its 95 % bootstrap interval (seeded, so reproducible);
+    ``None`` without per-seed runs for both."""
+    figure, lower, _ = ranked_figure({m: e[world] for m, e in results["summary"].items()
+                                      if world in e})
+    runs = results.get("runs") or []
+
+    def seeds(m: str) -> list[Any]:
+        return [r.get(figure) for r in runs if r.get("method") == m and r.get("world") == world]
+
+    x, y = seeds(a), seeds(b)
+    if not x or not y:
+        return None
+    return probability_of_improvement(x, y, rng=generator(), lower_is_better=lower)
+
+
+def _outcome(a: str, b: str, est: Estimate) -> str:
+    if est.contains(0.5):
+        return "no evidence of a difference"
+    return f"{_name(a) if est.lo > 0.5 else _name(b)} is better"
+
+
+def _qualifier(ours: str, ests: dict[str, Estimate]) -> str:
+    """What P(improvement) says about ``ours`` against each other method, as a clause."""
+    better = [m for m, e in ests.items() if e.lo > 0.5]
+    worse = [m for m, e in ests.items() if e.hi < 0.5]
+    none = [m for m, e in ests.items() if e.contains(0.5)]
+    parts = ([f"{_name(ours)} is better than {', '.join(better)}"] if better else []) + \
+            ([f"no evidence of a difference from {', '.join(none)}"] if none else []) + \
+            ([f"{', '.join(worse)} {'is' if len(worse) == 1 else 'are'} better"]
+             if worse else [])
+    return (f"; by P({_name(ours)} better) and its {LEVEL * 100:g} % CI: " + "; ".join(parts)
+            if parts else "")
+
+
+def _comparison_lines(results: dict[str, Any], world: str,
+                      ests: dict[tuple[str, str], Estimate]) -> list[str]:
+    """One sub-item per (ours, other) pair: P(ours better) [CI] and what it says."""
+    label = ranked_figure({m: e[world] for m, e in results["summary"].items()
+                           if world in e})[2]
+    out = []
+    for (a, b), est in ests.items():
+        n_a = sum(1 for r in results["runs"] if r.get("method") == a and r.get("world") == world)
+        n_b = sum(1 for r in results["runs"] if r.get("method") == b and r.get("world") == world)
+        out.append(f"  - {_name(a)} vs {b}: P({_name(a)} better) = {est.value:.2f}, "
+                   f"{LEVEL * 100:g} % CI [{est.lo:.2f}, {est.hi:.2f}] on {label}, "
+                   f"{n_a} × {n_b} seeds: {_outcome(a, b, est)}.")
+    return out
+
+
 def verdict(results: dict[str, Any]) -> list[str]:
-    """Say plainly, per world, whether RNH-QL beat every other method."""
+    """Say plainly, per world, whether RNH-QL beat every other method, and whether the
+    seeds are evidence of it: the rank on medians (:data:`RANKING`), then, where
+    ``results["runs"]`` holds the seeds, the probability of improvement of RNH-QL (and of
+    RNH-QL+) over each other method with its 95 % bootstrap interval ("no evidence of a
+    difference" when that interval contains 0.5)."""
     summ = results["summary"]
     lines = []
     worlds = sorted({w for m in summ.values() for w in m})
@@ -235,6 +346,15 @@ def verdict(results: dict[str, Any]) -> list[str]:
         best = min(scored.values())
         leaders = sorted(m for m, sc in scored.items() if sc == best)
         none_optimal = all(summ[m][world]["optimal_route_fraction"] == 0 for m in scored)
+        ests: dict[tuple[str, str], Estimate] = {}
+        for ours in (m for m in OURS if m in scored):
+            for other in scored:
+                if other == ours or (other, ours) in ests:
+                    continue
+                est = improvement(results, world, ours, other)
+                if est is not None:
+                    ests[(ours, other)] = est
+        qual = _qualifier("rnh-ql", {b: e for (a, b), e in ests.items() if a == "rnh-ql"})
         if none_optimal:
             lines.append(f"- {world}: no method's final greedy route from S is optimal in any "
                          f"seed within {results['episodes']} episodes.")
@@ -246,18 +366,19 @@ def verdict(results: dict[str, Any]) -> list[str]:
                          f"{pos} of {len(scored)}"
                          + (f", tied with {', '.join(tied)}" if tied else "")
                          + (f"; best: {', '.join(leaders)}" if "rnh-ql" not in leaders else "")
-                         + ".")
+                         + qual + ".")
         elif "rnh-ql" not in scored:
             lines.append(f"- {world}: best: {', '.join(leaders)}.")
         elif leaders == ["rnh-ql"]:
-            lines.append(f"- {world}: RNH-QL ranks first ({RANKING}).")
+            lines.append(f"- {world}: RNH-QL ranks first ({RANKING}){qual}.")
         elif "rnh-ql" in leaders:
             lines.append(f"- {world}: RNH-QL ties for first with "
-                         f"{', '.join(m for m in leaders if m != 'rnh-ql')}.")
+                         f"{', '.join(m for m in leaders if m != 'rnh-ql')}{qual}.")
         else:
             pos = 1 + sum(sc < scored["rnh-ql"] for sc in scored.values())
             lines.append(f"- {world}: RNH-QL does NOT win: it ranks {pos} of {len(scored)}; "
-                         f"best: {', '.join(leaders)} ({RANKING}).")
+                         f"best: {', '.join(leaders)} ({RANKING}){qual}.")
+        lines += _comparison_lines(results, world, ests)
     return lines
 
 

@@ -39,6 +39,28 @@ def physics_grading(d: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+@renderer("reward-design")
+def reward_design(d: dict[str, Any]) -> str:
+    """Every method x reward scheme x discount: optimal seeds · median episodes to a stable
+    optimal route; the value-iteration facts as sentences the study computed."""
+    lines = [f"On `{d['scenario']}`, {d['seeds']} seeds × {d['episodes']} episodes per cell "
+             "(optimal seeds / seeds · median episodes to a stable optimal route, omitted "
+             "when the median seed never gets there):", "",
+             "| method | " + " | ".join(d["columns"]) + " |",
+             "|---|" + "---|" * len(d["columns"])]
+    for m, row in d["cells"].items():
+        cells = []
+        for c in d["columns"]:
+            e = row[c]
+            med = e["stable"][0]
+            cells.append(f"{e['optimal']}/{e['seeds']}"
+                         + ("" if med is None or not math.isfinite(med) else f" · {med:.0f}"))
+        lines.append(f"| {m} | " + " | ".join(cells) + " |")
+    lines += ["", "What value iteration says of each scheme (computed by the study):", "",
+              *d["sentences"]]
+    return "\n".join(lines) + "\n"
+
+
 @renderer("ladder")
 def ladder_table(d: dict[str, Any]) -> str:
     """The fidelity ladder: each method trained in the grid (then driven at the rung) and

@@ -2,6 +2,8 @@
 
     python -m scenarios.experiments.reward_design --out results/reward-design  # 10 seeds x 3000
     python -m scenarios.experiments.reward_design --out /tmp/rd --seeds 2 --episodes 300  # a look
+    python -m scenarios.experiments.reward_design --out results/reward-design --artifact paper-50
+        # ... and write docs/results/reward-design.paper-50.json, the README's table
 
 For each scheme (``paper`` +100/-1/+1, ``goal-only`` +100/-1/0, ``step-cost``
 +100/-1/-1) and gamma in {0.95, 0.99}, one ``compare`` sweep on the scenario
@@ -14,6 +16,7 @@ so every number in the explanation is computed, not typed.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 from pathlib import Path
@@ -93,6 +96,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--episodes", type=int, default=3000)
     p.add_argument("--jobs", type=int, default=None)
     p.add_argument("--resume", action="store_true", help="skip runs already finished")
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/reward-design.NAME.json (the table the "
+                        "README renders)")
     args = p.parse_args(argv)
     methods = [m for m in args.methods.split(",") if m]
     sc, _ = load(args.scenario)
@@ -109,8 +115,34 @@ def main(argv: list[str] | None = None) -> int:
                                      progress=Progress(len(specs)))
     text = report(args, methods, facts, grid)
     atomic_write_text(Path(args.out) / "REPORT.md", text)
+    if args.artifact:
+        from scenarios.artifacts import write_artifact
+
+        cmd = (f"python -m scenarios.experiments.reward_design --out {args.out} --scenario "
+               f"{args.scenario} --seeds {args.seeds} --episodes {args.episodes}"
+               + ("" if args.methods == p.get_default("methods") else
+                  f" --methods {args.methods}") + f" --artifact {args.artifact}")
+        write_artifact(f"reward-design.{args.artifact}", cmd, ["grid"],
+                       artifact_data(args, methods, facts, grid))
     print(text)
     return 0
+
+
+def artifact_data(args: argparse.Namespace, methods: list[str], facts: list[RewardFacts],
+                  grid: dict[tuple[str, float], dict[str, Any]]) -> dict[str, Any]:
+    """What the README's table and sentences show: per method and (scheme, gamma) the
+    seeds, the optimal ones and episodes to a stable optimal route; the computed facts."""
+    cells = {m: {f"{s} γ={g:g}": {
+        "seeds": grid[(s, g)]["summary"][m]["grid"]["seeds"],
+        "optimal": round(grid[(s, g)]["summary"][m]["grid"]["optimal_route_fraction"]
+                         * grid[(s, g)]["summary"][m]["grid"]["seeds"]),
+        "stable": [grid[(s, g)]["summary"][m]["grid"]["episodes_to_stable_optimal"][k]
+                   for k in ("median", "q25", "q75")]}
+        for g in GAMMAS for s in REWARD_SCHEMES} for m in methods}
+    return {"scenario": args.scenario, "seeds": args.seeds, "episodes": args.episodes,
+            "columns": [f"{s} γ={g:g}" for g in GAMMAS for s in REWARD_SCHEMES],
+            "cells": cells, "facts": [dataclasses.asdict(f) for f in facts],
+            "sentences": explain(facts)}
 
 
 if __name__ == "__main__":

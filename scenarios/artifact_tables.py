@@ -61,6 +61,23 @@ def reward_design(d: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+@renderer("optimum")
+def optimum(d: dict[str, Any]) -> str:
+    """V* of one scenario at a fidelity, beside the exact optimum and its driven check."""
+    v = "inf" if d["v_star"] is None else f"{d['v_star']:.2f}"
+    dr = d["driven"]
+    driven = "–" if dr is None else (
+        f"{dr['primitives_mean']:.2f} primitives, P(G) {dr['p_goal']:.3f} "
+        f"[{dr['p_goal_ci95'][0]:.3f}, {dr['p_goal_ci95'][1]:.3f}], "
+        f"{dr['contacts_mean']:.2f} contacts ({dr['rollouts']} drives)")
+    exact = d["exact"] if d["exact"] >= 0 else "no G"
+    return ("| scenario, fidelity | V\\*(S) | P(G) ≤ budget | exact optimum | its policy "
+            "driven | states | drives | build |\n|---|---|---|---|---|---|---|---|\n"
+            f"| {d['scenario']}, `{d['fidelity']}` | {v} | {d['p_goal']:.3f} (≤ {d['budget']}) | "
+            f"{exact} | {driven} | {d['states']:,} | {d['drives']:,} | "
+            f"{d['build_s']:.0f} s |\n")
+
+
 @renderer("ladder")
 def ladder_table(d: dict[str, Any]) -> str:
     """The fidelity ladder: each method trained in the grid (then driven at the rung) and

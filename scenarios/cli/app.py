@@ -124,6 +124,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="seed of the model's start poses and noise streams")
     p.add_argument("--rollouts", type=int, default=0, metavar="N",
                    help="also drive the optimal policy N times from S as a check (0: no)")
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/optimum.NAME.json (the table docs/fidelity.md "
+                        "renders)")
     p.set_defaults(func=optimum.cmd_optimum)
 
     p = sub.add_parser("view", help="open a .rrd recording in the Rerun viewer")

@@ -101,4 +101,21 @@ def cmd_optimum(args: argparse.Namespace) -> int:
         print(f"  driven      {rollouts} rollouts of the optimal policy: P(G) {r.p_goal:.4f} "
               f"(95 % interval {lo:.3f}-{hi:.3f}), mean {r.mean_primitives:.2f} primitives "
               f"(median {r.median_primitives:g}), {r.mean_contacts:.2f} contacts per rollout")
+    if getattr(args, "artifact", None):
+        from scenarios.artifacts import write_artifact
+
+        driven = None if not rollouts else {
+            "rollouts": rollouts, "p_goal": r.p_goal, "p_goal_ci95": list(r.p_goal_interval),
+            "primitives_mean": r.mean_primitives, "contacts_mean": r.mean_contacts}
+        cmd = (f"rnhql optimum {args.scenario} --fidelity {fid.label} --seed {seed}"
+               + ("" if samples is None else f" --samples {samples}")
+               + (f" --rollouts {rollouts}" if rollouts else "")
+               + f" --artifact {args.artifact}")
+        write_artifact(f"optimum.{args.artifact}", cmd, ["physics-exact", "physics-noisy"], {
+            "scenario": sc.name, "fidelity": fid.label, "budget": budget,
+            "v_star": None if math.isinf(start.expected_primitives)
+            else start.expected_primitives,
+            "p_goal": start.p_goal_within_budget, "exact": exact, "continuous_m": continuous,
+            "states": int(model.n_states), "drives": int(model.primitives),
+            "build_s": float(model.build_s), "driven": driven})
     return 0

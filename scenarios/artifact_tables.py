@@ -78,6 +78,21 @@ def optimum(d: dict[str, Any]) -> str:
             f"{d['build_s']:.0f} s |\n")
 
 
+@renderer("memory")
+def memory(d: dict[str, Any]) -> str:
+    """Peak RSS and checkpoint size per method and map size."""
+    sizes = d["sizes"]
+    lines = [f"{d['kind']} maps, `rnhql train ... --episodes {d['episodes']} --save` per cell "
+             "in a fresh process, kernels compiled beforehand; peak RSS · checkpoint (the "
+             f"imports alone take {d['floor_mb']:.0f} MB):", "",
+             "| method | " + " | ".join(f"{n}²" for n in sizes) + " |",
+             "|---|" + "---|" * len(sizes)]
+    for m, row in d["methods"].items():
+        lines.append(f"| {m} | " + " | ".join(
+            f"{row[str(n)][0]:.0f} MB · {row[str(n)][1]:.1f} MB" for n in sizes) + " |")
+    return "\n".join(lines) + "\n"
+
+
 @renderer("ladder")
 def ladder_table(d: dict[str, Any]) -> str:
     """The fidelity ladder: each method trained in the grid (then driven at the rung) and

@@ -44,7 +44,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--methods", default=",".join(METHODS), help="methods")
     p.add_argument("--episodes", type=int, default=20, help="training episodes per run")
     p.add_argument("--map-seed", type=int, default=7, help="generator seed of the maps")
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/memory.NAME.json (the table docs/studies.md "
+                        "renders)")
     args = p.parse_args(argv)
+    measured: dict[str, dict[str, list[float]]] = {}
     methods = [m for m in args.methods.split(",") if m]
     sizes = [int(s) for s in args.sizes.split(",")]
     with tempfile.TemporaryDirectory(prefix="rnhql-memory-") as tmp:
@@ -66,8 +70,18 @@ def main(argv: list[str] | None = None) -> int:
                 rss, _ = peak_rss_mb([sys.executable, "-m", "scenarios.cli", "train",
                                       str(tomls[n]), "--method", m, "--episodes",
                                       str(args.episodes), "--save", str(ckpt)], env)
-                cells.append(f"{rss:.0f} MB · {ckpt.stat().st_size / 1e6:.1f} MB")
+                size_mb = ckpt.stat().st_size / 1e6
+                measured.setdefault(m, {})[str(n)] = [rss, size_mb]
+                cells.append(f"{rss:.0f} MB · {size_mb:.1f} MB")
             print(f"| {m} | " + " | ".join(cells) + " |", flush=True)
+    if args.artifact:
+        from scenarios.artifacts import write_artifact
+
+        cmd = ("python -m scenarios.bench.memory " + " ".join(argv if argv is not None
+                                                               else sys.argv[1:]))
+        write_artifact(f"memory.{args.artifact}", cmd.strip(), ["grid"],
+                       {"kind": args.kind, "sizes": sizes, "episodes": args.episodes,
+                        "floor_mb": floor, "methods": measured})
     return 0
 
 

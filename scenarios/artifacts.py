@@ -29,6 +29,8 @@ from __future__ import annotations
 import datetime as _dt
 import hashlib
 import json
+import os
+import re
 import subprocess
 from collections.abc import Iterable
 from pathlib import Path
@@ -78,6 +80,17 @@ def code_version() -> str:
         return "unknown"
 
 
+def process_wall_s() -> float | None:
+    """Seconds since this process started (Linux ``/proc``; None elsewhere): the study's
+    wall time, which ``rnhql report`` quotes as what a refresh of it will take."""
+    try:
+        ticks = int(Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()[19])
+        uptime = float(Path("/proc/uptime").read_text().split()[0])
+        return round(uptime - ticks / os.sysconf("SC_CLK_TCK"), 1)
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any,
                    directory: Path = RESULTS_DIR) -> Path:
     """Write ``docs/results/<name>.json`` atomically: the study's figures and provenance."""
@@ -88,7 +101,8 @@ def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any
     digests = behaviour_digests()
     doc = {"format": FORMAT, "name": name, "command": command,
            "date": _dt.date.today().isoformat(), "code_version": code_version(),
-           "behaviour": {p: digests[p] for p in parts}, "data": data}
+           "behaviour": {p: digests[p] for p in parts}, "wall_s": process_wall_s(),
+           "data": data}
     path = directory / f"{name}.json"
     atomic_write_text(path, json.dumps(doc, indent=1, sort_keys=False) + "\n")
     return path
@@ -162,3 +176,22 @@ def legacy(command: str, known: str = "") -> None:
     import cog
 
     cog.out(legacy_note(command, known))
+
+
+LEGACY_CALL = re.compile(r'legacy\("([^"]+)"')
+
+
+def artifact_names(directory: Path = RESULTS_DIR) -> list[str]:
+    return sorted(p.stem for p in directory.glob("*.json"))
+
+
+def generated_pages(root: Path = ROOT) -> list[Path]:
+    """README.md and the docs/ pages that hold Cog blocks."""
+    pages = [root / "README.md", *sorted((root / "docs").glob("*.md"))]
+    return [p for p in pages if p.exists() and "[[[cog" in p.read_text(encoding="utf-8")]
+
+
+def legacy_tables(root: Path = ROOT) -> list[tuple[str, str]]:
+    """(page, command) of every table still typed by hand (a ``legacy(...)`` block)."""
+    return [(str(p.relative_to(root)), m.group(1)) for p in generated_pages(root)
+            for m in LEGACY_CALL.finditer(p.read_text(encoding="utf-8"))]

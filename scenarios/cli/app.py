@@ -15,7 +15,17 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from scenarios.cli import aliasing, bench, catalog, compare, optimum, route, train, view
+from scenarios.cli import (
+    aliasing,
+    bench,
+    catalog,
+    compare,
+    optimum,
+    report,
+    route,
+    train,
+    view,
+)
 from scenarios.cli.args import add_fidelity_arg, add_record_args, add_scenario_args
 from scenarios.runs.backends import SweepError
 from sim.errors import InputError
@@ -135,6 +145,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="serve the web viewer on 127.0.0.1 instead of the native viewer")
     p.add_argument("--port", type=int, default=9090, help="web viewer port (with --web)")
     p.set_defaults(func=view.cmd_view)
+
+    p = sub.add_parser("report", help="the docs' generated tables: which are stale, and a "
+                                      "refresh that re-measures them")
+    p.add_argument("--refresh", action="store_true",
+                   help="re-run every stale artifact's study, then regenerate the pages")
+    p.add_argument("--dry-run", action="store_true",
+                   help="with --refresh: print what would run and what it took last time")
+    p.set_defaults(func=report.cmd_report)
 
     p = sub.add_parser("bench", help="measure throughput")
     p.add_argument("--json", action="store_true", help="print the figures as JSON")

@@ -1,0 +1,85 @@
+"""``rnhql report``: which figures in the docs are stale, and a one-command refresh.
+
+Every generated table in the README and ``docs/`` comes from an artifact in
+``docs/results/`` (:mod:`scenarios.artifacts`). ``rnhql report`` lists them with when
+and at which code version they were measured, what they took, and whether the code's
+behaviour has changed since (stale), and the tables still typed by hand. ``--refresh``
+re-runs the command of every stale artifact, one after another (each is a study that
+uses every core), then regenerates the pages (``cog -r``). ``--dry-run`` says what a
+refresh would run and how long it took last time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import subprocess
+import sys
+
+from scenarios.artifacts import (
+    ROOT,
+    artifact_names,
+    behaviour_digests,
+    generated_pages,
+    legacy_tables,
+    load_artifact,
+    stale_parts,
+)
+
+
+def _took(wall_s: float | None) -> str:
+    if wall_s is None:
+        return "unknown"
+    return f"{wall_s / 60:.0f} min" if wall_s >= 90 else f"{wall_s:.0f} s"
+
+
+def argv_of(command: str) -> list[str]:
+    """An artifact's command as argv for this interpreter (``rnhql`` and ``python``)."""
+    words = shlex.split(command)
+    if words[0] == "rnhql":
+        return [sys.executable, "-m", "scenarios.cli", *words[1:]]
+    if words[0] in ("python", "python3"):
+        return [sys.executable, *words[1:]]
+    return words
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    now = behaviour_digests()
+    stale = []
+    print("artifact | measured | took | state")
+    for name in artifact_names():
+        doc = load_artifact(name)
+        parts = stale_parts(doc, now)
+        state = f"STALE ({', '.join(parts)} changed)" if parts else "fresh"
+        print(f"{name} | {doc['date']} at {doc['code_version']} | "
+              f"{_took(doc.get('wall_s'))} | {state}")
+        if parts:
+            stale.append(doc)
+    hand = legacy_tables()
+    if hand:
+        print(f"\ntyped by hand ({len(hand)}; re-run with --artifact and render them):")
+        for page, command in hand:
+            print(f"  {page}: {command}")
+    if not args.refresh:
+        if stale:
+            print(f"\n{len(stale)} stale; `rnhql report --refresh` re-runs them")
+        return 0
+    known = [d.get("wall_s") for d in stale]
+    total = sum(w for w in known if w is not None)
+    took = ("time unknown" if all(w is None for w in known) else
+            f"about {_took(total)} measured last time"
+            + (" (some unknown)" if None in known else ""))
+    print(f"\nrefresh: {len(stale)} stale artifact(s), {took}")
+    for doc in stale:
+        print(f"  {doc['command']}")
+        if args.dry_run:
+            continue
+        code = subprocess.call(argv_of(doc["command"]), cwd=ROOT)
+        if code != 0:
+            print(f"rnhql report: `{doc['command']}` exited with {code}; the pages are not "
+                  "regenerated", file=sys.stderr)
+            return 1
+    if args.dry_run:
+        return 0
+    pages = [str(p) for p in generated_pages()]
+    return subprocess.call([sys.executable, "-m", "cogapp", "-r", "-I", str(ROOT), *pages])

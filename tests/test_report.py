@@ -1,0 +1,45 @@
+"""``rnhql report``: stale artifacts listed, a refresh that runs their commands."""
+
+from __future__ import annotations
+
+import sys
+
+import pytest
+
+from scenarios.artifacts import artifact_names, behaviour_digests, legacy_tables
+from scenarios.cli import report
+from scenarios.cli.app import main
+
+
+def test_report_lists_every_artifact_and_every_table_typed_by_hand(capsys):
+    assert main(["report"]) == 0
+    out = capsys.readouterr().out
+    for name in artifact_names():
+        assert name in out
+    for page, command in legacy_tables():
+        assert f"{page}: {command}" in out
+
+
+def test_a_dry_refresh_names_the_stale_commands_and_runs_nothing(capsys, monkeypatch):
+    """Every artifact made stale (a behaviour digest changed): the refresh plans each
+    command, and with --dry-run starts none of them."""
+    changed = {k: "changed" for k in behaviour_digests()}
+    monkeypatch.setattr(report, "behaviour_digests", lambda: changed)
+    ran = []
+    monkeypatch.setattr(report.subprocess, "call", lambda *a, **k: ran.append(a) or 0)
+    assert main(["report", "--refresh", "--dry-run"]) == 0
+    out = capsys.readouterr().out
+    names = artifact_names()
+    assert f"refresh: {len(names)} stale artifact(s)" in out
+    assert out.count("STALE") == len(names)
+    assert ran == []
+
+
+@pytest.mark.parametrize("command, head", [
+    ("rnhql optimum paper-50 --fidelity noisy", [sys.executable, "-m", "scenarios.cli",
+                                                  "optimum"]),
+    ("python -m scenarios.bench.memory --artifact x", [sys.executable, "-m",
+                                                        "scenarios.bench.memory"]),
+])
+def test_an_artifacts_command_runs_with_this_interpreter(command, head):
+    assert report.argv_of(command)[:len(head)] == head

@@ -56,16 +56,22 @@ def independent_p_goal(sc, fidelity, policy: np.ndarray, drives: int) -> tuple[i
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--scenario", default="paper-50")
-    p.add_argument("--fidelity", default="noisy")
-    p.add_argument("--methods", default="rnh-ql+,haql,dyna-q")
-    p.add_argument("--seeds", type=int, default=10)
-    p.add_argument("--episodes", type=int, default=1000)
-    p.add_argument("--rewards", default="goal-only")
-    p.add_argument("--drives", type=int, default=50)
-    p.add_argument("--out", default="results/grading-check")
+    p.add_argument("--scenario", default="paper-50", help="built-in name or scenario file")
+    p.add_argument("--fidelity", default="noisy",
+                   help="physics fidelity the runs train and are graded in (a preset or a "
+                        "knob file; see rnhql train --help)")
+    p.add_argument("--methods", default="rnh-ql+,haql,dyna-q", help="comma-separated methods")
+    p.add_argument("--seeds", type=int, default=10, help="seeds per method (0 .. N-1)")
+    p.add_argument("--episodes", type=int, default=1000, help="training episodes per run")
+    p.add_argument("--rewards", default="goal-only",
+                   help="reward scheme (a preset, or goal=,bump=,step=)")
+    p.add_argument("--drives", type=int, default=50,
+                   help="independent drives of each final policy from S [primitives capped "
+                        "at the episode's budget], each its own noise stream")
+    p.add_argument("--out", default="results/grading-check", help="output folder")
     p.add_argument("--artifact", default=None, metavar="NAME",
-                   help="also write docs/results/NAME.json (a table the docs render)")
+                   help="also write docs/results/physics-grading.NAME.json (a table the docs "
+                        "render)")
     args = p.parse_args(argv)
     fid = parse_fidelity(args.fidelity)
     sc, model = load(args.scenario, None, None, args.rewards)

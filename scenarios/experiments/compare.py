@@ -31,8 +31,6 @@ from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
 from scenarios.runs.spec import RecordOptions, RunSpec, load
 from scenarios.signals import sigint_handled_by
 
-ALL_METHODS = ("rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt",
-               "q-lambda", "dyna-q")
 PARTIAL = "runs.partial.jsonl"
 
 

@@ -84,6 +84,9 @@ def register(config: type[MethodConfig], module: ModuleType, compared: bool = Tr
     if missing:
         raise ValueError(f"{module.__name__} has no {', '.join(missing)}: a method module "
                          "declares State, init_state and the hooks act, update, begin, exploit")
+    if tuple(getattr(module.State, "_fields", ())[:2]) != ("par", "tally"):
+        raise ValueError(f"{module.__name__}.State is not a named tuple whose first fields "
+                         "are par and tally")
     if config.cli in METHODS:
         raise ValueError(f"a method named {config.cli!r} is registered already "
                          f"({METHODS[config.cli].__name__})")

@@ -1,0 +1,124 @@
+"""Adding a method touches its module and the registry, nothing else: a throwaway method,
+defined and registered here at test time, runs end to end through ``rnhql compare`` and
+shows in its results and summary.
+
+This module is the throwaway method's module (config, ``State``, ``init_state``, hooks),
+laid out as ``learning/q_learning.py`` is: the steps of :mod:`learning.registry`'s
+docstring, but for the row in the registry's table, which :func:`register` adds here.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import ClassVar, NamedTuple
+
+import numpy as np
+import pytest
+from numba import njit
+
+from learning.config import BaseParams, MethodConfig
+from learning.geometry import Geometry
+from learning.tabular import begin_plain, eps_greedy, exploit_q, q_learning
+from learning.tally import Tally, new_tally
+
+HOOK = dict(cache=True, inline="always")
+
+
+@dataclass(frozen=True)
+class Throwaway(MethodConfig):
+    """Q-learning under another name, with an optimistic start of its own."""
+
+    name: ClassVar[str] = "THROWAWAY-QL"
+    cli: ClassVar[str] = "throwaway-ql"
+    q0: float = 1.0  # initial Q for every (s, a) [reward units]
+
+
+class State(NamedTuple):
+    par: BaseParams
+    tally: Tally
+    q: np.ndarray  # float64[nS, nA]
+
+
+def init_state(cfg: Throwaway, geom: Geometry, rng: np.random.Generator) -> State:
+    return State(cfg.params(), new_tally(), np.full((geom.n_states, geom.n_actions), cfg.q0))
+
+
+@njit(**HOOK)
+def act(st, s, rng):
+    return eps_greedy(st.q, s, st.par.eps, rng)
+
+
+@njit(**HOOK)
+def update(st, s, a, r, s2, terminated, rng):
+    q_learning(st.q, s, a, r, s2, terminated, st.par.alpha, st.par.gamma, 0.0)
+
+
+begin = begin_plain
+exploit = exploit_q
+
+
+@pytest.fixture
+def throwaway():
+    """The method registered for one test, and gone again after it."""
+    import sys
+
+    from learning.registry import register, unregister
+
+    register(Throwaway, sys.modules[__name__])
+    try:
+        yield Throwaway.cli
+    finally:
+        unregister(Throwaway.cli)
+
+
+def test_a_registered_method_runs_through_compare(throwaway, tmp_path, capsys):
+    from learning.registry import METHODS, comparison_methods
+    from scenarios.cli import main
+
+    assert comparison_methods()[-1] == throwaway  # compare's default list has it
+    out = tmp_path / "cmp"
+    assert main(["compare", "paper-40", "--methods", f"{throwaway},st-ql", "--seeds", "2",
+                 "--episodes", "20", "--jobs", "1", "--set", "q0=2", "--out", str(out)]) == 0
+    data = json.loads((out / "results.json").read_text())
+    runs = [r for r in data["runs"] if r["method"] == throwaway]
+    assert [r["seed"] for r in runs] == [0, 1]
+    for r in runs:
+        assert r["method_name"] == "THROWAWAY-QL" and r["config"]["q0"] == 2.0
+        assert len(r["steps_per_episode"]) == 20
+        assert r["final_route_length"] == -1 or r["final_route_length"] >= 60
+    assert data["summary"][throwaway]["grid"]["seeds"] == 2
+    assert list(data["summary"]) == [throwaway, "st-ql"]
+    md = (out / "summary.md").read_text()
+    assert f"| {throwaway} | grid | 2 |" in md
+    assert (out / "steps_per_episode.png").stat().st_size > 5000
+    assert throwaway in capsys.readouterr().out
+    assert type(METHODS[throwaway]()) is Throwaway
+
+
+def test_unregister_leaves_the_registry_as_it_was(throwaway):
+    from learning.registry import METHODS, comparison_methods, unregister
+
+    before = comparison_methods()
+    unregister(throwaway)
+    try:
+        assert throwaway not in METHODS and throwaway not in comparison_methods()
+        assert comparison_methods() == before[:-1]
+    finally:
+        import sys
+
+        from learning.registry import register
+
+        register(Throwaway, sys.modules[__name__])  # for the fixture to remove
+
+
+def test_register_refuses_a_taken_name_and_a_module_without_hooks(throwaway):
+    import sys
+    import types
+
+    from learning.registry import register
+
+    with pytest.raises(ValueError, match="registered already"):
+        register(Throwaway, sys.modules[__name__])
+    with pytest.raises(ValueError, match="has no State, init_state"):
+        register(type("Other", (Throwaway,), {"cli": "other"}), types.ModuleType("bare"))

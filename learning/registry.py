@@ -78,7 +78,9 @@ def register(config: type[MethodConfig], module: ModuleType, compared: bool = Tr
     """Add a method: its config class and the module with its ``State`` and hooks.
 
     ``compared``: in :func:`comparison_methods` (after the methods already there).
-    Compiled code that already ran is not affected; a new ``State`` compiles anew.
+    Compiled code that already ran is not affected; a new ``State`` compiles anew. The
+    module must be importable in every process that reads numba's on-disk cache (a
+    module of a package, not a script): the cached kernels name its ``State`` class.
     """
     missing = [h for h in HOOKS if not hasattr(module, h)]
     if missing:

@@ -59,12 +59,20 @@ exploit = exploit_q
 
 
 @pytest.fixture
-def throwaway():
-    """The method registered for one test, and gone again after it."""
+def throwaway(monkeypatch):
+    """The method registered for one test, and gone again after it.
+
+    Kernels compiled for it stay out of numba's on-disk cache: a cache index names the
+    ``State`` classes it holds, and every later process that loads that index (a CLI run
+    without this test module on its path) would fail to import this one.
+    """
     import sys
+
+    from numba.core import caching
 
     from learning.registry import register, unregister
 
+    monkeypatch.setattr(caching.Cache, "save_overload", lambda self, sig, data: None)
     register(Throwaway, sys.modules[__name__])
     try:
         yield Throwaway.cli

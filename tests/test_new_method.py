@@ -2,9 +2,11 @@
 defined and registered here at test time, runs end to end through ``rnhql compare`` and
 shows in its results and summary.
 
-This module is the throwaway method's module (config, ``State``, ``init_state``, hooks),
-laid out as ``learning/q_learning.py`` is: the steps of :mod:`learning.registry`'s
-docstring, but for the row in the registry's table, which :func:`register` adds here.
+This module is the throwaway method's module: a config, a ``State`` of its own,
+``init_state`` and the four hooks (Q-learning's rules, borrowed from
+:mod:`learning.q_learning`, the template a new method starts from). The steps of
+:mod:`learning.registry`'s docstring, but for the row in the registry's table, which
+:func:`~learning.registry.register` adds here.
 """
 
 from __future__ import annotations
@@ -15,14 +17,11 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 import pytest
-from numba import njit
 
+from learning import q_learning
 from learning.config import BaseParams, MethodConfig
 from learning.geometry import Geometry
-from learning.tabular import begin_plain, eps_greedy, exploit_q, q_learning
 from learning.tally import Tally, new_tally
-
-HOOK = dict(cache=True, inline="always")
 
 
 @dataclass(frozen=True)
@@ -34,7 +33,7 @@ class Throwaway(MethodConfig):
     q0: float = 1.0  # initial Q for every (s, a) [reward units]
 
 
-class State(NamedTuple):
+class State(NamedTuple):  # its own class: dispatch goes by the state's type
     par: BaseParams
     tally: Tally
     q: np.ndarray  # float64[nS, nA]
@@ -44,18 +43,8 @@ def init_state(cfg: Throwaway, geom: Geometry, rng: np.random.Generator) -> Stat
     return State(cfg.params(), new_tally(), np.full((geom.n_states, geom.n_actions), cfg.q0))
 
 
-@njit(**HOOK)
-def act(st, s, rng):
-    return eps_greedy(st.q, s, st.par.eps, rng)
-
-
-@njit(**HOOK)
-def update(st, s, a, r, s2, terminated, rng):
-    q_learning(st.q, s, a, r, s2, terminated, st.par.alpha, st.par.gamma, 0.0)
-
-
-begin = begin_plain
-exploit = exploit_q
+act, update = q_learning.act, q_learning.update
+begin, exploit = q_learning.begin, q_learning.exploit
 
 
 @pytest.fixture

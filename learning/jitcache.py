@@ -65,6 +65,8 @@ def kernels_cached(package: Path = PACKAGE) -> bool:
     """Whether numba has compiled kernels of this package on disk (False on a first run,
     or after the sources changed): the CLI then says compilation is under way."""
     root = os.environ.get("NUMBA_CACHE_DIR")
-    if root:
-        return any(Path(root).glob(f"**/{package.name}/kernels.*.nbi"))
+    if root:  # numba names the folder <package>_<hash of its path> (older: the path itself)
+        return any(f for pattern in (f"{package.name}_*/kernels.*.nbi",
+                                     f"**/{package.name}/kernels.*.nbi")
+                   for f in Path(root).glob(pattern))
     return any((package / "__pycache__").glob("kernels.*.nbi"))

@@ -1,12 +1,13 @@
 """The fixed sweep whose records must not change when code moves (behaviour unchanged).
 
-Every method, grid and physics (exact fidelity), 2 seeds, 100 episodes on
-``paper-40`` with goal-only rewards; and the three model learners in physics at
-``noisy`` (2 seeds, 30 episodes), so a change of the noisy world or its grading shows.
-The digests of these parts are also the behaviour digests that tell a table in the docs
-it is stale (:mod:`scenarios.artifacts`). Each run's ``results.json`` record, minus
-its wall-clock fields, is hashed; ``tests/data/golden_sweep.json`` holds the
-hashes of the code the figures in the README were measured with.
+Every compared method (:func:`learning.registry.comparison_methods`), grid and physics
+(exact fidelity), 2 seeds, 100 episodes on ``paper-40`` with goal-only rewards; and the
+three model learners in physics at ``noisy`` (2 seeds, 30 episodes), so a change of the
+noisy world or its grading shows. The digests of these parts are also the behaviour
+digests that tell a table in the docs it is stale (:mod:`scenarios.artifacts`). Each
+run's ``results.json`` record, minus its wall-clock fields, is hashed;
+``tests/data/golden_sweep.json`` holds the hashes of the code the figures in the README
+were measured with.
 
 Regenerate only when a change is *meant* to alter results (and say so in the
 commit): ``python -m tests.golden_sweep --write``.
@@ -29,9 +30,10 @@ WALL_KEYS = ("wall_time_s", "wall_time_per_episode_s")
 
 
 def sweep_specs() -> list[Any]:
-    from scenarios.experiments.compare import ALL_METHODS, make_specs
+    from learning.registry import comparison_methods
+    from scenarios.experiments.compare import make_specs
 
-    return [*make_specs("paper-40", ALL_METHODS, SEEDS, EPISODES, ("grid", "physics"),
+    return [*make_specs("paper-40", comparison_methods(), SEEDS, EPISODES, ("grid", "physics"),
                         rewards="goal-only"),
             *make_specs("paper-40", NOISY_METHODS, SEEDS, NOISY_EPISODES, ("physics",),
                         rewards="goal-only", fidelity="noisy")]

@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import math
 
+import pytest
+
 from scenarios.experiments.ablation import compact_table, stable_optimal, verdict
 from scenarios.experiments.suite import build_suite
 
@@ -80,3 +82,90 @@ def test_every_variant_is_a_config_of_its_method_and_the_ablations_rows_need_it(
         make_config(method, overrides)
         if method == "rnh-ql+ablation":
             assert {k for k, _ in overrides} - plus, label
+
+
+RUN_FIELDS = ["map", "label", "seed", "optimal", "final_route_optimal", "final_route_length",
+              "first_optimal", "stable_optimal", "env_steps", "wall_time_s", "episodes"]
+TINY = ["--seeds", "2", "--episodes", "20", "--jobs", "1", "--maps", "paper-40,maze-1",
+        "--variants", "0,11"]
+
+
+def _without_wall(data):
+    """An ablation.json without its timings and map paths (another --out)."""
+    return {**data, "runs": [{k: v for k, v in r.items() if k != "wall_time_s"}
+                             for r in data["runs"]],
+            "maps": [{k: v for k, v in m.items() if k != "file"} for m in data["maps"]]}
+
+
+def test_ablation_runs_as_a_sweep_and_writes_its_files(tmp_path, capsys):
+    """The ablation's files and their shape; each run's figures are its record's."""
+    from scenarios.experiments.ablation import VARIANTS, main
+    from scenarios.experiments.compare import PARTIAL
+    from scenarios.runs.run import run_one
+    from scenarios.runs.spec import RunSpec, load
+
+    out = tmp_path / "abl"
+    assert main(["--out", str(out), *TINY]) == 0
+    data = json.loads((out / "ablation.json").read_text())
+    assert list(data) == ["maps", "variants", "summary", "runs"]
+    assert [m["name"] for m in data["maps"]] == ["paper-40", "maze-1"]
+    labels = [VARIANTS[0][0], VARIANTS[11][0]]
+    assert [v["label"] for v in data["variants"]] == labels
+    assert list(data["summary"]) == labels
+    assert data["summary"][labels[1]]["maze-1"]["seeds"] == 2
+    assert len(data["runs"]) == 2 * 2 * 2
+    for r in data["runs"]:
+        assert list(r) == RUN_FIELDS and r["episodes"] == 20
+    # the first run, as the ablation computed it before it ran on run_sweep
+    first = data["runs"][0]
+    path = data["maps"][0]["file"]
+    rec = run_one(RunSpec(path, "rnh-ql", 0, 20))
+    opt = int(load(path)[1].optimal_route_length)
+    assert {k: v for k, v in first.items() if k != "wall_time_s"} == dict(
+        map="paper-40", label=labels[0], seed=0, optimal=opt,
+        final_route_optimal=bool(rec["final_route_optimal"]),
+        final_route_length=rec["final_route_length"], first_optimal=rec["episodes_to_optimal"],
+        stable_optimal=stable_optimal(rec["test_episodes"], rec["test_route_length"], opt),
+        env_steps=rec["env_steps"], episodes=20)
+    md = (out / "ablation.md").read_text()
+    assert md.startswith("Rewards `goal-only`, 2 seeds x 20 episodes.") and "Compact" in md
+    assert (out / "ablation.png").stat().st_size > 5000
+    assert not (out / PARTIAL).exists()
+    assert md in capsys.readouterr().out
+
+
+def test_ablation_interrupted_then_resumed_writes_what_one_pass_writes(tmp_path, monkeypatch):
+    from scenarios.experiments.ablation import main
+    from scenarios.experiments.compare import PARTIAL
+    from scenarios.runs import backends
+
+    whole = tmp_path / "whole"
+    assert main(["--out", str(whole), *TINY]) == 0
+    real = backends.run_local
+    seen = []
+
+    def stop_after_two(todo, on_result=None, **kw):
+        seen.append(len(todo))
+        done: list = []
+
+        def save(rec):  # Ctrl-C as the second run is saved
+            on_result(rec)
+            done.append(rec)
+            if len(done) == 2:
+                raise KeyboardInterrupt
+        return real(todo, on_result=save, **kw)
+
+    monkeypatch.setattr(backends, "run_local", stop_after_two)
+    out = tmp_path / "cut"
+    with pytest.raises(KeyboardInterrupt):
+        main(["--out", str(out), *TINY])
+    kept = [json.loads(line) for line in (out / PARTIAL).read_text().splitlines()]
+    assert len(kept) == 2 and "steps_per_episode" not in kept[0]  # the kept figures only
+    assert not (out / "ablation.json").exists()
+    monkeypatch.setattr(backends, "run_local", lambda todo, **kw: seen.append(len(todo))
+                        or real(todo, **kw))
+    assert main(["--out", str(out), *TINY, "--resume"]) == 0
+    assert seen == [8, 6]
+    assert _without_wall(json.loads((out / "ablation.json").read_text())) == _without_wall(
+        json.loads((whole / "ablation.json").read_text()))
+    assert (out / "ablation.md").read_text() == (whole / "ablation.md").read_text()

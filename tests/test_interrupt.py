@@ -57,6 +57,21 @@ def strip_timings(x):
     return x
 
 
+def resume_gives_the_whole_sweep(sweep: list[str], out: Path, tmp_path: Path,
+                                 *extra: str) -> None:
+    """``--resume`` finishes the interrupted sweep in ``out`` (``extra``: more of its
+    arguments) with the results.json one uninterrupted sweep writes."""
+    resumed = subprocess.run([*CLI, *sweep, "--out", str(out), *extra, "--resume"],
+                             cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert resumed.returncode == 0, resumed.stderr
+    whole = subprocess.run([*CLI, *sweep, "--out", str(tmp_path / "whole")], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=300)
+    assert whole.returncode == 0, whole.stderr
+    a = json.loads((out / "results.json").read_text())
+    b = json.loads((tmp_path / "whole" / "results.json").read_text())
+    assert strip_timings(a) == strip_timings(b)
+
+
 def test_ctrl_c_stops_a_recorded_sweep_and_resume_completes_it(tmp_path):
     sweep = ["compare", "paper-40", "--methods", "rn-ql,st-ql", "--seeds", "6",
              "--episodes", "1500", "--jobs", "2"]
@@ -73,16 +88,7 @@ def test_ctrl_c_stops_a_recorded_sweep_and_resume_completes_it(tmp_path):
     assert not (out / "results.json").exists()
     assert rec.exists() and verify_recording(rec)[0]
 
-    resumed = subprocess.run([*CLI, *sweep, "--out", str(out), "--record", str(rec),
-                              "--resume"], cwd=tmp_path, capture_output=True, text=True,
-                             timeout=300)
-    assert resumed.returncode == 0, resumed.stderr
-    whole = subprocess.run([*CLI, *sweep, "--out", str(tmp_path / "whole")], cwd=tmp_path,
-                           capture_output=True, text=True, timeout=300)
-    assert whole.returncode == 0, whole.stderr
-    a = json.loads((out / "results.json").read_text())
-    b = json.loads((tmp_path / "whole" / "results.json").read_text())
-    assert strip_timings(a) == strip_timings(b)
+    resume_gives_the_whole_sweep(sweep, out, tmp_path, "--record", str(rec))
     assert verify_recording(rec)[0]
 
 
@@ -122,15 +128,7 @@ def test_ctrl_c_stops_a_batched_physics_sweep_and_resume_completes_it(tmp_path):
     assert took <= 2.0, f"took {took:.2f} s to stop"
     assert "Traceback" not in err
     assert partial.read_text().count("\n") == 4  # the batch was not finished: nothing of it
-    resumed = subprocess.run([*CLI, *sweep, "--out", str(out), "--resume"], cwd=tmp_path,
-                             capture_output=True, text=True, timeout=300)
-    assert resumed.returncode == 0, resumed.stderr
-    whole = subprocess.run([*CLI, *sweep, "--out", str(tmp_path / "whole")], cwd=tmp_path,
-                           capture_output=True, text=True, timeout=300)
-    assert whole.returncode == 0, whole.stderr
-    a = json.loads((out / "results.json").read_text())
-    b = json.loads((tmp_path / "whole" / "results.json").read_text())
-    assert strip_timings(a) == strip_timings(b)
+    resume_gives_the_whole_sweep(sweep, out, tmp_path)
 
 
 def _take_lock(out: str, barrier, results) -> None:

@@ -44,3 +44,17 @@ def _opt_level_after_import(env: dict[str, str]) -> str:
 def test_kernels_compile_at_O2_unless_the_user_says_otherwise():
     assert _opt_level_after_import({}) == "2"
     assert _opt_level_after_import({"NUMBA_OPT": "3"}) == "3"
+
+
+def test_kernels_cached_finds_numbas_folder_under_numba_cache_dir(tmp_path, monkeypatch):
+    from learning.jitcache import kernels_cached
+
+    pkg = tmp_path / "src" / "learning"
+    pkg.mkdir(parents=True)
+    root = tmp_path / "cache"
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(root))
+    assert not kernels_cached(pkg)
+    folder = root / "learning_90062a5e"  # numba's: <package>_<hash of its path>
+    folder.mkdir(parents=True)
+    (folder / "kernels._episodes-22.py311.nbi").write_bytes(b"")
+    assert kernels_cached(pkg)

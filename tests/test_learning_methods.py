@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 
 from learning import METHODS, RNHQL, STQL, config_from_fields
-from learning.registry import FAMILY_OF_CONFIG
+from learning.registry import FAMILY_OF_CONFIG, comparison_methods
 
 
 def test_registry_names():
-    assert list(METHODS) == ["st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "rnh-ql", "q-opt",
-                             "q-lambda", "dyna-q", "rnh-ql+", "rnh-ql+ablation"]
+    assert list(METHODS) == ["rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql",
+                             "q-opt", "q-lambda", "dyna-q", "rnh-ql+ablation"]
+    assert comparison_methods() == tuple(METHODS)[:-1]  # all but the ablation's method
     assert METHODS["rnh-ql"].name == "RNH-QL" and METHODS["st-ql"].name == "ST-QL"
     for cli, cls in METHODS.items():
         assert cls.cli == cli and cls in FAMILY_OF_CONFIG

@@ -125,3 +125,18 @@ def test_robots_never_touch_each_other():
 def test_bad_batch_size_is_an_error():
     with pytest.raises(ValueError, match="n_robots"):
         RouteBatch(resolve_scenario("paper-50"), 0)
+
+
+def test_a_reused_rollout_env_must_record_trajectories_when_a_path_is_wanted():
+    from sim.physics.rollouts import drive_policy, rollout_env
+
+    sc = resolve_scenario("paper-40")
+    fid = parse_fidelity("exact")
+    assert not RouteBatch(sc, 1).records_trajectories
+    assert RouteBatch(sc, 1, trajectories=True).records_trajectories
+    plain = rollout_env(sc, 2, fid)
+    assert not plain.batch.records_trajectories
+    policy = np.zeros(sc.nx * sc.ny, dtype=np.int64)
+    with pytest.raises(ValueError, match="trajectories"):
+        drive_policy(sc, policy, fid, 2, keep_path=True, env=plain)
+    assert rollout_env(sc, 2, fid, trajectories=True).batch.records_trajectories

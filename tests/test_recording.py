@@ -170,9 +170,8 @@ def test_metadata_names_versions_and_commit(synthetic, tmp_path):
     assert git_commit(tmp_path) is None  # outside a repository: no commit, no error
 
 
-def test_comparison_parts_gather_into_one_file(tmp_path, paper50, paper50_model):
-    rid = str(uuid.uuid4())
-    runs = [("rnh-ql", 0), ("st-ql", 0)]
+def _comparison_parts(tmp_path, paper50, paper50_model, runs, rid) -> list[Path]:
+    """A synthetic 20-episode part file per (method, seed) of a comparison ``rid``."""
     parts = []
     for method, seed in runs:
         part = tmp_path / f"{method}-s{seed}.rrd"
@@ -180,6 +179,13 @@ def test_comparison_parts_gather_into_one_file(tmp_path, paper50, paper50_model)
                          values_every=10, method=method, seed=seed,
                          prefix=run_prefix(method, seed), recording_id=rid, blueprint=False)
         parts.append(part)
+    return parts
+
+
+def test_comparison_parts_gather_into_one_file(tmp_path, paper50, paper50_model):
+    rid = str(uuid.uuid4())
+    runs = [("rnh-ql", 0), ("st-ql", 0)]
+    parts = _comparison_parts(tmp_path, paper50, paper50_model, runs, rid)
     out = gather_comparison(tmp_path / "compare.rrd", parts, paper50, runs, recording_id=rid)
     assert verify_recording(out)[0]
     for method, seed in runs:
@@ -351,15 +357,10 @@ def test_comparison_file_has_the_summary_before_the_runs(tmp_path, paper50, pape
 
     rid = str(uuid.uuid4())
     runs = [("rnh-ql", 0), ("st-ql", 0)]
-    parts, records = [], []
-    for method, seed in runs:
-        part = tmp_path / f"{method}-s{seed}.rrd"
-        record_synthetic(part, paper50, paper50_model, episodes=20, record_every=10,
-                         values_every=10, method=method, seed=seed,
-                         prefix=run_prefix(method, seed), recording_id=rid, blueprint=False)
-        parts.append(part)
-        records.append({"key": method, "steps_per_episode": [5] * 20,
-                        "return_per_episode": [1.0] * 20, "success_per_episode": [1] * 20})
+    parts = _comparison_parts(tmp_path, paper50, paper50_model, runs, rid)
+    records = [{"key": method, "steps_per_episode": [5] * 20,
+                "return_per_episode": [1.0] * 20, "success_per_episode": [1] * 20}
+               for method, _ in runs]
     curves = summary_curves(records, lambda r: r["key"])
     out = gather_comparison(tmp_path / "c.rrd", parts, paper50, runs, recording_id=rid,
                             curves=curves)

@@ -4,7 +4,7 @@
   1024 robots in one Space) on paper-50 and on a 512 x 512 arena at paper-50's obstacle
   density; random walks from random start cells, restarted every 200 primitives, the
   guard cache warmed first (a learning run fills it in its first episodes);
-* ``learning``: a learning run as ``compare --world physics`` runs it: the ten methods x
+* ``learning``: a learning run as ``compare --world physics`` runs it: the compared methods x
   ``seeds`` seeds, ``episodes`` episodes, all robots of one batch in this process (one
   core), with the time split between learners, the compiled world kernel, Chipmunk
   (casts and contact checks), episode bookkeeping and the rest of the loop.
@@ -31,8 +31,6 @@ from sim.scenario import Scenario
 from sim.scenario_io import resolve_scenario
 
 SIZES = (1, 4, 16, 64, 256, 1024)
-TEN_METHODS = ("rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt",
-               "q-lambda", "dyna-q")
 
 
 def arena_512() -> Scenario:
@@ -83,15 +81,18 @@ def scaling(seconds: float = 2.0, sizes: tuple[int, ...] = SIZES) -> dict[str, A
 
 
 def learning(episodes: int = 300, seeds: int = 10, scenario: str = "paper-50",
-             rewards: str = "goal-only", methods: tuple[str, ...] = TEN_METHODS,
+             rewards: str = "goal-only", methods: tuple[str, ...] | None = None,
              fidelity: str | None = None) -> dict:
-    """One batch of ``len(methods) x seeds`` runs, as a physics compare trains them."""
+    """One batch of ``len(methods) x seeds`` runs, as a physics compare trains them
+    (``methods``: by default those ``rnhql compare`` runs)."""
+    from learning.registry import comparison_methods
     from learning.streams import streams
     from scenarios.runs.physics import RunGroup, train_physics_runs
     from scenarios.runs.spec import load, make_config
     from sim.physics.fidelity import parse_fidelity
 
     sc, model = load(scenario, None, None, rewards)
+    methods = comparison_methods() if methods is None else methods
     groups = []
     for m in methods:
         rs = [streams(s) for s in range(seeds)]

@@ -15,6 +15,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
+from learning.registry import comparison_methods
 from scenarios.cli import (
     aliasing,
     bench,
@@ -92,7 +93,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("compare", help="methods x seeds (x worlds): results, summary, figures")
     add_scenario_args(p, learning=True)
-    p.add_argument("--methods", help="comma-separated (default: all ten)")
+    p.add_argument("--methods", help="comma-separated (default: "
+                   f"{','.join(comparison_methods())})")
     p.add_argument("--seeds", type=int, default=10, help="number of seeds (default 10)")
     p.add_argument("--seed-base", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--episodes", type=int, default=3000, help="training episodes per run")

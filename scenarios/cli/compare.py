@@ -30,18 +30,14 @@ from sim.errors import InputError
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    from scenarios.experiments.compare import (
-        ALL_METHODS,
-        SweepRecording,
-        make_specs,
-        run_sweep,
-    )
+    from learning.registry import comparison_methods
+    from scenarios.experiments.compare import SweepRecording, make_specs, run_sweep
 
     name, start, goal = scenario_key(args)
     # validate the scenario before any work
     sc, _ = load(name, start, goal, rewards_arg(args), s_starts_arg(args))
     methods = (unique(parse_list(args.methods, "--methods"), "--methods") if args.methods
-               else list(ALL_METHODS))
+               else list(comparison_methods()))
     worlds = [check_world(w) for w in unique(parse_list(args.world, "--world"), "--world")]
     overrides = parse_overrides(args.set)
     per_method = overrides_per_method(methods, overrides)

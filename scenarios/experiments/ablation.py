@@ -4,7 +4,10 @@ with dyna-q and q-lambda for reference, on every map of the suite (goal-only rew
 ``python -m scenarios.experiments.ablation --out results/ablation --seeds 10 --episodes 3000
 --jobs 2`` builds the suite (:mod:`scenarios.experiments.suite`) in ``OUT/suite`` and writes
 ``OUT/ablation.md`` (the table), ``OUT/ablation.json`` (per-run figures and the summary) and
-``OUT/runs.partial.jsonl`` (one line per finished run; a rerun skips the runs already there).
+``OUT/ablation.png``. It is a sweep of :func:`scenarios.experiments.compare.run_sweep` with
+files of its own: while it runs, ``OUT/runs.partial.jsonl`` holds a line per finished run;
+after Ctrl-C the same command with ``--resume`` runs only the rest (a finished ablation is
+not read back: its runs carry no keys).
 
 Cells: seeds whose final greedy route from S is optimal, then the median [q25, q75] over
 seeds of *episodes to stable optimal*: episodes trained at the first greedy test (every 10
@@ -17,14 +20,16 @@ import argparse
 import json
 import math
 import textwrap
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from scenarios.experiments.compare import SweepFiles, ctrl_c_held, run_sweep
 from scenarios.experiments.suite import build_suite
 from scenarios.figures.save import save_figure
+from scenarios.runs.spec import RunSpec
 
 # label, method, overrides: each row adds one ingredient to the row above it, down to
 # rnh-ql+; the rows after it take one ingredient away again, or are references. A row that
@@ -64,20 +69,26 @@ def stable_optimal(test_episodes: list[int], lengths: list[int], optimal: int) -
     return episodes_to_stable_optimal(np.asarray(test_episodes), np.asarray(lengths), optimal)
 
 
-def _run(job: tuple[str, str, str, str, tuple, int, int]) -> dict[str, Any]:
-    from scenarios.runs.run import run_one
-    from scenarios.runs.spec import RunSpec, load
+Row = tuple[str, str, tuple[tuple[str, float], ...]]  # label, method, overrides
 
-    map_name, path, label, method, overrides, seed, episodes = job
-    rec = run_one(RunSpec(path, method, seed, episodes, overrides=overrides))
-    opt = int(load(path)[1].optimal_route_length)
-    return dict(map=map_name, label=label, seed=seed, optimal=opt,
+
+def kept(rec: dict[str, Any]) -> dict[str, Any]:
+    """What the ablation keeps of a run's record (its table's figures, not the per-episode
+    arrays): ``stable_optimal`` is :func:`stable_optimal` of its greedy tests."""
+    return dict(key=rec["key"], seed=rec["seed"], optimal=int(rec["optimal_route_length"]),
                 final_route_optimal=bool(rec["final_route_optimal"]),
                 final_route_length=rec["final_route_length"],
                 first_optimal=rec["episodes_to_optimal"],
-                stable_optimal=stable_optimal(rec["test_episodes"], rec["test_route_length"],
-                                              opt),
+                stable_optimal=rec["episodes_to_stable_optimal"],
                 env_steps=rec["env_steps"], wall_time_s=rec["wall_time_s"])
+
+
+def ablation_specs(rows: Sequence[Row], maps: list[dict], seeds: int, episodes: int
+                   ) -> list[tuple[str, str, RunSpec]]:
+    """(label, map name, run) for every row x map x seed; two rows of the same method and
+    overrides share their runs."""
+    return [(lab, m["name"], RunSpec(m["file"], meth, s, episodes, overrides=tuple(ov)))
+            for lab, meth, ov in rows for m in maps for s in range(seeds)]
 
 
 def quartiles(xs: list[int | None]) -> tuple[float, float, float]:
@@ -206,6 +217,55 @@ def figure(summary: dict, maps: list[dict], labels: list[str], path: Path, title
     plt.close(fig)
 
 
+def ablation_files(rows: Sequence[Row], maps: list[dict], labelled: list[tuple[str, str, RunSpec]],
+                   rewards: str, seeds: int, episodes: int) -> SweepFiles:
+    """The ablation's files: ``ablation.md``, ``ablation.json``, ``ablation.png``."""
+    labels = [r[0] for r in rows]
+
+    def write(_specs: Sequence[RunSpec], records: list[dict[str, Any]], out: Path
+              ) -> dict[str, Any]:
+        from sim.files import atomic_write_text
+
+        by_key = {r["key"]: r for r in records}
+        runs = []
+        for lab, map_name, spec in labelled:
+            r = by_key[spec.key]
+            runs.append(dict(map=map_name, label=lab, seed=r["seed"], optimal=r["optimal"],
+                             final_route_optimal=r["final_route_optimal"],
+                             final_route_length=r["final_route_length"],
+                             first_optimal=r["first_optimal"],
+                             stable_optimal=r["stable_optimal"], env_steps=r["env_steps"],
+                             wall_time_s=r["wall_time_s"], episodes=episodes))
+        summary = summarise(runs, maps, labels)
+        md = (f"Rewards `{rewards}`, {seeds} seeds x {episodes} episodes. Cell: seeds whose "
+              "final greedy route is optimal · median [q25, q75] episodes to stable optimal "
+              "(`*`/held out: maps generated from seeds nobody tuned on).\n\n"
+              + table(summary, maps, labels) + "\n")
+        ours = next((lab for lab in labels if lab.endswith("(= rnh-ql+)")), None)
+        lines: list[str] = []
+        for ref in [lab for lab in labels if lab.startswith("dyna-q")] if ours else []:
+            got = verdict(summary, maps, ours, ref, 9)
+            lines += got if not lines else got[1:]
+        if lines:
+            md += ("\nTargets of the rnh-ql+ study, computed from the table:\n\n"
+                   + "\n".join(lines) + "\n")
+        md += ("\nCompact (optimal seeds · median episodes to stable optimal, — never):\n\n"
+               + compact_table(summary, maps, labels, 9) + "\n")
+        payload = dict(maps=maps, variants=[dict(label=lab, method=m, overrides=dict(ov))
+                                            for lab, m, ov in rows],
+                       summary=summary, runs=runs)
+        atomic_write_text(out / "ablation.md", md)
+        atomic_write_text(out / "ablation.json", json.dumps(payload, indent=1, default=str))
+        with ctrl_c_held():
+            figure(summary, maps, labels, out / "ablation.png",
+                   f"rnh-ql+ ablation, rewards {rewards}, {seeds} seeds x {episodes} episodes: "
+                   "optimal seeds (colour, top) and median episodes to stable optimal (bottom)")
+        print(md)
+        return payload
+
+    return SweepFiles(write, keep=kept, finished=lambda _out: {})
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
                                  formatter_class=argparse.ArgumentDefaultsHelpFormatter)
@@ -213,6 +273,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--episodes", type=int, default=3000)
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--resume", action="store_true",
+                    help="after Ctrl-C: run only the runs not finished yet")
     ap.add_argument("--maps", default="",
                     help="comma-separated suite names, or held-out (default: all)")
     ap.add_argument("--variants", default="", help="comma-separated labels or row numbers "
@@ -244,55 +306,13 @@ def main(argv: list[str] | None = None) -> int:
         method, _, sets = ex.partition(":")
         ov = tuple((k, float(v)) for k, v in (kv.split("=") for kv in sets.split(",") if kv))
         rows.append((f"{method}|{sets}" if sets else method, method, ov))
-    labels = [r[0] for r in rows]
-    partial = out / "runs.partial.jsonl"
-    done: dict[tuple, dict] = {}
-    if partial.exists():
-        for line in partial.read_text().splitlines():
-            r = json.loads(line)
-            done[(r["map"], r["label"], r["seed"], r.get("episodes", a.episodes))] = r
-    jobs = [(m["name"], m["file"], lab, meth, ov, s, a.episodes) for lab, meth, ov in rows
-            for m in maps
-            for s in range(a.seeds) if (m["name"], lab, s, a.episodes) not in done]
-    out.mkdir(parents=True, exist_ok=True)
-    with partial.open("a") as fh, ProcessPoolExecutor(max_workers=max(1, a.jobs)) as pool:
-        futs = [pool.submit(_run, j) for j in jobs]
-        for k, fut in enumerate(as_completed(futs)):
-            r = fut.result()
-            r["episodes"] = a.episodes
-            done[(r["map"], r["label"], r["seed"], a.episodes)] = r
-            fh.write(json.dumps(r) + "\n")
-            fh.flush()
-            if (k + 1) % 20 == 0:
-                print(f"{k + 1}/{len(jobs)} runs", flush=True)
-    runs = [r for (mp, lab, s, ep), r in done.items()
-            if ep == a.episodes and lab in labels and s < a.seeds
-            and mp in {m["name"] for m in maps}]
-    summary = summarise(runs, maps, labels)
-    from sim.files import atomic_write_text
+    from scenarios.runs.backends import Progress, run_local
 
-    md = (f"Rewards `{a.rewards}`, {a.seeds} seeds x {a.episodes} episodes. Cell: seeds whose "
-          "final greedy route is optimal · median [q25, q75] episodes to stable optimal "
-          "(`*`/held out: maps generated from seeds nobody tuned on).\n\n"
-          + table(summary, maps, labels) + "\n")
-    ours = next((lab for lab in labels if lab.endswith("(= rnh-ql+)")), None)
-    lines = []
-    for ref in [lab for lab in labels if lab.startswith("dyna-q")] if ours else []:
-        got = verdict(summary, maps, ours, ref, 9)
-        lines += got if not lines else got[1:]
-    if lines:
-        md += ("\nTargets of the rnh-ql+ study, computed from the table:\n\n"
-               + "\n".join(lines) + "\n")
-    md += ("\nCompact (optimal seeds · median episodes to stable optimal, — never):\n\n"
-           + compact_table(summary, maps, labels, 9) + "\n")
-    atomic_write_text(out / "ablation.md", md)
-    atomic_write_text(out / "ablation.json", json.dumps(dict(maps=maps, variants=[
-        dict(label=lab, method=m, overrides=dict(ov)) for lab, m, ov in rows],
-        summary=summary, runs=runs), indent=1, default=str))
-    figure(summary, maps, labels, out / "ablation.png",
-           f"rnh-ql+ ablation, rewards {a.rewards}, {a.seeds} seeds x {a.episodes} episodes: "
-           "optimal seeds (colour, top) and median episodes to stable optimal (bottom)")
-    print(md)
+    labelled = ablation_specs(rows, maps, a.seeds, a.episodes)
+    specs = list({spec.key: spec for _, _, spec in labelled}.values())
+    run_sweep(specs, out, run_local, resume=a.resume,
+              files=ablation_files(rows, maps, labelled, a.rewards, a.seeds, a.episodes),
+              jobs=max(1, a.jobs), progress=Progress(len(specs)))
     return 0
 
 

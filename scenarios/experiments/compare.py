@@ -2,9 +2,9 @@
 and a comparison recording.
 
 :func:`run_sweep` is the one owner of a sweep's outputs: it runs the specs, writes
-``results.json``, ``summary.md`` and the figures, and (given a
-:class:`SweepRecording`) merges the runs' recordings into one ``.rrd``; every
-experiment and the CLI make this one call.
+``results.json``, ``summary.md`` and the figures (or a study's own files, given its
+:class:`SweepFiles`), and (given a :class:`SweepRecording`) merges the runs'
+recordings into one ``.rrd``; every experiment and the CLI make this one call.
 
 Partial progress survives: every finished run is appended to
 ``DIR/runs.partial.jsonl`` as it arrives, and ``--resume --out DIR`` skips the runs
@@ -15,6 +15,7 @@ when the sweep is complete; after Ctrl-C the recording holds the runs finished s
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import os
 import signal
@@ -31,8 +32,6 @@ from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
 from scenarios.runs.spec import RecordOptions, RunSpec, load
 from scenarios.signals import sigint_handled_by
 
-ALL_METHODS = ("rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql", "q-opt",
-               "q-lambda", "dyna-q")
 PARTIAL = "runs.partial.jsonl"
 
 
@@ -236,11 +235,61 @@ def grading_protocol(fid: Any) -> dict[str, Any]:
             "final_rollouts": g.FINAL_ROLLOUTS, "p_goal_interval": "Wilson 95 %"}
 
 
-def read_partial(out_dir: Path) -> dict[str, dict[str, Any]]:
-    """Finished runs, by key: those of a finished sweep (its ``results.json``), then those
-    of an interrupted one (a torn last line is ignored). So ``--resume`` after a sweep that
-    finished re-runs nothing of it (an extended sweep runs only what is new)."""
-    path = out_dir / PARTIAL
+Writer = Callable[[Sequence[RunSpec], list[dict[str, Any]], Path], dict[str, Any]]
+Finished = Callable[[Path], dict[str, dict[str, Any]]]
+
+
+@dataclass(frozen=True)
+class SweepFiles:
+    """What a sweep writes once every run is finished, and what it holds of each run until
+    then. :func:`compare_files` is ``rnhql compare``'s; a study with files of its own (the
+    RNH-QL+ ablation) gives its own and keeps everything else of :func:`run_sweep`."""
+
+    # every run finished: write the sweep's files (atomically), return its results
+    write: Writer
+    # what of a finished run's record the sweep holds, in memory and in runs.partial.jsonl,
+    # "key" included; None: all of it
+    keep: Callable[[dict[str, Any]], dict[str, Any]] | None = None
+    # the runs of a finished sweep in the directory, by key (--resume re-runs none of
+    # them); None: those of its results.json
+    finished: Finished | None = None
+
+
+def compare_files(figures: bool = True) -> SweepFiles:
+    """``rnhql compare``'s files: ``results.json``, ``summary.md`` and (``figures``) the
+    figures."""
+    return SweepFiles(functools.partial(write_compare, figures=figures))
+
+
+def write_compare(specs: Sequence[RunSpec], runs: list[dict[str, Any]], out_dir: Path,
+                  figures: bool = True) -> dict[str, Any]:
+    from scenarios.figures.plots import all_figures
+
+    results = assemble(specs, runs)
+    write_results(out_dir, results, list(dict.fromkeys(s.method for s in specs)))
+    if figures:
+        sc, model = load(*specs[0].problem)
+        with ctrl_c_held():
+            all_figures(results, sc, model, out_dir)
+    return results
+
+
+@contextlib.contextmanager
+def ctrl_c_held() -> Iterator[None]:
+    """A Ctrl-C while the block draws figures acts at its end (seconds); a second one at
+    once. One while matplotlib builds its lazy parsers (pyparsing, on the first label) can
+    leave them half made and surface as an AttributeError."""
+    from scenarios.runs.physics import StopFlag
+
+    stop = StopFlag()
+    with sigint_handled_by(stop.request):
+        yield
+    if stop.requested:
+        raise KeyboardInterrupt
+
+
+def finished_compare(out_dir: Path) -> dict[str, dict[str, Any]]:
+    """The runs of a finished comparison in ``out_dir`` (its ``results.json``), by key."""
     done: dict[str, dict[str, Any]] = {}
     finished = out_dir / "results.json"
     if finished.exists():
@@ -249,6 +298,16 @@ def read_partial(out_dir: Path) -> dict[str, dict[str, Any]]:
                 done[rec["key"]] = rec
         except (json.JSONDecodeError, AttributeError, KeyError, TypeError):
             pass  # not a results file of this tool: only the partial runs count
+    return done
+
+
+def read_partial(out_dir: Path, finished: Finished | None = None) -> dict[str, dict[str, Any]]:
+    """Finished runs, by key: those of a finished sweep (``finished``; by default its
+    ``results.json``), then those of an interrupted one (a torn last line is ignored). So
+    ``--resume`` after a sweep that finished re-runs nothing of it (an extended sweep runs
+    only what is new)."""
+    path = out_dir / PARTIAL
+    done = (finished or finished_compare)(out_dir)
     if path.exists():
         for line in path.read_text(encoding="utf-8").splitlines():
             try:
@@ -262,10 +321,10 @@ def read_partial(out_dir: Path) -> dict[str, dict[str, Any]]:
 def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
               execute: Callable[..., list[dict[str, Any]]], resume: bool = False,
               figures: bool = True, recording: SweepRecording | None = None,
-              **execute_kwargs: Any) -> dict[str, Any]:
+              files: SweepFiles | None = None, **execute_kwargs: Any) -> dict[str, Any]:
     """Run the specs not finished yet with ``execute`` (a backend), then write everything:
     ``results.json``, ``summary.md``, the figures (``figures``) and the comparison
-    recording (``recording``).
+    recording (``recording``); or, given ``files``, what they write.
 
     On Ctrl-C the runs finished so far are in ``runs.partial.jsonl``, the recording
     holds them (its parts are kept for ``--resume``), a line on stderr says so, and the
@@ -273,20 +332,21 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     writes the same ``results.json`` as an uninterrupted sweep.
     """
     check_out_dir(out_dir)
+    files = files or compare_files(figures)
     if recording is not None:
         specs = with_recording(specs, recording)
     with sweep_lock(out_dir):
         try:
-            results = _run_sweep(specs, out_dir, execute, resume, figures, **execute_kwargs)
+            results = _run_sweep(specs, out_dir, execute, resume, files, **execute_kwargs)
         except KeyboardInterrupt:
-            _keep_finished(specs, out_dir, recording)
+            _keep_finished(specs, out_dir, recording, files.finished)
             raise
         except ImportError as err:
             if not interrupted(err):
                 raise
             # Ctrl-C inside a C extension's import (matplotlib's, while the figures are
             # drawn) surfaces as "ImportError: initialization failed": it is the same Ctrl-C
-            _keep_finished(specs, out_dir, recording)
+            _keep_finished(specs, out_dir, recording, files.finished)
             raise KeyboardInterrupt from err
         if recording is not None:
             with _finishing(recording.path):  # every run is done: the recording holds them all
@@ -331,19 +391,19 @@ def _finishing(record: str) -> Iterator[None]:
 
 
 def _keep_finished(specs: Sequence[RunSpec], out_dir: Path,
-                   recording: SweepRecording | None) -> None:
+                   recording: SweepRecording | None, finished: Finished | None) -> None:
     """After Ctrl-C: say what was kept, and write the recording of the runs done so far.
     A second Ctrl-C while this runs exits at once (status 130)."""
     main = threading.current_thread() is threading.main_thread()
     old = signal.signal(signal.SIGINT, lambda *_: os._exit(130)) if main else None
     try:
-        done = read_partial(out_dir)
-        finished = [s for s in specs if s.key in done]
-        print(f"\ninterrupted: {len(finished)} of {len(specs)} runs finished, kept in "
+        done = read_partial(out_dir, finished)
+        over = [s for s in specs if s.key in done]
+        print(f"\ninterrupted: {len(over)} of {len(specs)} runs finished, kept in "
               f"{out_dir / PARTIAL}; finish with the same command and --resume",
               file=sys.stderr)
-        if recording is not None and finished:
-            gather_parts(finished, recording.path, keep_parts=True,
+        if recording is not None and over:
+            gather_parts(over, recording.path, keep_parts=True,
                          records=list(done.values()))
             print(f"recording of the finished runs: {recording.path}", file=sys.stderr)
     finally:
@@ -352,11 +412,9 @@ def _keep_finished(specs: Sequence[RunSpec], out_dir: Path,
 
 
 def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
-               execute: Callable[..., list[dict[str, Any]]], resume: bool, figures: bool,
+               execute: Callable[..., list[dict[str, Any]]], resume: bool, files: SweepFiles,
                **execute_kwargs: Any) -> dict[str, Any]:
-    from scenarios.figures.plots import all_figures
-
-    done = read_partial(out_dir) if resume else {}
+    done = read_partial(out_dir, files.finished) if resume else {}
     keys = {s.key for s in specs}
     foreign = [k for k in done if k not in keys]
     if foreign:
@@ -380,23 +438,11 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
                     partial.truncate(at)
                 raise
 
-        new = execute(todo, on_result=save, **execute_kwargs) if todo else []
+        keep = {} if files.keep is None else {"keep": files.keep}
+        new = execute(todo, on_result=save, **keep, **execute_kwargs) if todo else []
     progress = execute_kwargs.get("progress")
     if progress is not None:  # nothing left to run: its heartbeat must not outlive the sweep
         progress.close()
-    results = assemble(specs, [*done.values(), *new])
-    write_results(out_dir, results, list(dict.fromkeys(s.method for s in specs)))
-    if figures:
-        sc, model = load(*specs[0].problem)
-        # a Ctrl-C while matplotlib builds its lazy parsers (pyparsing, on the first label)
-        # can leave them half made and surface as an AttributeError: hold it to the end of
-        # the figures (seconds), then act on it; a second Ctrl-C acts at once
-        from scenarios.runs.physics import StopFlag
-
-        stop = StopFlag()
-        with sigint_handled_by(stop.request):
-            all_figures(results, sc, model, out_dir)
-        if stop.requested:
-            raise KeyboardInterrupt
+    results = files.write(specs, [*done.values(), *new], out_dir)
     (out_dir / PARTIAL).unlink(missing_ok=True)
     return results

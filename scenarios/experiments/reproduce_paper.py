@@ -21,7 +21,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from scenarios.experiments.compare import ALL_METHODS, make_specs, run_sweep
+from learning.registry import comparison_methods
+from scenarios.experiments.compare import make_specs, run_sweep
 from scenarios.runs.backends import Progress, run_local, run_ray
 from sim.files import atomic_write_text
 
@@ -196,7 +197,7 @@ def main(argv: list[str] | None = None) -> int:
         return run_sweep(specs, out / sub, execute, resume=args.resume,
                          progress=Progress(len(specs)), **kw)
 
-    compare = {s: sweep(f"compare-{s}", s, ALL_METHODS) for s in ("paper-40", "paper-50")}
+    compare = {s: sweep(f"compare-{s}", s, comparison_methods()) for s in ("paper-40", "paper-50")}
     alpha = {a: sweep(f"alpha-{a:g}", "paper-50", SWEEP_METHODS, (("alpha", a),))
              for a in ALPHAS}
     eps = {e: sweep(f"eps-{e:g}", "paper-50", SWEEP_METHODS, (("eps", e),)) for e in EPSILONS}

@@ -22,7 +22,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from scenarios.experiments.compare import ALL_METHODS, make_specs, run_sweep
+from learning.registry import comparison_methods
+from scenarios.experiments.compare import make_specs, run_sweep
 from scenarios.experiments.reward_facts import RewardFacts, facts_markdown, reward_facts
 from scenarios.runs.backends import Progress, run_local
 from scenarios.runs.spec import load
@@ -91,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--out", default="results/reward-design")
     p.add_argument("--scenario", default="paper-50")
-    p.add_argument("--methods", default=",".join(ALL_METHODS))
+    p.add_argument("--methods", default=",".join(comparison_methods()))
     p.add_argument("--seeds", type=int, default=10)
     p.add_argument("--episodes", type=int, default=3000)
     p.add_argument("--jobs", type=int, default=None)

@@ -1,7 +1,9 @@
 """Where the runs of a sweep execute: a local process pool, or a Ray cluster.
 
 A backend takes specs and returns their records in spec order; ``on_result``
-sees each record as soon as it finishes so the caller can persist it. Specs are
+sees each record as soon as it finishes so the caller can persist it; ``keep``
+(optional) cuts each record down to what the caller holds (a long study keeps a few
+figures of each run, not its per-episode arrays). Specs are
 planned into tasks first (:func:`scenarios.runs.physics_batch.plan_tasks`): a grid
 run is a task of its own, physics runs of one problem and budget are the robots of
 one batch (a task that returns several records at once). A run
@@ -26,6 +28,7 @@ from scenarios.runs.spec import RunSpec
 from sim.errors import InputError
 
 OnResult = Callable[[dict[str, Any]], None] | None
+Keep = Callable[[dict[str, Any]], dict[str, Any]] | None
 
 
 class SweepError(RuntimeError):
@@ -111,12 +114,15 @@ class Progress:
 
 class _Collector:
     def __init__(self, specs: Sequence[RunSpec], on_result: OnResult,
-                 progress: Progress | None) -> None:
+                 progress: Progress | None, keep: Keep = None) -> None:
         self.specs, self.on_result, self.progress = specs, on_result, progress
+        self.keep = keep
         self.records: list[dict[str, Any] | None] = [None] * len(specs)
         self.failures: list[tuple[RunSpec, str]] = []
 
     def ok(self, i: int, rec: dict[str, Any]) -> None:
+        if self.keep is not None:
+            rec = self.keep(rec)
         self.records[i] = rec
         if self.on_result is not None:
             self.on_result(rec)
@@ -172,14 +178,14 @@ def _end_workers(pool: ProcessPoolExecutor) -> None:
 
 
 def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = None,
-              progress: Progress | None = None) -> list[dict[str, Any]]:
+              progress: Progress | None = None, keep: Keep = None) -> list[dict[str, Any]]:
     """Run specs in ``jobs`` worker processes (in this process when ``jobs == 1``).
 
     Ctrl-C (``KeyboardInterrupt`` in this process) ends the workers at once and
     propagates; every run finished before it has already gone to ``on_result``.
     """
     try:
-        return _run_local(specs, jobs, _Collector(specs, on_result, progress))
+        return _run_local(specs, jobs, _Collector(specs, on_result, progress, keep))
     finally:
         if progress is not None:
             progress.close()
@@ -219,7 +225,8 @@ def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector) -> list[dic
 
 
 def run_ray(specs: Sequence[RunSpec], address: str | None = None, num_cpus: int | None = None,
-            on_result: OnResult = None, progress: Progress | None = None) -> list[dict[str, Any]]:
+            on_result: OnResult = None, progress: Progress | None = None,
+            keep: Keep = None) -> list[dict[str, Any]]:
     """Run each task (a run, or a physics batch) as a Ray task (one CPU each) on a cluster
     or a local runtime.
 
@@ -240,7 +247,7 @@ def run_ray(specs: Sequence[RunSpec], address: str | None = None, num_cpus: int 
         remote = ray.remote(num_cpus=1, max_retries=1)(run_task)
         tasks = plan_tasks(specs, num_cpus or 1)
         refs = {remote.remote([specs[i] for i in task]): task for task in tasks}
-        col = _Collector(specs, on_result, progress)
+        col = _Collector(specs, on_result, progress, keep)
         pending = list(refs)
         try:
             while pending:

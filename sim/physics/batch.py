@@ -173,6 +173,12 @@ class RouteBatch:
     def time_s(self, i: int) -> float:
         return self.steps(i) * self.config.dt_s
 
+    @property
+    def records_trajectories(self) -> bool:
+        """Whether each primitive's poses are kept for :meth:`trajectory` (built with
+        ``trajectories=True``)."""
+        return bool(self._traj.shape[1])
+
     def trajectory(self, i: int) -> np.ndarray:
         """float64[n, 3]: robot ``i``'s pose before its last primitive, then after each step."""
         n = int(self.r.ntraj[i])
@@ -201,7 +207,7 @@ class RouteBatch:
         act = self._all if active is None else np.asarray(active, dtype=np.bool_)
         acts = np.asarray(actions, dtype=np.int64)
         rb, r = self.robots, self.r
-        if self._traj.shape[1]:
+        if self.records_trajectories:
             self._traj_start[:] = self.poses()
         K.begin_all(rb, acts, act, self.cell_m, self.nx, self.ny)
         clock = time.perf_counter

@@ -123,7 +123,8 @@ def drive_policy(sc: Scenario, policy: np.ndarray | Callable[[np.ndarray], np.nd
     limit = int(max_steps or sc.steps_per_episode)
     if env is None:
         env = rollout_env(sc, n, fidelity, config, trajectories=measure_metres or keep_path)
-    elif env.num_envs != n or ((measure_metres or keep_path) and not env.batch._traj.shape[1]):
+    elif env.num_envs != n or ((measure_metres or keep_path)
+                               and not env.batch.records_trajectories):
         raise ValueError("the env to reuse must have n sub-envs (and trajectories if "
                          "metres or the path are wanted)")
     env.max_episode_steps = limit

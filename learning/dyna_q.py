@@ -2,7 +2,10 @@
 
 After each real step, ``n_planning`` Q updates on pairs drawn uniformly from the
 pairs seen (Sutton & Barto 8.2), each replaying an outcome drawn from the move
-model (:mod:`learning.move_model`; a move "works" when it moved at all).
+model (:mod:`learning.move_model`; a move "works" when it moved at all without a bump,
+read from its reward by :mod:`learning.move_reading`: with carried pose a move that grazed
+an obstacle on its way into a cell is paid the bump, and storing that as the move's
+outcome replayed a free corridor move as a penalty until it was next tried).
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from learning.move_model import (
     pair_of,
     replay_draws_failure,
 )
+from learning.move_reading import MoveReading, new_move_reading, read_move
 from learning.tabular import begin_plain, draw_below, eps_greedy, exploit_q, q_learning
 from learning.tally import Tally, new_tally
 
@@ -54,11 +58,18 @@ class State(NamedTuple):
     tally: Tally
     q: np.ndarray  # float64[nS, nA]
     model: MoveModel
+    reading: MoveReading  # the rewards of a stay and of a clean arrival (bumps from rewards)
+
+
+# Added after checkpoints were written: a file without them loads the fresh values (no reward
+# seen yet), relearnt at the next stay and clean arrival (see learning.checkpoint).
+ADDED = ("reading.r_stay", "reading.r_clean")
 
 
 def init_state(cfg: DynaQ, geom: Geometry, rng: np.random.Generator) -> State:
     n_s, n_a = geom.n_states, geom.n_actions
-    return State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), new_move_model(n_s, n_a))
+    return State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), new_move_model(n_s, n_a),
+                 new_move_reading())
 
 
 @njit(**HOOK)
@@ -81,12 +92,15 @@ def update(st, s, a, r, s2, terminated, rng):
     seen = st.model.seen
     n_seen = st.model.n_seen
     r_fail = st.model.r_fail
+    r_stay = st.reading.r_stay
+    r_clean = st.reading.r_clean
     alpha = p.alpha
     gamma = p.gamma
     q_learning(q, s, a, r, s2, terminated, alpha, gamma, 0.0)
     note_pair(succ, seen, n_seen, s, a)
+    clean = read_move(r_stay, r_clean, s, r, s2, terminated)
     observe_outcome(succ, to_goal, reward, works, fails, r_fail, s, a, r, s2, terminated,
-                    s2 != s or terminated)
+                    clean)
     n = n_seen[0]
     n_a = q.shape[1]
     for _ in range(p.n_planning):

@@ -72,3 +72,22 @@ def test_a_grazing_arrival_is_a_failure_in_the_move_model_and_off_the_known_rout
     update(st, 0, a, -1.0, s2, False, rng)  # a grazing arrival
     assert (st.model.works[0, a], st.model.fails[0, a]) == (1, 2)
     assert st.opt.r_free[0] == 0.0
+
+
+def test_dyna_q_stores_a_grazing_arrival_as_a_failure_not_as_the_moves_reward():
+    """Dyna-Q's model: the move's success outcome keeps the free reward; a grazing arrival
+    (paid the bump) is counted among the failures it replays with their frequency."""
+    from learning.dyna_q import DynaQ, init_state, update
+    from learning.geometry import Geometry
+
+    ix, iy = np.meshgrid(np.arange(3), np.arange(3))
+    coords = (np.column_stack([ix.ravel(), iy.ravel()]) + 0.5).astype(np.float64)
+    geom = Geometry(coords=coords, goal=8, bounds_m=(0.0, 0.0, 3.0, 3.0), n_states=9,
+                    n_actions=4)
+    st = init_state(DynaQ(n_planning=0), geom, np.random.default_rng(0))
+    rng = np.random.default_rng(0)
+    update(st, 0, 0, -1.0, 0, False, rng)  # a bump
+    update(st, 0, 1, 0.0, 1, False, rng)  # a free arrival
+    update(st, 0, 1, -1.0, 1, False, rng)  # a grazing arrival
+    assert (st.model.works[0, 1], st.model.fails[0, 1]) == (1, 1)
+    assert st.model.reward[0, 1] == 0.0

@@ -93,6 +93,34 @@ def memory(d: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+@renderer("ablation")
+def ablation(d: dict[str, Any]) -> str:
+    """The ablation on the suite: optimal seeds · median episodes to a stable optimal route
+    (— never) per variant and map, and how many maps reach ``min_seeds`` optimal seeds."""
+    maps, k = d["maps"], d["min_seeds"]
+    lines = [f"Rewards `{d['rewards']}`, {d['seeds']} seeds × {d['episodes']} episodes; `*` = "
+             "maps generated from seeds nobody tuned on; cells: optimal seeds · median "
+             "episodes to a stable optimal route (— never).", "",
+             "| variant | " + " | ".join(m["name"] + ("*" if m["held_out"] else "")
+                                       for m in maps) + f" | maps ≥ {k} |",
+             "|---|" + "---|" * (len(maps) + 1)]
+    for lab in d["labels"]:
+        row = d["summary"].get(lab, {})
+        cells, good, have = [], 0, 0
+        for m in maps:
+            c = row.get(m["name"])
+            if c is None:
+                cells.append("")
+                continue
+            have += 1
+            good += c["optimal_seeds"] >= k
+            med = c["median"]
+            cells.append(f"{c['optimal_seeds']} · "
+                         + ("—" if med is None or not math.isfinite(med) else f"{med:.0f}"))
+        lines.append(f"| {lab} | " + " | ".join(cells) + f" | {good}/{have} |")
+    return "\n".join(lines) + "\n"
+
+
 @renderer("ladder")
 def ladder_table(d: dict[str, Any]) -> str:
     """The fidelity ladder: each method trained in the grid (then driven at the rung) and

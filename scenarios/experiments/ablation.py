@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import textwrap
 from collections.abc import Sequence
 from pathlib import Path
@@ -285,6 +286,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rewards", default="goal-only", help="reward scheme of the suite")
     ap.add_argument("--held-out-seeds", default="101,102",
                     help="generator seeds of the held-out maze and rooms maps (e.g. 101,...,110)")
+    ap.add_argument("--artifact", default=None, metavar="NAME",
+                    help="also write docs/results/ablation.NAME.json (the README's table) and "
+                         "redraw docs/ablation.png from it")
     a = ap.parse_args(argv)
     out = Path(a.out)
     try:
@@ -310,10 +314,33 @@ def main(argv: list[str] | None = None) -> int:
 
     labelled = ablation_specs(rows, maps, a.seeds, a.episodes)
     specs = list({spec.key: spec for _, _, spec in labelled}.values())
-    run_sweep(specs, out, run_local, resume=a.resume,
-              files=ablation_files(rows, maps, labelled, a.rewards, a.seeds, a.episodes),
-              jobs=max(1, a.jobs), progress=Progress(len(specs)))
+    payload = run_sweep(specs, out, run_local, resume=a.resume,
+                        files=ablation_files(rows, maps, labelled, a.rewards, a.seeds,
+                                             a.episodes),
+                        jobs=max(1, a.jobs), progress=Progress(len(specs)))
+    if a.artifact:
+        write_ablation_artifact(a, [r[0] for r in rows], maps, payload["summary"],
+                                sys.argv[1:] if argv is None else argv)
     return 0
+
+
+def write_ablation_artifact(a: argparse.Namespace, labels: list[str], maps: list[dict],
+                            summary: dict, argv: Sequence[str]) -> None:
+    """``docs/results/ablation.NAME.json`` (what the README's table shows) and
+    ``docs/ablation.png`` drawn from it."""
+    from scenarios.artifacts import ROOT, write_artifact
+
+    data = {"rewards": a.rewards, "seeds": a.seeds, "episodes": a.episodes, "min_seeds": 9,
+            "maps": [{"name": m["name"], "held_out": m["held_out"]} for m in maps],
+            "labels": labels, "summary": summary}
+    write_artifact(f"ablation.{a.artifact}",
+                   "python -m scenarios.experiments.ablation " + " ".join(argv),
+                   ["grid"], data)
+    with ctrl_c_held():
+        figure(summary, maps, labels, ROOT / "docs" / "ablation.png",
+               f"rnh-ql+ ablation, rewards {a.rewards}, {a.seeds} seeds x {a.episodes} "
+               "episodes: optimal seeds (colour, top) and median episodes to stable optimal "
+               "(bottom)")
 
 
 if __name__ == "__main__":

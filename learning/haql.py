@@ -39,6 +39,7 @@ from learning.tally import Tally, begin_tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
 COUNT_CAP = 1 << 30  # bumps minus arrivals saturate here (int32)
+BUMP_COST_CAP = 1 << 20  # a move's excess bumps in a route's cost (int64 sums stay finite)
 # Added after checkpoints were written: a file without them loads the fresh values (no reward
 # seen yet), relearnt at the next stay and clean arrival (see learning.checkpoint).
 ADDED = ("reading.r_stay", "reading.r_clean")
@@ -113,36 +114,147 @@ def init_state(cfg: HAQL, geom: Geometry, rng: np.random.Generator) -> State:
                np.zeros((n_s, n_a), np.int32), new_free_space(geom), new_move_reading())
     if cfg.explored:
         fs = st.free
-        rederive(st.pi_h, fs.neighbour, fs.blocked, fs.distance, fs.queue, int(fs.goal[0]))
+        rederive(st.pi_h, fs.neighbour, fs.blocked, st.balance, fs.distance, fs.queue,
+                 int(fs.goal[0]))
     else:
         st.pi_h[:] = heuristic_actions(geom)
     return st
 
 
 @njit(cache=True)
-def rederive(pi_h, nb, blocked, dist, queue, goal):
+def rederive(pi_h, nb, blocked, bal, dist, queue, goal):
     """pi_H for every state: the unblocked move to the neighbour nearest G (lowest index on
-    ties; move 0 where no neighbour has a route), after one BFS from G. Takes the free
-    space's arrays (hooks read a named tuple's fields once, at their top; see
-    :mod:`learning.rnh_ql_plus.rules`)."""
+    ties), after one BFS from G.
+
+    Where no route of unblocked moves is left, the first move of the route that crosses the
+    least excess of bumps over arrivals (``bal`` summed over its blocked moves), then the
+    fewest moves (:func:`least_bumped_costs`). A noisy world can block a corridor move whose
+    bumps outnumber its arrivals after a few tries, and a maze has no other way: the
+    heuristic then still points along the route most likely to be open, as the optimal
+    policy of a stochastic world must, instead of at move 0. In a deterministic world a
+    state without a route of unblocked moves is walled off from G, so this changes nothing
+    a run can reach. Takes the free space's arrays (hooks read a named tuple's fields once,
+    at their top; see :mod:`learning.rnh_ql_plus.rules`)."""
     bfs_distances(nb, blocked, dist, queue, goal)
+    cut = False
     for s in range(pi_h.shape[0]):
-        best, best_d = 0, -1
-        for a in range(nb.shape[1]):
-            t = nb[s, a]
-            if t < 0 or blocked[s, a] or dist[t] < 0:
+        if dist[s] >= 0:
+            pi_h[s] = nearest_move(nb, blocked, dist, s)
+        else:
+            cut = True
+    if not cut:
+        return
+    cost = least_bumped_costs(nb, bal, goal)
+    for s in range(pi_h.shape[0]):
+        if dist[s] < 0:
+            best, best_c = 0, np.int64(-1)
+            for a in range(nb.shape[1]):
+                t = nb[s, a]
+                if t < 0 or cost[t] < 0:
+                    continue
+                c = cost[t] + step_cost(bal, s, a, cost.shape[0])
+                if best_c < 0 or c < best_c:
+                    best, best_c = a, c
+            pi_h[s] = best
+
+
+@njit(cache=True, inline="always")
+def step_cost(bal, s, a, n_s):
+    """A move's cost in :func:`least_bumped_costs`: its excess of bumps over arrivals, in
+    units worth more than any route's length, plus one move."""
+    return np.int64(min(max(bal[s, a], 0), BUMP_COST_CAP)) * np.int64(n_s + 1) + 1
+
+
+@njit(cache=True)
+def least_bumped_costs(nb, bal, goal):
+    """cost[s]: the least (excess bumps x (nS + 1) + moves) of a route from s to G over
+    every arena move (-1: none); Dijkstra from G over the moves reversed, with a binary
+    heap that may hold a state more than once (stale entries are skipped). Allocates its
+    arrays: it runs only when a route was cut, not on a step."""
+    n_s, n_a = nb.shape
+    cost = np.full(n_s, -1, np.int64)
+    into_start = np.zeros(n_s + 1, np.int64)  # the moves into each state, grouped by state
+    for u in range(n_s):
+        for a in range(n_a):
+            v = nb[u, a]
+            if v >= 0:
+                into_start[v + 1] += 1
+    for v in range(n_s):
+        into_start[v + 1] += into_start[v]
+    into = np.empty(into_start[n_s], np.int64)
+    fill = into_start[:-1].copy()
+    for u in range(n_s):
+        for a in range(n_a):
+            v = nb[u, a]
+            if v >= 0:
+                into[fill[v]] = u * n_a + a
+                fill[v] += 1
+    keys = np.empty(into.shape[0] + 1, np.int64)
+    vals = np.empty(into.shape[0] + 1, np.int64)
+    cost[goal] = 0
+    keys[0], vals[0] = 0, goal
+    size = 1
+    done = np.zeros(n_s, np.bool_)
+    while size > 0:
+        c, v = keys[0], vals[0]
+        size -= 1
+        keys[0], vals[0] = keys[size], vals[size]
+        i = 0
+        while True:  # sift down
+            left, right, m = 2 * i + 1, 2 * i + 2, i
+            if left < size and keys[left] < keys[m]:
+                m = left
+            if right < size and keys[right] < keys[m]:
+                m = right
+            if m == i:
+                break
+            keys[i], keys[m] = keys[m], keys[i]
+            vals[i], vals[m] = vals[m], vals[i]
+            i = m
+        if done[v]:
+            continue
+        done[v] = True
+        for k in range(into_start[v], into_start[v + 1]):
+            u, a = into[k] // n_a, into[k] % n_a
+            if done[u]:
                 continue
-            if best_d < 0 or dist[t] < best_d:
-                best, best_d = a, dist[t]
-        pi_h[s] = best
+            cu = c + step_cost(bal, u, a, n_s)
+            if cost[u] < 0 or cu < cost[u]:
+                cost[u] = cu
+                j = size
+                keys[j], vals[j] = cu, u
+                size += 1
+                while j > 0:  # sift up
+                    p = (j - 1) // 2
+                    if keys[p] <= keys[j]:
+                        break
+                    keys[p], keys[j] = keys[j], keys[p]
+                    vals[p], vals[j] = vals[j], vals[p]
+                    j = p
+    return cost
+
+
+@njit(cache=True, inline="always")
+def nearest_move(nb, walls, dist, s):
+    """The move from s not in ``walls`` to the neighbour with the least ``dist`` (lowest
+    index on ties; 0 when no neighbour has a route)."""
+    best, best_d = 0, -1
+    for a in range(nb.shape[1]):
+        t = nb[s, a]
+        if t < 0 or walls[s, a] or dist[t] < 0:
+            continue
+        if best_d < 0 or dist[t] < best_d:
+            best, best_d = a, dist[t]
+    return best
 
 
 @njit(cache=True, inline="always")
 def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, clean):
     """After a move: a bump (stayed in s, or arrived paid the bump's reward: ``clean`` is
     False) counts up, a move that reached its neighbour cleanly down; when the sign flips
-    (the move's most likely outcome changed), re-derive pi_H. (A move that drifted into
-    another cell without a bump tells nothing about this one.)"""
+    (the move's most likely outcome changed), re-derive pi_H; and where s has no route of
+    unblocked moves, whenever pi_H's own move bumps (:func:`rederive`). (A move that
+    drifted into another cell without a bump tells nothing about this one.)"""
     if s2 == nb[s, a] and clean:
         if bal[s, a] > -COUNT_CAP:  # int32: a long run must not wrap round
             bal[s, a] -= 1
@@ -154,7 +266,11 @@ def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, cle
     now = bal[s, a] > 0
     if now != blocked[s, a]:
         blocked[s, a] = now
-        rederive(pi_h, nb, blocked, dist, queue, goal)
+        rederive(pi_h, nb, blocked, bal, dist, queue, goal)
+    elif now and dist[s] < 0 and pi_h[s] == a:
+        # cut off, and the least-bumped route's first move bumped again: its cost rose, so
+        # the heuristic may now point another way (else it pushes one wall for ever)
+        rederive(pi_h, nb, blocked, bal, dist, queue, goal)
 
 
 @njit(cache=True)

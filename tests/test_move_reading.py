@@ -91,3 +91,24 @@ def test_dyna_q_stores_a_grazing_arrival_as_a_failure_not_as_the_moves_reward():
     update(st, 0, 1, -1.0, 1, False, rng)  # a grazing arrival
     assert (st.model.works[0, 1], st.model.fails[0, 1]) == (1, 1)
     assert st.model.reward[0, 1] == 0.0
+
+
+def test_haql_points_along_the_least_bumped_route_when_bumps_cut_every_route():
+    """A 1 x 4 corridor 0-1-2-3 with G = 3: the move 1 -> 2 bumped more often than it
+    arrived (blocked), so no route of unblocked moves is left from 0 and 1. The heuristic
+    still points right, along the only route, instead of at move 0 (up, off the arena)."""
+    from learning.haql import rederive
+
+    nb = np.full((4, 4), -1, np.int32)
+    for s in range(4):
+        nb[s, 2] = s - 1 if s > 0 else -1
+        nb[s, 3] = s + 1 if s < 3 else -1
+    blocked = np.zeros((4, 4), np.bool_)
+    bal = np.zeros((4, 4), np.int32)
+    blocked[1, 3], bal[1, 3] = True, 2
+    bal[0, 3] = bal[2, 3] = -3
+    pi_h = np.zeros(4, np.int32)
+    dist = np.zeros(4, np.int32)
+    rederive(pi_h, nb, blocked, bal, dist, np.zeros(4, np.int32), 3)
+    assert dist.tolist() == [-1, -1, 1, 0]
+    assert pi_h[:3].tolist() == [3, 3, 3]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 # Sweeps above exact build V* (the stochastic model of the physics world, tens of seconds
@@ -26,3 +27,23 @@ def paper50():
 @pytest.fixture(scope="session")
 def paper50_model(paper50):
     return build_model(paper50)
+
+
+def corridor_moves(n: int) -> np.ndarray:
+    """int32[n, 4]: the moves of a 1 x n corridor 0-1-...-(n-1) (0 up, 1 down, 2 left,
+    3 right; -1 off the arena), as a learner's free space holds them."""
+    nb = np.full((n, 4), -1, np.int32)
+    for s in range(n):
+        nb[s, 2] = s - 1 if s > 0 else -1
+        nb[s, 3] = s + 1 if s < n - 1 else -1
+    return nb
+
+
+def open_geometry_3x3():
+    """A learner's geometry of a 3 x 3 open arena, G in the far corner (8)."""
+    from learning.geometry import Geometry
+
+    ix, iy = np.meshgrid(np.arange(3), np.arange(3))
+    coords = (np.column_stack([ix.ravel(), iy.ravel()]) + 0.5).astype(np.float64)
+    return Geometry(coords=coords, goal=8, bounds_m=(0.0, 0.0, 3.0, 3.0), n_states=9,
+                    n_actions=4)

@@ -8,6 +8,7 @@ import pytest
 
 from learning import METHODS, RNHQLPlus, RNHQLPlusAblation, geometry_of, train_tabular
 from learning.rnh_ql_plus_ablation.features import sparse_features
+from tests.conftest import corridor_moves
 
 
 def test_sparse_features_match_dense_within_cutoff(paper50_model):
@@ -184,10 +185,7 @@ def test_known_routes_are_bfs_over_moves_seen_to_work():
     from learning.known_routes import known_distances, known_move, new_known_routes
 
     # a 1 x 4 corridor 0-1-2-3, G = 3; actions: 0 up, 1 down, 2 left, 3 right
-    nb = np.full((4, 4), -1, np.int32)
-    for s in range(4):
-        nb[s, 2] = s - 1 if s > 0 else -1
-        nb[s, 3] = s + 1 if s < 3 else -1
+    nb = corridor_moves(4)
     works = np.zeros((4, 4), np.int32)
     fails = np.zeros((4, 4), np.int32)
     kr = new_known_routes(4)

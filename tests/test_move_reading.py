@@ -7,6 +7,7 @@ import pytest
 
 from learning.move_reading import UNSEEN, new_move_reading, read_move
 from sim.scenario import REWARD_SCHEMES
+from tests.conftest import corridor_moves, open_geometry_3x3
 
 
 def steps(reading, moves):
@@ -55,13 +56,9 @@ def test_a_stay_paid_like_a_free_move_does_not_become_the_bump_reward():
 def test_a_grazing_arrival_is_a_failure_in_the_move_model_and_off_the_known_routes():
     """RNH-QL+'s real step: an arrival paid the bump counts as a failure of the move (the
     model's and the known route's), and does not move the free-move reward."""
-    from learning.geometry import Geometry
     from learning.rnh_ql_plus import RNHQLPlus, init_state, update
 
-    ix, iy = np.meshgrid(np.arange(3), np.arange(3))
-    coords = (np.column_stack([ix.ravel(), iy.ravel()]) + 0.5).astype(np.float64)
-    geom = Geometry(coords=coords, goal=8, bounds_m=(0.0, 0.0, 3.0, 3.0), n_states=9,
-                    n_actions=4)
+    geom = open_geometry_3x3()
     st = init_state(RNHQLPlus(n_planning=0), geom, np.random.default_rng(0))
     rng = np.random.default_rng(0)
     nb = st.free.neighbour
@@ -78,12 +75,8 @@ def test_dyna_q_stores_a_grazing_arrival_as_a_failure_not_as_the_moves_reward():
     """Dyna-Q's model: the move's success outcome keeps the free reward; a grazing arrival
     (paid the bump) is counted among the failures it replays with their frequency."""
     from learning.dyna_q import DynaQ, init_state, update
-    from learning.geometry import Geometry
 
-    ix, iy = np.meshgrid(np.arange(3), np.arange(3))
-    coords = (np.column_stack([ix.ravel(), iy.ravel()]) + 0.5).astype(np.float64)
-    geom = Geometry(coords=coords, goal=8, bounds_m=(0.0, 0.0, 3.0, 3.0), n_states=9,
-                    n_actions=4)
+    geom = open_geometry_3x3()
     st = init_state(DynaQ(n_planning=0), geom, np.random.default_rng(0))
     rng = np.random.default_rng(0)
     update(st, 0, 0, -1.0, 0, False, rng)  # a bump
@@ -99,10 +92,7 @@ def test_haql_points_along_the_least_bumped_route_when_bumps_cut_every_route():
     still points right, along the only route, instead of at move 0 (up, off the arena)."""
     from learning.haql import rederive
 
-    nb = np.full((4, 4), -1, np.int32)
-    for s in range(4):
-        nb[s, 2] = s - 1 if s > 0 else -1
-        nb[s, 3] = s + 1 if s < 3 else -1
+    nb = corridor_moves(4)
     blocked = np.zeros((4, 4), np.bool_)
     bal = np.zeros((4, 4), np.int32)
     blocked[1, 3], bal[1, 3] = True, 2

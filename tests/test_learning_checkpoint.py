@@ -255,3 +255,29 @@ def test_rnh_ql_plus_loads_its_checkpoints_from_before_the_ablation_split(tmp_pa
     _as_written_before_the_split(path, v_target=1)
     with pytest.raises(CheckpointError, match=r"field 'config': v_target = 1 .*rnh-ql\+ablation"):
         load_checkpoint(path, method="rnh-ql+", geometry=geom)
+
+
+@pytest.mark.parametrize("method", ["rnh-ql+", "haql", "dyna-q", "rnh-ql+ablation"])
+def test_a_checkpoint_from_before_a_methods_added_fields_loads_them_fresh(
+        tmp_path, paper50_model, method):
+    """A field a method gained later (its ``ADDED``, here the bump reading) is absent from
+    older files: they load with a fresh agent's value, and every other field as stored."""
+    from learning.registry import family_of
+
+    m = paper50_model
+    cfg = METHODS[method]()
+    added = family_of(cfg).ADDED
+    derived = set(getattr(family_of(cfg), "DERIVED", ()))
+    r = train_tabular(cfg, m, 5, np.random.default_rng(0))
+    path = save_checkpoint(tmp_path / "new.npz", Checkpoint.of_result(r, np.random.default_rng(1)))
+    with np.load(path) as d:
+        payload = {k: d[k] for k in d.files if k.removeprefix("state_") not in added}
+    assert len(payload) < len(np.load(path).files)
+    old = tmp_path / "old.npz"
+    np.savez(old, **payload)
+    ck = load_checkpoint(old, geometry=geometry_of(m))
+    fresh = dict(arrays(make_agent(cfg, geometry_of(m), np.random.default_rng(0)).state))
+    got, want = dict(arrays(ck.state)), dict(arrays(r.state))
+    for name in set(got) - derived:
+        expect = fresh[name] if name in added else want[name]
+        assert np.array_equal(got[name], expect), name

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import ClassVar, NamedTuple
+from typing import ClassVar, NamedTuple, get_type_hints
 
 # field -> (valid?, what a valid value is); checked for every config that has the field
 _VALID = {
@@ -51,12 +51,19 @@ class FieldMovedError(ValueError):
     now belongs to another method (the message names it)."""
 
 
-class BaseParams(NamedTuple):
-    """The parameters every method reads (methods with more declare their own tuple)."""
+def params_tuple(name: str, module: str, **fields: type) -> type:
+    """The named tuple type ``name`` of a method's parameters: ``eps``, ``alpha`` and
+    ``gamma`` (what every method reads), then ``fields`` (field -> float, int or bool, the
+    type its rule expects), for :meth:`MethodConfig.params`. ``module``: the declaring
+    module's ``__name__`` (the tuple pickles by it)."""
+    kind = NamedTuple(name, [("eps", float), ("alpha", float), ("gamma", float),
+                             *fields.items()])
+    kind.__module__ = module
+    return kind
 
-    eps: float
-    alpha: float
-    gamma: float
+
+# the parameters every method reads (methods with more declare their own tuple)
+BaseParams = params_tuple("BaseParams", __name__)
 
 
 @dataclass(frozen=True)
@@ -70,6 +77,8 @@ class MethodConfig:
     alpha: float = 0.1  # Q learning rate (step size on the TD error)
     gamma: float = 0.95  # discount per step
 
+    params_type: ClassVar[type] = BaseParams  # what params() returns (see params_tuple)
+
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             if f.name in _VALID:
@@ -80,9 +89,10 @@ class MethodConfig:
 
     def params(self) -> NamedTuple:
         """The fields the compiled rules read, as a named tuple of float/int/bool scalars
-        (each cast to the type its rule expects, so a ``--set`` value never changes the
-        compiled signature)."""
-        return BaseParams(float(self.eps), float(self.alpha), float(self.gamma))
+        (:attr:`params_type`: each field cast to the type its rule expects, so a ``--set``
+        value never changes the compiled signature)."""
+        kind = self.params_type
+        return kind(*(cast(getattr(self, f)) for f, cast in get_type_hints(kind).items()))
 
     def fields(self) -> dict[str, object]:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}

@@ -8,13 +8,16 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 from numba import njit
 
-from learning.config import MethodConfig
+from learning.config import MethodConfig, params_tuple
 from learning.geometry import Geometry
 from learning.tabular import eps_greedy, exploit_q
 from learning.tally import Tally, begin_tally, new_tally
 from learning.traces import QTraces, clear_traces, new_traces, q_lambda
 
 HOOK = dict(cache=True, inline="always")
+
+
+Params = params_tuple("Params", __name__, lam=float, trace_min=float)
 
 
 @dataclass(frozen=True)
@@ -30,17 +33,7 @@ class QLambda(MethodConfig):
     lam: float = 0.85  # trace decay lambda
     trace_min: float = 1e-8  # traces below this are dropped (keeps the trace list short)
 
-    def params(self) -> Params:
-        return Params(float(self.eps), float(self.alpha), float(self.gamma), float(self.lam),
-                      float(self.trace_min))
-
-
-class Params(NamedTuple):
-    eps: float
-    alpha: float
-    gamma: float
-    lam: float
-    trace_min: float
+    params_type: ClassVar[type] = Params
 
 
 class State(NamedTuple):

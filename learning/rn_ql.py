@@ -10,13 +10,16 @@ import numpy as np
 from numba import njit
 
 from learning import mlp
-from learning.config import MethodConfig
+from learning.config import MethodConfig, params_tuple
 from learning.geometry import Geometry
 from learning.tabular import argmax_first, eps_greedy
 from learning.tally import Tally, begin_tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
 HIDDEN = 10  # the paper's 2-10-1 nets
+
+
+Params = params_tuple("Params", __name__, lam=float, q_scale=float)
 
 
 @dataclass(frozen=True)
@@ -35,17 +38,7 @@ class RNQL(MethodConfig):
     q_scale: float = 100.0  # Q = q_scale * net output [reward units]
     init_range: float = 0.5  # initial weights ~ U(-init_range, init_range)
 
-    def params(self) -> Params:
-        return Params(float(self.eps), float(self.alpha), float(self.gamma), float(self.lam),
-                      float(self.q_scale))
-
-
-class Params(NamedTuple):
-    eps: float
-    alpha: float
-    gamma: float
-    lam: float
-    q_scale: float
+    params_type: ClassVar[type] = Params
 
 
 class State(NamedTuple):

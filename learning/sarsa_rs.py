@@ -15,12 +15,15 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 from numba import njit
 
-from learning.config import MethodConfig
+from learning.config import MethodConfig, params_tuple
 from learning.geometry import Geometry
 from learning.tabular import eps_greedy, exploit_q, sarsa
 from learning.tally import Tally, begin_tally, new_tally, record_shaping
 
 HOOK = dict(cache=True, inline="always")
+
+
+Params = params_tuple("Params", __name__, omega=float, alpha_v=float)
 
 
 @dataclass(frozen=True)
@@ -38,17 +41,7 @@ class SarsaRS(MethodConfig):
     omega: float = 1.0  # potential scale omega [dimensionless]
     alpha_v: float = 0.1  # abstract-V learning rate
 
-    def params(self) -> Params:
-        return Params(float(self.eps), float(self.alpha), float(self.gamma), float(self.omega),
-                      float(self.alpha_v))
-
-
-class Params(NamedTuple):
-    eps: float
-    alpha: float
-    gamma: float
-    omega: float
-    alpha_v: float
+    params_type: ClassVar[type] = Params
 
 
 class State(NamedTuple):

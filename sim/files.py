@@ -1,9 +1,10 @@
-"""Atomic file writes: a temp file beside the target, then ``os.replace``.
+"""Atomic file writes (a temp file beside the target, then ``os.replace``), and input reads.
 
 A full disk, Ctrl-C or a killed process must never leave half a file under the
 real name, and an error must name the file the user asked for, not a temp file.
 The one helper for ``sim`` and ``scenarios`` (``learning`` may not import ``sim``
-and keeps its own for checkpoints).
+and keeps its own for checkpoints). An input file that cannot be read raises the
+reader's :class:`sim.errors.InputError` (one line naming the file and the fix).
 """
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+from sim.errors import InputError
 
 _UMASK = os.umask(0)  # read once at import: os.umask can only be read by setting it
 os.umask(_UMASK)
@@ -67,3 +70,18 @@ def atomic_write_text(path: str | Path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically (:func:`atomic_path`)."""
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
+
+
+def read_input(path: Path, error: type[InputError], kind: str, fix: str) -> bytes:
+    """The bytes of an input file; a missing or unreadable file, or a folder, raises
+    ``error`` naming it (``kind``: what a folder is not, e.g. "a map"; ``fix``: what to
+    pass instead of a folder)."""
+    try:
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise error(str(path), "file", "does not exist", "check the path") from None
+    except IsADirectoryError:
+        raise error(str(path), "file", f"is a directory, not {kind}", fix) from None
+    except PermissionError:
+        raise error(str(path), "file", "cannot be read (permission denied)",
+                    "check the file's permissions") from None

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from sim.errors import MapError
+from sim.files import read_input
 
 PASSABLE = frozenset(".GS")
 BLOCKED = frozenset("@OTW")
@@ -120,13 +121,9 @@ def parse_map(text: str, source: str) -> GridMap:
 
 def load_map(path: str | Path) -> GridMap:
     path = Path(path)
+    raw = read_input(path, MapError, "a map", "pass a Moving AI .map file")
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise MapError(str(path), "file", "does not exist", "check the path") from None
-    except IsADirectoryError:
-        raise MapError(str(path), "file", "is a directory, not a map",
-                       "pass a Moving AI .map file") from None
+        text = raw.decode("utf-8")
     except UnicodeDecodeError:
         raise MapError(str(path), "file", "is not a text file",
                        "pass a Moving AI .map text file") from None

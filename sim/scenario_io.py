@@ -16,6 +16,7 @@ import numpy as np
 
 from sim.errors import ScenarioError
 from sim.feasibility import validate
+from sim.files import read_input
 from sim.layouts import chain, random_circles
 from sim.maps import GridMap, load_map, movingai_to_cell
 from sim.scenario import (
@@ -218,16 +219,7 @@ def _blocked_cells(grid_map: GridMap) -> tuple[Cell, ...]:
 
 def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise ScenarioError(str(path), "file", "does not exist", "check the path") from None
-    except IsADirectoryError:
-        raise ScenarioError(str(path), "file", "is a directory, not a scenario file",
-                            "pass a .toml or .map file inside it") from None
-    except PermissionError:
-        raise ScenarioError(str(path), "file", "cannot be read (permission denied)",
-                            "check the file's permissions") from None
+    raw = read_input(path, ScenarioError, "a scenario file", "pass a .toml or .map file inside it")
     try:
         data = tomllib.loads(raw.decode("utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:

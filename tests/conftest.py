@@ -29,6 +29,24 @@ def paper50_model(paper50):
     return build_model(paper50)
 
 
+def private_cache_for(*builders):
+    """A fixture ``private_cache``: the disk cache in a fresh folder (``XDG_CACHE_HOME``, the
+    disk cache on), and the in-memory cache of each of ``builders`` (``lru_cache``d model
+    builders) emptied before and after the test. Yields the folder."""
+
+    @pytest.fixture
+    def private_cache(tmp_path, monkeypatch):
+        monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+        monkeypatch.delenv("RNHQL_NO_DISK_CACHE", raising=False)
+        for b in builders:
+            b.cache_clear()
+        yield tmp_path
+        for b in builders:
+            b.cache_clear()
+
+    return private_cache
+
+
 def corridor_moves(n: int) -> np.ndarray:
     """int32[n, 4]: the moves of a 1 x n corridor 0-1-...-(n-1) (0 up, 1 down, 2 left,
     3 right; -1 off the arena), as a learner's free space holds them."""

@@ -1,7 +1,8 @@
 """The dense O(cells x circles) rasteriser sim.grid.raster replaced: the reference it must match.
 
 Kept only for tests (``tests/test_raster.py``): every cell against every circle,
-no bounding boxes, no cleverness.
+no bounding boxes, no cleverness. The blocked map squares and the arena walls are
+:func:`sim.grid.raster.with_squares_and_walls`, which the rewrite left as they were.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import numpy as np
 
 from sim.grid.actions import ACTION_DELTAS
 from sim.grid.discretiser import Discretiser
+from sim.grid.raster import with_squares_and_walls
 
 
 def dense_occupancy(sc) -> np.ndarray:
@@ -23,7 +25,6 @@ def dense_occupancy(sc) -> np.ndarray:
     so the rule holds for any scenario.
     """
     infl = sc.robot.inflation_m
-    c = sc.cell_size_m
     self = Discretiser.from_scenario(sc)
     xy = self.centres()
     blocked = np.zeros(self.n_states, dtype=bool)
@@ -31,21 +32,7 @@ def dense_occupancy(sc) -> np.ndarray:
         circ = np.array([(o.x_m, o.y_m, o.radius_m) for o in sc.obstacles])
         d = np.hypot(xy[:, :1] - circ[None, :, 0], xy[:, 1:] - circ[None, :, 1])
         blocked |= (d < circ[None, :, 2] + infl).any(axis=1)
-    if sc.blocked_cells:
-        cells = np.array(sc.blocked_cells, dtype=np.int64)
-        blocked[cells[:, 1] * self.nx + cells[:, 0]] = True
-        if infl >= c / 2:  # a disc this large could reach a neighbouring square
-            sq = blocked.reshape(self.ny, self.nx).copy()
-            grown = sq.copy()
-            grown[1:] |= sq[:-1]
-            grown[:-1] |= sq[1:]
-            grown[:, 1:] |= sq[:, :-1]
-            grown[:, :-1] |= sq[:, 1:]
-            blocked = grown.ravel()
-    wall = np.minimum.reduce([xy[:, 0], xy[:, 1], sc.width_m - xy[:, 0],
-                              sc.height_m - xy[:, 1]])
-    blocked |= wall < infl
-    return blocked.reshape(self.ny, self.nx)
+    return with_squares_and_walls(sc, blocked)
 
 
 def _segment_distance(px: np.ndarray, py: np.ndarray, ax: np.ndarray, ay: np.ndarray,

@@ -7,6 +7,7 @@ import pytest
 
 from scenarios.runs.spec import load
 from sim.physics.model import cache_dir, physics_model
+from tests.conftest import private_cache_for
 
 
 @pytest.fixture(scope="module")
@@ -14,13 +15,7 @@ def paper40():
     return load("paper-40")
 
 
-@pytest.fixture
-def private_cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    monkeypatch.delenv("RNHQL_NO_DISK_CACHE", raising=False)
-    physics_model.cache_clear()
-    yield tmp_path
-    physics_model.cache_clear()
+private_cache = private_cache_for(physics_model)
 
 
 def test_agrees_with_the_grid_on_every_free_move_and_the_optimum(paper40, private_cache):

@@ -49,6 +49,7 @@ from sim.physics.stochastic_solve import (
     solve,
 )
 from sim.scenario import Circle, Scenario
+from tests.conftest import private_cache_for
 
 NOISY = parse_fidelity("noisy")
 EXACT = parse_fidelity("exact")
@@ -57,13 +58,7 @@ GRAZE = Scenario(name="graze", width_m=6.0, height_m=6.0, start=(1, 0), goal=(1,
                  obstacles=(Circle(3.448, 3.05, 1.6385),), steps_per_episode=60)
 
 
-@pytest.fixture
-def private_cache(tmp_path, monkeypatch):
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    monkeypatch.delenv("RNHQL_NO_DISK_CACHE", raising=False)
-    stochastic_model.cache_clear()
-    yield tmp_path
-    stochastic_model.cache_clear()
+private_cache = private_cache_for(stochastic_model)
 
 
 def test_at_exact_the_model_is_the_exact_physics_model(private_cache):

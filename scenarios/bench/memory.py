@@ -13,7 +13,6 @@ too: the floor every run pays.
 
 from __future__ import annotations
 
-import argparse
 import os
 import subprocess
 import sys
@@ -35,10 +34,10 @@ def peak_rss_mb(cmd: list[str], env: dict[str, str]) -> tuple[float, int]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from scenarios.experiments.args import script_parser
     from scenarios.experiments.scaling_maps import write_problem
 
-    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = script_parser(__doc__)
     p.add_argument("--sizes", default="64,128,256,512", help="map sizes [cells a side]")
     p.add_argument("--kind", default="rooms", help="map kind (sim.map_generators)")
     p.add_argument("--methods", default=",".join(METHODS), help="methods")

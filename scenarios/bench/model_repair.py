@@ -13,13 +13,13 @@ microseconds a wall for each (results are checked equal along the way).
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 
 import numpy as np
 
 from learning.free_space import bfs_distances, distances_change, repair_distances
+from scenarios.experiments.args import script_parser
 from sim.grid.planning import far_start_goal
 from sim.map_generators import KINDS, generate
 
@@ -79,8 +79,7 @@ def bench_map(free: np.ndarray, seed: int = 0, max_walls: int = 4000) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = script_parser(__doc__)
     p.add_argument("--sizes", default="256,512", help="map sizes [cells a side]")
     p.add_argument("--kinds", default=",".join(KINDS), help="map kinds")
     p.add_argument("--walls", type=int, default=2000, help="walls timed per map (at most)")

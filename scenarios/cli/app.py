@@ -27,7 +27,13 @@ from scenarios.cli import (
     train,
     view,
 )
-from scenarios.cli.args import add_fidelity_arg, add_record_args, add_scenario_args
+from scenarios.cli.args import (
+    add_fidelity_arg,
+    add_record_args,
+    add_scenario_args,
+    add_training_args,
+    add_world_args,
+)
 from scenarios.runs.backends import SweepError
 from sim.errors import InputError
 
@@ -69,11 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_scenario_args(p, learning=True)
     p.add_argument("--method", default="rnh-ql", help="method (default rnh-ql)")
     p.add_argument("--seed", type=int, default=0, help="the run's seed")
-    p.add_argument("--episodes", type=int, default=3000, help="training episodes")
-    p.add_argument("--world", default="grid", help="grid (default) or physics")
-    add_fidelity_arg(p)
-    p.add_argument("--set", action="append", metavar="FIELD=VALUE",
-                   help="override a config field, e.g. --set alpha=0.2 (repeatable)")
+    add_training_args(p, "grid (default) or physics")
     p.add_argument("--save", metavar="AGENT.npz", help="save the trained agent")
     p.add_argument("--resume", metavar="AGENT.npz", help="continue a saved grid run")
     p.add_argument("--json", metavar="FILE", help="also write the run's record as JSON")
@@ -84,8 +86,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_scenario_args(p, learning=True)
     p.add_argument("--agent", required=True, metavar="AGENT.npz",
                    help="an agent saved with rnhql train --save")
-    p.add_argument("--world", default="grid", help="grid (default) or physics (drive it)")
-    add_fidelity_arg(p)
+    add_world_args(p, "grid (default) or physics (drive it)")
     p.add_argument("--png", metavar="FILE", help="also draw the routes to a PNG")
     p.add_argument("--record", nargs="?", const="", default=None, metavar="PATH.rrd",
                    help="record the route to Rerun (default recordings/<scenario>-route-...)")
@@ -97,11 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
                    f"{','.join(comparison_methods())})")
     p.add_argument("--seeds", type=int, default=10, help="number of seeds (default 10)")
     p.add_argument("--seed-base", type=int, default=0, help="first seed (default 0)")
-    p.add_argument("--episodes", type=int, default=3000, help="training episodes per run")
-    p.add_argument("--world", default="grid", help="grid, physics or grid,physics")
-    add_fidelity_arg(p)
-    p.add_argument("--set", action="append", metavar="FIELD=VALUE",
-                   help="override a config field for every method that has it")
+    add_training_args(p, "grid, physics or grid,physics", sweep=True)
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--backend", default="local", help="local (process pool) or ray")
     p.add_argument("--address", default=None, help="Ray cluster: auto or ray://host:port")

@@ -10,10 +10,16 @@ import argparse
 import os
 import re
 import sys
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from scenarios.runs.spec import WORLDS, ExperimentError
+from scenarios.runs.spec import WORLDS, ExperimentError, load
 from sim.errors import InputError
+
+if TYPE_CHECKING:
+    from sim.grid import TabularModel
+    from sim.scenario import Cell, Scenario
 
 
 class CliError(InputError):
@@ -117,6 +123,23 @@ def add_fidelity_arg(p: argparse.ArgumentParser) -> None:
                         "runs only)")
 
 
+def add_world_args(p: argparse.ArgumentParser, worlds: str) -> None:
+    """``--world`` (``worlds``: its help) and ``--fidelity``: the commands that train or drive."""
+    p.add_argument("--world", default="grid", help=worlds)
+    add_fidelity_arg(p)
+
+
+def add_training_args(p: argparse.ArgumentParser, worlds: str, sweep: bool = False) -> None:
+    """``--episodes``, :func:`add_world_args` and ``--set``: train, and compare (``sweep``:
+    several runs and methods)."""
+    p.add_argument("--episodes", type=int, default=3000,
+                   help="training episodes per run" if sweep else "training episodes")
+    add_world_args(p, worlds)
+    p.add_argument("--set", action="append", metavar="FIELD=VALUE",
+                   help="override a config field for every method that has it" if sweep
+                   else "override a config field, e.g. --set alpha=0.2 (repeatable)")
+
+
 def fidelity_arg(args: argparse.Namespace) -> str | None:
     """``--fidelity`` checked now (one line, exit 2 on a bad value); None for exact."""
     from sim.physics.fidelity import parse_fidelity
@@ -141,8 +164,6 @@ def add_record_args(p: argparse.ArgumentParser) -> None:
 
 
 def scenario_from_args(args: argparse.Namespace):  # -> Scenario
-    from scenarios.runs.spec import load
-
     return load(*scenario_key(args), getattr(args, "rewards", None))[0]
 
 
@@ -273,6 +294,42 @@ def scenario_key(args: argparse.Namespace) -> tuple[str, tuple | None, tuple | N
     start = parse_cell(args.start, "--start") if args.start else None
     goal = parse_cell(args.goal, "--goal") if args.goal else None
     return args.scenario, start, goal
+
+
+@dataclass(frozen=True)
+class Problem:
+    """What a training command runs on, from its flags (each checked before any work):
+    the scenario key and options as :class:`scenarios.runs.spec.RunSpec` holds them, and
+    the loaded scenario and grid model."""
+
+    scenario: str  # built-in name, .toml or .map path
+    start: Cell | None  # --start (Moving AI frame) or the --scen problem's
+    goal: Cell | None
+    rewards: str | None  # rewards_arg
+    s_starts: float | None  # s_starts_arg
+    fidelity: str | None  # fidelity_arg
+    sc: Scenario
+    model: TabularModel
+
+    @property
+    def key(self) -> tuple[str, Cell | None, Cell | None, str | None, float | None]:
+        """What :func:`scenarios.runs.spec.load` takes (a spec's ``problem``)."""
+        return self.scenario, self.start, self.goal, self.rewards, self.s_starts
+
+    def spec_fields(self) -> dict[str, object]:
+        """The keyword arguments of a :class:`~scenarios.runs.spec.RunSpec` (and of
+        ``make_specs``) that come from the problem."""
+        return dict(start=self.start, goal=self.goal, rewards=self.rewards,
+                    fidelity=self.fidelity, s_starts=self.s_starts)
+
+
+def problem_arg(args: argparse.Namespace) -> Problem:
+    """The scenario, ``--rewards``, ``--s-starts`` and ``--fidelity`` of a training command,
+    checked, with the scenario and its grid model loaded."""
+    name, start, goal = scenario_key(args)
+    rewards, s_starts = rewards_arg(args), s_starts_arg(args)
+    sc, model = load(name, start, goal, rewards, s_starts)
+    return Problem(name, start, goal, rewards, s_starts, fidelity_arg(args), sc, model)
 
 
 def print_run(rec_like: dict, optimal: int) -> None:

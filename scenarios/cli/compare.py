@@ -12,20 +12,17 @@ from scenarios.cli.args import (
     MAX_SEEDS,
     check_world,
     compile_notice,
-    fidelity_arg,
     parse_list,
     parse_overrides,
     positive,
+    problem_arg,
     record_path,
-    rewards_arg,
     rewards_note,
-    s_starts_arg,
-    scenario_key,
     seed_value,
     starts_note,
     unique,
 )
-from scenarios.runs.spec import ExperimentError, load, make_config
+from scenarios.runs.spec import ExperimentError, make_config
 from sim.errors import InputError
 
 
@@ -33,9 +30,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from learning.registry import comparison_methods
     from scenarios.experiments.compare import SweepRecording, make_specs, run_sweep
 
-    name, start, goal = scenario_key(args)
-    # validate the scenario before any work
-    sc, _ = load(name, start, goal, rewards_arg(args), s_starts_arg(args))
+    pb = problem_arg(args)  # the scenario checked and loaded before any work
+    name, sc = pb.scenario, pb.sc
     methods = (unique(parse_list(args.methods, "--methods"), "--methods") if args.methods
                else list(comparison_methods()))
     worlds = [check_world(w) for w in unique(parse_list(args.world, "--world"), "--world")]
@@ -45,9 +41,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     seed_base = seed_value(args.seed_base, "--seed-base", n_seeds)
     seeds = list(range(seed_base, seed_base + n_seeds))
     episodes = positive(args.episodes, "--episodes", MAX_EPISODES)
-    specs = make_specs(name, methods, seeds, episodes, worlds,
-                       per_method, start, goal, rewards=rewards_arg(args),
-                       fidelity=fidelity_arg(args), s_starts=s_starts_arg(args))
+    specs = make_specs(name, methods, seeds, episodes, worlds, per_method, **pb.spec_fields())
     execute, kwargs = _backend(args)
     from scenarios.runs.backends import Progress
 

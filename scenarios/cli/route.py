@@ -8,16 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.cli.args import (
-    check_output_file,
-    check_world,
-    fidelity_arg,
-    record_path,
-    rewards_arg,
-    s_starts_arg,
-    scenario_key,
-)
-from scenarios.runs.spec import load
+from scenarios.cli.args import check_output_file, check_world, problem_arg, record_path
 
 
 def cmd_route(args: argparse.Namespace) -> int:
@@ -27,10 +18,9 @@ def cmd_route(args: argparse.Namespace) -> int:
     from scenarios.figures.routes import ascii_routes, route_png
     from sim.grid.planning import bfs_route
 
-    name, start, goal = scenario_key(args)
-    sc, model = load(name, start, goal, rewards_arg(args), s_starts_arg(args))
+    pb = problem_arg(args)
+    sc, model = pb.sc, pb.model
     check_world(args.world)
-    fidelity_arg(args)
     if args.png:
         check_output_file(Path(args.png), "--png", ".png")
     ckpt = load_checkpoint(args.agent, None, model.n_states, geometry_of(model))
@@ -44,7 +34,7 @@ def cmd_route(args: argparse.Namespace) -> int:
         from sim.physics.fidelity import parse_fidelity
         from sim.physics.rollouts import drive_policy
 
-        fid = parse_fidelity(fidelity_arg(args) or sc.physics)
+        fid = parse_fidelity(pb.fidelity or sc.physics)
         n = 1 if fid.is_exact else FINAL_ROLLOUTS
         driven = drive_policy(sc, greedy_actions(ckpt.state), fid, n, 0, FINAL_TAG,
                               measure_metres=True, keep_routes=True, keep_path=True)

@@ -13,19 +13,16 @@ from scenarios.cli.args import (
     check_output_file,
     check_world,
     check_writable,
-    fidelity_arg,
     parse_overrides,
     positive,
     print_run,
+    problem_arg,
     record_path,
-    rewards_arg,
     rewards_note,
-    s_starts_arg,
-    scenario_key,
     seed_value,
     starts_note,
 )
-from scenarios.runs.spec import ExperimentError, load, make_config
+from scenarios.runs.spec import ExperimentError, make_config
 
 
 def cmd_train(args: argparse.Namespace) -> int:
@@ -34,22 +31,18 @@ def cmd_train(args: argparse.Namespace) -> int:
     from learning.train import train_tabular
     from scenarios.runs.spec import RunOutcome, RunSpec, run_record, scenario_digest
 
-    name, start, goal = scenario_key(args)
-    sc, model = load(name, start, goal, rewards_arg(args), s_starts_arg(args))
+    pb = problem_arg(args)
+    sc, model = pb.sc, pb.model
     check_world(args.world)
     positive(args.episodes, "--episodes", MAX_EPISODES)
     seed_value(args.seed, "--seed")
     if args.json:
         check_output_file(Path(args.json), "--json")
     cfg = make_config(args.method, parse_overrides(args.set))
-    fidelity = fidelity_arg(args)
-    spec = RunSpec(name, args.method, args.seed, args.episodes, args.world, start=start,
-                   goal=goal, rewards=rewards_arg(args), fidelity=fidelity,
-                   s_starts=s_starts_arg(args))
+    spec = RunSpec(pb.scenario, args.method, args.seed, args.episodes, args.world,
+                   **pb.spec_fields())
     record = record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
-    problem = {"scenario": scenario_digest(name, start, goal, rewards_arg(args),
-                                           s_starts_arg(args)),
-               "rewards": sc.rewards.label()}
+    problem = {"scenario": scenario_digest(*pb.key), "rewards": sc.rewards.label()}
     rs = streams(args.seed)  # the same streams as a run of `rnhql compare`
     rng = rs.learner
     if args.save:

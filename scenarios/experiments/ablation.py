@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from scenarios.experiments.args import script_parser
 from scenarios.experiments.compare import SweepFiles, ctrl_c_held, run_sweep
 from scenarios.experiments.suite import build_suite
 from scenarios.figures.save import save_figure
@@ -272,8 +273,7 @@ def ablation_files(rows: Sequence[Row], maps: list[dict], labelled: list[tuple[s
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    ap = script_parser(__doc__)
     ap.add_argument("--out", default="results/ablation")
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--episodes", type=int, default=3000)

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from scenarios.experiments.args import script_parser
 from scenarios.runs.spec import load
 from sim.files import atomic_write_text
 from sim.grid import TabularModel
@@ -182,8 +183,7 @@ def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    ap = script_parser(__doc__)
     ap.add_argument("scenario", help="a built-in name, a .toml or a .map (with --start/--goal)")
     ap.add_argument("--fidelity", default="exact", help="exact (default), noisy, rough, or knobs")
     ap.add_argument("--repeats", type=int, default=20, help="drives per (cell, action) (20)")

@@ -14,9 +14,9 @@ intervals overlap. Writes ``GRADING.md`` and ``grading.json`` to ``--out``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import gymnasium as gym
@@ -25,6 +25,7 @@ import numpy as np
 import sim.envs  # noqa: F401  (registers the ids)
 from learning.readout import greedy_actions
 from learning.streams import streams
+from scenarios.experiments.args import arg, parse
 from scenarios.runs.physics import RunGroup, train_physics_runs
 from scenarios.runs.spec import load, make_config
 from sim.files import atomic_write_text
@@ -53,26 +54,24 @@ def independent_p_goal(sc, fidelity, policy: np.ndarray, drives: int) -> tuple[i
     return hits, float(np.mean(prims)) if prims else float("nan")
 
 
+@dataclass(frozen=True)
+class Args:
+    scenario: str = arg("paper-50", "built-in name or scenario file")
+    fidelity: str = arg("noisy", "physics fidelity the runs train and are graded in (a preset "
+                        "or a knob file; see rnhql train --help)")
+    methods: str = arg("rnh-ql+,haql,dyna-q", "comma-separated methods")
+    seeds: int = arg(10, "seeds per method (0 .. N-1)")
+    episodes: int = arg(1000, "training episodes per run")
+    rewards: str = arg("goal-only", "reward scheme (a preset, or goal=,bump=,step=)")
+    drives: int = arg(50, "independent drives of each final policy from S [primitives capped "
+                      "at the episode's budget], each its own noise stream")
+    out: str = arg("results/grading-check", "output folder")
+    artifact: str | None = arg(None, "also write docs/results/physics-grading.NAME.json (a "
+                               "table the docs render)", metavar="NAME")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--scenario", default="paper-50", help="built-in name or scenario file")
-    p.add_argument("--fidelity", default="noisy",
-                   help="physics fidelity the runs train and are graded in (a preset or a "
-                        "knob file; see rnhql train --help)")
-    p.add_argument("--methods", default="rnh-ql+,haql,dyna-q", help="comma-separated methods")
-    p.add_argument("--seeds", type=int, default=10, help="seeds per method (0 .. N-1)")
-    p.add_argument("--episodes", type=int, default=1000, help="training episodes per run")
-    p.add_argument("--rewards", default="goal-only",
-                   help="reward scheme (a preset, or goal=,bump=,step=)")
-    p.add_argument("--drives", type=int, default=50,
-                   help="independent drives of each final policy from S [primitives capped "
-                        "at the episode's budget], each its own noise stream")
-    p.add_argument("--out", default="results/grading-check", help="output folder")
-    p.add_argument("--artifact", default=None, metavar="NAME",
-                   help="also write docs/results/physics-grading.NAME.json (a table the docs "
-                        "render)")
-    args = p.parse_args(argv)
+    args = parse(Args, __doc__, argv)
     fid = parse_fidelity(args.fidelity)
     sc, model = load(args.scenario, None, None, args.rewards)
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
@@ -134,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def artifact_data(args: argparse.Namespace, label: str, methods: list[str],
+def artifact_data(args: Args, label: str, methods: list[str],
                   out: list[dict]) -> dict:
     """What the docs' table shows, per method (quantiles over seeds, type 7)."""
     from scenarios.runs.results import quantile

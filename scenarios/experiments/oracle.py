@@ -15,7 +15,6 @@ greedy test from S every 10 episodes, common random numbers per seed.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -29,6 +28,7 @@ from learning.rbf import rbf_features
 from learning.state import init_state
 from learning.streams import streams
 from learning.train import KERNEL_OUT, greedy_test
+from scenarios.experiments.args import script_parser
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
 from sim.files import atomic_write_text
@@ -65,8 +65,7 @@ def train_with_potential(model, potential: np.ndarray, seed: int, episodes: int,
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = script_parser(__doc__)
     p.add_argument("--out", default="results/oracle")
     p.add_argument("--scenario", default="paper-50")
     p.add_argument("--seeds", type=int, default=10)

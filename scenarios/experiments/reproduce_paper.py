@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from learning.registry import comparison_methods
+from scenarios.experiments.args import script_parser
 from scenarios.experiments.compare import make_specs, run_sweep
 from scenarios.runs.backends import Progress, run_local, run_ray
 from sim.files import atomic_write_text
@@ -169,8 +170,7 @@ def _value_notes(args: argparse.Namespace) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = script_parser(__doc__)
     p.add_argument("--out", default="results/paper")
     p.add_argument("--seeds", type=int, default=10)
     p.add_argument("--episodes", type=int, default=3000)

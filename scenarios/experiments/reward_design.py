@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from learning.registry import comparison_methods
+from scenarios.experiments.args import script_parser
 from scenarios.experiments.compare import make_specs, run_sweep
 from scenarios.experiments.reward_facts import RewardFacts, facts_markdown, reward_facts
 from scenarios.runs.backends import Progress, run_local
@@ -88,8 +89,7 @@ def report(args: argparse.Namespace, methods: list[str], facts: list[RewardFacts
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = script_parser(__doc__)
     p.add_argument("--out", default="results/reward-design")
     p.add_argument("--scenario", default="paper-50")
     p.add_argument("--methods", default=",".join(comparison_methods()))

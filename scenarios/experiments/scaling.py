@@ -18,15 +18,16 @@ median is finite).
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from scenarios.experiments.args import arg, parse
 from scenarios.experiments.compare import make_specs, run_sweep
 from scenarios.figures.save import save_figure
 from scenarios.runs.backends import Progress, run_local
@@ -90,17 +91,20 @@ def figure(rows: dict[str, list[dict[str, Any]]], path: Path, title: str) -> Non
     plt.close(fig)
 
 
+@dataclass(frozen=True)
+class Args:
+    out: str = arg("results/scaling", "output folder: a folder per size, scaling.md, "
+                   "scaling.png")
+    sizes: str = arg("25,50,100,200", "arena sides n [cells], comma-separated")
+    methods: str = arg(",".join(METHODS), "comma-separated methods")
+    seeds: int = arg(10, "seeds per method and size (0 .. N-1)")
+    rewards: str = arg("goal-only", "reward scheme (a preset, or goal=,bump=,step=)")
+    jobs: int | None = arg(None, "worker processes [default: all cores]")
+    resume: bool = arg(False, "skip runs already finished in --out")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--out", default="results/scaling")
-    p.add_argument("--sizes", default="25,50,100,200")
-    p.add_argument("--methods", default=",".join(METHODS))
-    p.add_argument("--seeds", type=int, default=10)
-    p.add_argument("--rewards", default="goal-only")
-    p.add_argument("--jobs", type=int, default=None)
-    p.add_argument("--resume", action="store_true")
-    args = p.parse_args(argv)
+    args = parse(Args, __doc__, argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     sizes = [int(s) for s in args.sizes.split(",")]

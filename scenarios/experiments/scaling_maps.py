@@ -24,12 +24,12 @@ episodes to a stable optimal route, median wall time per run.
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 from pathlib import Path
 from typing import Any
 
+from scenarios.experiments.args import script_parser
 from scenarios.experiments.compare import make_specs, run_sweep
 from scenarios.runs.backends import Progress, run_local
 from sim.files import atomic_write_text
@@ -78,8 +78,7 @@ def cell(stat: dict[str, Any], seeds: int) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = script_parser(__doc__)
     p.add_argument("--out", default="results/scaling-maps", help="output folder")
     p.add_argument("--sizes", default="256", help="map sizes [cells a side], e.g. 256,512")
     p.add_argument("--kinds", default=",".join(KINDS), help="map kinds")

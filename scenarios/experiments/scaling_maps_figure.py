@@ -14,7 +14,6 @@ least-squares line through the log-log points, over the sizes the line has.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from collections.abc import Sequence
@@ -23,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from scenarios.experiments.args import script_parser
 from scenarios.experiments.scaling import fit_exponent
 from scenarios.palette import method_colour_mpl
 from sim.files import atomic_write_text
@@ -155,8 +155,7 @@ def table(points: Sequence[Point]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = script_parser(__doc__)
     p.add_argument("folders", nargs="+", type=Path,
                    help="output folders of scenarios.experiments.scaling_maps")
     p.add_argument("--out", type=Path, default=Path("results/scaling-maps.png"),

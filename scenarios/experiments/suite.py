@@ -15,12 +15,12 @@ optimal route, steps per episode, whether the map is held out from tuning).
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 
 import numpy as np
 
+from scenarios.experiments.args import script_parser
 from sim.grid.planning import far_start_goal
 from sim.map_generators import small_maze, small_rooms
 from sim.maps import load_map, movingai_to_cell, read_free_grid, write_free_grid
@@ -146,8 +146,7 @@ def shipped_suite_tomls() -> dict[str, tuple[str, np.ndarray | None]]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()),
-                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    ap = script_parser(__doc__)
     ap.add_argument("--out", default="results/suite", help="directory for maps and TOMLs")
     ap.add_argument("--rewards", default="goal-only", choices=sorted(REWARD_SCHEMES))
     ap.add_argument("--no-moving-ai", action="store_true", help="skip the Moving AI maps")

@@ -91,18 +91,23 @@ def occupancy(sc: Scenario) -> np.ndarray:
     can never be reached from a centre, but they are checked anyway so the rule
     holds for any scenario.
     """
-    disc = Discretiser.from_scenario(sc)
-    infl = sc.robot.inflation_m
-    c = sc.cell_size_m
-    blocked = np.zeros(disc.n_states, dtype=bool)
+    blocked = np.zeros(sc.nx * sc.ny, dtype=bool)
     circ = circle_array(sc)
     if circ.shape[0]:
         s_idx, _ = near_pairs(sc, circ, 0.0)
         blocked[s_idx] = True
+    return with_squares_and_walls(sc, blocked)
+
+
+def with_squares_and_walls(sc: Scenario, blocked: np.ndarray) -> np.ndarray:
+    """bool[ny, nx]: the cells ``blocked`` (bool[nS], what the circles block), the blocked
+    map squares (and, for a disc that reaches a neighbouring square, every 4-neighbour),
+    and the cells whose disc crosses an arena wall."""
+    infl = sc.robot.inflation_m
     if sc.blocked_cells:
         cells = np.asarray(sc.blocked_cells, dtype=np.int64).reshape(-1, 2)
         blocked[cells[:, 1] * sc.nx + cells[:, 0]] = True
-        if infl >= c / 2:  # a disc this large could reach a neighbouring square
+        if infl >= sc.cell_size_m / 2:  # a disc this large could reach a neighbouring square
             sq = blocked.reshape(sc.ny, sc.nx).copy()
             grown = sq.copy()
             grown[1:] |= sq[:-1]
@@ -110,7 +115,7 @@ def occupancy(sc: Scenario) -> np.ndarray:
             grown[:, 1:] |= sq[:, :-1]
             grown[:, :-1] |= sq[:, 1:]
             blocked = grown.ravel()
-    xy = disc.centres()
+    xy = Discretiser.from_scenario(sc).centres()
     wall = np.minimum.reduce([xy[:, 0], xy[:, 1], sc.width_m - xy[:, 0], sc.height_m - xy[:, 1]])
     blocked |= wall < infl
     return blocked.reshape(sc.ny, sc.nx)

@@ -180,28 +180,68 @@ def _box_distance(px, py, x0, y0, x1, y1):
     return math.hypot(dx, dy)
 
 
-@njit(cache=True)
-def sweep_fraction(circles, walls, boxes, cell_m, nx, ny, start, items, seen, stamp,
-                   radius, ax, ay, bx, by):
-    """Fraction of (ax, ay) -> (bx, by) a disc of ``radius`` sweeps before touching a static
-    shape, skipping hits at 0 (shapes it overlaps at the start); inf when it touches none.
-    ``seen`` (int64[K+M]) and ``stamp`` dedupe candidates; pass a new stamp per call."""
-    best = math.inf
+# What one static shape does to a query: a wall (index into ``walls``) or an item of the
+# grid index (a circle id, or K + a box id), folded into the query's answer so far.
+
+@njit(cache=True, inline="always")
+def _sweep_wall(walls, k, radius, ax, ay, bx, by, best):
     # cpShapeSegmentQuery first asks whether the disc at the start already touches the shape
     # (a point query): then it reports alpha 0, which the guard skips
+    if _segment_distance(ax, ay, walls[k, 0], walls[k, 1], walls[k, 2],
+                         walls[k, 3]) - walls[k, 4] <= radius:
+        return best
+    t = _segment_alpha(walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3], walls[k, 4],
+                       ax, ay, bx, by, radius)
+    return t if 0.0 < t < best else best
+
+
+@njit(cache=True, inline="always")
+def _sweep_item(circles, boxes, k, radius, ax, ay, bx, by, best):
+    n_circles = circles.shape[0]
+    if k < n_circles:
+        if math.hypot(ax - circles[k, 0], ay - circles[k, 1]) - circles[k, 2] <= radius:
+            return best
+        t = _circle_alpha(circles[k, 0], circles[k, 1], circles[k, 2], ax, ay, bx, by, radius)
+    else:
+        m = k - n_circles
+        if _box_distance(ax, ay, boxes[m, 0], boxes[m, 1], boxes[m, 2], boxes[m, 3]) <= radius:
+            return best
+        t = _box_alpha(boxes[m, 0], boxes[m, 1], boxes[m, 2], boxes[m, 3], ax, ay, bx, by,
+                       radius)
+    return t if 0.0 < t < best else best
+
+
+@njit(cache=True, inline="always")
+def _overlap_wall(walls, k, radius, x, y, _bx, _by, deepest):
+    d = radius - (_segment_distance(x, y, walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3])
+                  - walls[k, 4])
+    return d if d > deepest else deepest
+
+
+@njit(cache=True, inline="always")
+def _overlap_item(circles, boxes, k, radius, x, y, _bx, _by, deepest):
+    n_circles = circles.shape[0]
+    if k < n_circles:
+        d = radius - (math.hypot(x - circles[k, 0], y - circles[k, 1]) - circles[k, 2])
+    else:
+        m = k - n_circles
+        d = radius - _box_distance(x, y, boxes[m, 0], boxes[m, 1], boxes[m, 2], boxes[m, 3])
+    return d if d > deepest else deepest
+
+
+@njit(cache=True, inline="always")
+def _fold_shapes(wall, item, out, circles, walls, boxes, cell_m, nx, ny, start, items, seen,
+                 stamp, radius, ax, ay, bx, by):
+    """``out`` folded by ``wall`` over the walls, then by ``item`` over each shape of the
+    index (once: ``seen``/``stamp``) in the cells a disc of ``radius`` on a -> b can reach.
+    ``wall`` and ``item`` are compiled functions: numba compiles one loop per pair, as
+    fast as the loop written out for each query."""
     for k in range(walls.shape[0]):
-        if _segment_distance(ax, ay, walls[k, 0], walls[k, 1], walls[k, 2],
-                             walls[k, 3]) - walls[k, 4] <= radius:
-            continue
-        t = _segment_alpha(walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3], walls[k, 4],
-                           ax, ay, bx, by, radius)
-        if 0.0 < t < best:
-            best = t
+        out = wall(walls, k, radius, ax, ay, bx, by, out)
     gx0 = min(max(int(math.floor((min(ax, bx) - radius) / cell_m)), 0), nx - 1)  # noqa: RUF046 (numba)
     gy0 = min(max(int(math.floor((min(ay, by) - radius) / cell_m)), 0), ny - 1)  # noqa: RUF046 (numba)
     gx1 = min(max(int(math.floor((max(ax, bx) + radius) / cell_m)), 0), nx - 1)  # noqa: RUF046 (numba)
     gy1 = min(max(int(math.floor((max(ay, by) + radius) / cell_m)), 0), ny - 1)  # noqa: RUF046 (numba)
-    n_circles = circles.shape[0]
     for gy in range(gy0, gy1 + 1):
         for gx in range(gx0, gx1 + 1):
             cell = gy * nx + gx
@@ -210,22 +250,27 @@ def sweep_fraction(circles, walls, boxes, cell_m, nx, ny, start, items, seen, st
                 if seen[k] == stamp:
                     continue
                 seen[k] = stamp
-                if k < n_circles:
-                    if math.hypot(ax - circles[k, 0], ay - circles[k, 1]) - circles[k, 2] \
-                            <= radius:
-                        continue
-                    t = _circle_alpha(circles[k, 0], circles[k, 1], circles[k, 2], ax, ay, bx,
-                                      by, radius)
-                else:
-                    m = k - n_circles
-                    if _box_distance(ax, ay, boxes[m, 0], boxes[m, 1], boxes[m, 2],
-                                     boxes[m, 3]) <= radius:
-                        continue
-                    t = _box_alpha(boxes[m, 0], boxes[m, 1], boxes[m, 2], boxes[m, 3], ax, ay,
-                                   bx, by, radius)
-                if 0.0 < t < best:
-                    best = t
-    return best
+                out = item(circles, boxes, k, radius, ax, ay, bx, by, out)
+    return out
+
+
+@njit(cache=True)
+def sweep_fraction(circles, walls, boxes, cell_m, nx, ny, start, items, seen, stamp,
+                   radius, ax, ay, bx, by):
+    """Fraction of (ax, ay) -> (bx, by) a disc of ``radius`` sweeps before touching a static
+    shape, skipping hits at 0 (shapes it overlaps at the start); inf when it touches none.
+    ``seen`` (int64[K+M]) and ``stamp`` dedupe candidates; pass a new stamp per call."""
+    return _fold_shapes(_sweep_wall, _sweep_item, math.inf, circles, walls, boxes, cell_m, nx,
+                        ny, start, items, seen, stamp, radius, ax, ay, bx, by)
+
+
+@njit(cache=True)
+def overlap_depth(circles, walls, boxes, cell_m, nx, ny, start, items, seen, stamp, radius,
+                  x, y):
+    """Deepest overlap [m] of a disc of ``radius`` at (x, y) with any static shape (0: none);
+    the point-query distances :func:`sweep_fraction` uses."""
+    return _fold_shapes(_overlap_wall, _overlap_item, 0.0, circles, walls, boxes, cell_m, nx,
+                        ny, start, items, seen, stamp, radius, x, y, x, y)
 
 
 class Sweeper:
@@ -241,39 +286,3 @@ class Sweeper:
         self.stamp += 1
         return sweep_fraction(g.circles, g.walls, g.boxes, g.cell_m, g.nx, g.ny, g.start,
                               g.items, self.seen, self.stamp, radius, ax, ay, bx, by)
-
-
-@njit(cache=True)
-def overlap_depth(circles, walls, boxes, cell_m, nx, ny, start, items, seen, stamp, radius,
-                  x, y):
-    """Deepest overlap [m] of a disc of ``radius`` at (x, y) with any static shape (0: none);
-    the point-query distances :func:`sweep_fraction` uses."""
-    deepest = 0.0
-    for k in range(walls.shape[0]):
-        d = radius - (_segment_distance(x, y, walls[k, 0], walls[k, 1], walls[k, 2],
-                                        walls[k, 3]) - walls[k, 4])
-        if d > deepest:
-            deepest = d
-    gx0 = min(max(int(math.floor((x - radius) / cell_m)), 0), nx - 1)  # noqa: RUF046 (numba)
-    gy0 = min(max(int(math.floor((y - radius) / cell_m)), 0), ny - 1)  # noqa: RUF046 (numba)
-    gx1 = min(max(int(math.floor((x + radius) / cell_m)), 0), nx - 1)  # noqa: RUF046 (numba)
-    gy1 = min(max(int(math.floor((y + radius) / cell_m)), 0), ny - 1)  # noqa: RUF046 (numba)
-    n_circles = circles.shape[0]
-    for gy in range(gy0, gy1 + 1):
-        for gx in range(gx0, gx1 + 1):
-            cell = gy * nx + gx
-            for p in range(start[cell], start[cell + 1]):
-                k = items[p]
-                if seen[k] == stamp:
-                    continue
-                seen[k] = stamp
-                if k < n_circles:
-                    d = radius - (math.hypot(x - circles[k, 0], y - circles[k, 1])
-                                  - circles[k, 2])
-                else:
-                    m = k - n_circles
-                    d = radius - _box_distance(x, y, boxes[m, 0], boxes[m, 1], boxes[m, 2],
-                                               boxes[m, 3])
-                if d > deepest:
-                    deepest = d
-    return deepest

@@ -1,0 +1,83 @@
+"""One way to declare an experiment script's arguments: a frozen dataclass, like CleanRL's Args.
+
+Each field is a flag, ``--`` and its name with ``-`` for ``_``: the field's type is the
+flag's (``int``, ``float``, ``str``, or one of them ``| None``; a ``bool`` field is a
+switch, off by default), its default the flag's, and :func:`arg` gives the help line
+(units in brackets) and any other ``add_argument`` keyword (``metavar``, ``choices``)::
+
+    @dataclass(frozen=True)
+    class Args:
+        out: str = arg("results/scaling", "output folder")
+        seeds: int = arg(10, "seeds per method (0 .. N-1)")
+        resume: bool = arg(False, "skip runs already finished in --out")
+
+    def main(argv: list[str] | None = None) -> int:
+        args = parse(Args, __doc__, argv)
+
+The script's ``--help`` is its docstring's first paragraph, then each flag with its help
+and default. :func:`script_parser` is that parser alone, for a script that still adds
+its flags by hand.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import types
+import typing
+from collections.abc import Sequence
+from typing import Any, TypeVar
+
+T = TypeVar("T")
+
+
+def arg(default: Any, help: str, **kwargs: Any) -> Any:
+    """A field of an ``Args`` dataclass: its flag's default, help line and other
+    ``add_argument`` keywords."""
+    return dataclasses.field(default=default, metadata={"help": help, **kwargs})
+
+
+class _Help(argparse.ArgumentDefaultsHelpFormatter):
+    """A flag's help line ends with its default, unless that is None, a switch's False, or
+    the help names the default itself."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        if action.default in (None, False) or "default" in (action.help or ""):
+            return action.help
+        return super()._get_help_string(action)
+
+
+def script_parser(doc: str | None) -> argparse.ArgumentParser:
+    """An experiment script's parser: described by the first paragraph of ``doc`` (the
+    module docstring), every flag's help line ending with its default."""
+    return argparse.ArgumentParser(description=" ".join((doc or "").split("\n\n")[0].split()),
+                                   formatter_class=_Help)
+
+
+def _scalar(hint: Any) -> type:
+    """``int`` of ``int`` and of ``int | None``: what argparse converts the flag's text with."""
+    if isinstance(hint, types.UnionType) or typing.get_origin(hint) is typing.Union:
+        (hint,) = (h for h in typing.get_args(hint) if h is not type(None))
+    return hint
+
+
+def parser_of(cls: type, doc: str | None) -> argparse.ArgumentParser:
+    """:func:`script_parser` with a flag per field of the dataclass ``cls``."""
+    p = script_parser(doc)
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
+        flag = "--" + f.name.replace("_", "-")
+        kind = _scalar(hints[f.name])
+        if kind is bool:
+            if f.default is not False:
+                raise TypeError(f"{cls.__name__}.{f.name}: a switch is off by default")
+            p.add_argument(flag, action="store_true", **f.metadata)
+        else:
+            p.add_argument(flag, type=kind, default=f.default, **f.metadata)
+    return p
+
+
+def parse(cls: type[T], doc: str | None, argv: Sequence[str] | None = None) -> T:
+    """The ``cls`` (an ``Args`` dataclass) of the command line ``argv`` (None: sys.argv);
+    a usage error exits 2 with argparse's message."""
+    return cls(**vars(parser_of(cls, doc).parse_args(argv)))

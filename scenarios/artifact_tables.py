@@ -82,9 +82,9 @@ def optimum(d: dict[str, Any]) -> str:
 def memory(d: dict[str, Any]) -> str:
     """Peak RSS and checkpoint size per method and map size."""
     sizes = d["sizes"]
-    lines = [f"{d['kind']} maps, `rnhql train ... --episodes {d['episodes']} --save` per cell "
-             "in a fresh process, kernels compiled beforehand; peak RSS · checkpoint (the "
-             f"imports alone take {d['floor_mb']:.0f} MB):", "",
+    lines = [f"{d['kind']} maps, one training run of {d['episodes']} episodes saved to a "
+             "checkpoint per cell, each in a fresh process, kernels compiled beforehand; peak "
+             f"RSS · checkpoint (the imports alone take {d['floor_mb']:.0f} MB):", "",
              "| method | " + " | ".join(f"{n}²" for n in sizes) + " |",
              "|---|" + "---|" * len(sizes)]
     for m, row in d["methods"].items():

@@ -91,9 +91,19 @@ def process_wall_s() -> float | None:
         return None
 
 
+def study_digest(path: str | Path) -> dict[str, str]:
+    """The study script a table came from, and a hash of its text: a change of the study's
+    own code (a row's settings, what it measures) is not in the behaviour digests."""
+    path = Path(path).resolve()
+    rel = path.relative_to(ROOT).as_posix() if path.is_relative_to(ROOT) else str(path)
+    return {"path": rel, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
+
+
 def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any,
-                   directory: Path = RESULTS_DIR) -> Path:
-    """Write ``docs/results/<name>.json`` atomically: the study's figures and provenance."""
+                   directory: Path = RESULTS_DIR, study: str | Path | None = None) -> Path:
+    """Write ``docs/results/<name>.json`` atomically: the study's figures and provenance
+    (``study``: the study script's file, usually ``__file__``, hashed so that editing the
+    study marks its tables stale too)."""
     parts = sorted(set(depends_on))
     unknown = [p for p in parts if p not in PARTS]
     if unknown:
@@ -103,6 +113,8 @@ def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any
            "date": _dt.date.today().isoformat(), "code_version": code_version(),
            "behaviour": {p: digests[p] for p in parts}, "wall_s": process_wall_s(),
            "data": data}
+    if study is not None:
+        doc["study"] = study_digest(study)
     path = directory / f"{name}.json"
     atomic_write_text(path, json.dumps(doc, indent=1, sort_keys=False) + "\n")
     return path
@@ -122,9 +134,16 @@ def load_artifact(name: str, directory: Path = RESULTS_DIR) -> dict[str, Any]:
 
 
 def stale_parts(doc: dict[str, Any], now: dict[str, str] | None = None) -> list[str]:
-    """The parts whose behaviour changed since the artifact was measured."""
+    """The parts whose behaviour changed since the artifact was measured, and the study's
+    own script when its text changed (artifacts that recorded it)."""
     now = now or behaviour_digests()
-    return sorted(p for p, d in doc["behaviour"].items() if now.get(p) != d)
+    stale = sorted(p for p, d in doc["behaviour"].items() if now.get(p) != d)
+    study = doc.get("study")
+    if study is not None:
+        path = ROOT / study["path"]
+        if not path.exists() or study_digest(path)["sha256"] != study["sha256"]:
+            stale.append(f"the study {study['path']}")
+    return stale
 
 
 def provenance(doc: dict[str, Any], now: dict[str, str] | None = None) -> str:

@@ -73,3 +73,18 @@ def test_every_generated_block_in_the_docs_matches_its_artifact():
     assert pages, "no generated blocks found"
     code = Cog().main(["cog", "--check", "-I", str(REPO), *map(str, pages)])
     assert code == 0, "generated blocks are out of date: run `cog -r README.md docs/*.md`"
+
+
+def test_editing_the_study_script_marks_its_artifact_stale(tmp_path):
+    """The behaviour digests cover the learners and worlds, not a study's own settings (an
+    ablation row's switches): the artifact hashes its study script too."""
+    from scenarios.artifacts import load_artifact, stale_parts, write_artifact
+
+    study = tmp_path / "study.py"
+    study.write_text("ROWS = [('a', 1)]\n")
+    write_artifact("demo.x", "python -m demo", ["grid"], {"rows": 1}, directory=tmp_path,
+                   study=study)
+    doc = load_artifact("demo.x", directory=tmp_path)
+    assert stale_parts(doc) == []
+    study.write_text("ROWS = [('a', 2)]\n")
+    assert stale_parts(doc) == [f"the study {study}"]

@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
                                                                else sys.argv[1:]))
         write_artifact(f"memory.{args.artifact}", cmd.strip(), ["grid"],
                        {"kind": args.kind, "sizes": sizes, "episodes": args.episodes,
-                        "floor_mb": floor, "methods": measured})
+                        "floor_mb": floor, "methods": measured}, study=__file__)
     return 0
 
 

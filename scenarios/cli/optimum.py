@@ -117,5 +117,5 @@ def cmd_optimum(args: argparse.Namespace) -> int:
             else start.expected_primitives,
             "p_goal": start.p_goal_within_budget, "exact": exact, "continuous_m": continuous,
             "states": int(model.n_states), "drives": int(model.primitives),
-            "build_s": float(model.build_s), "driven": driven})
+            "build_s": float(model.build_s), "driven": driven}, study=__file__)
     return 0

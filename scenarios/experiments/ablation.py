@@ -339,7 +339,7 @@ def write_ablation_artifact(a: argparse.Namespace, labels: list[str], maps: list
             "labels": labels, "summary": summary}
     write_artifact(f"ablation.{a.artifact}",
                    "python -m scenarios.experiments.ablation " + " ".join(argv),
-                   ["grid"], data)
+                   ["grid"], data, study=__file__)
     with ctrl_c_held():
         figure(summary, maps, labels, ROOT / "docs" / "ablation.png",
                f"rnh-ql+ ablation, rewards {a.rewards}, {a.seeds} seeds x {a.episodes} "

@@ -134,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
 
         write_artifact(f"ladder.{args.artifact}", ladder_command(args)
                        + f" --artifact {args.artifact}", ["grid", "physics-exact",
-                                                          "physics-noisy"], data)
+                                                          "physics-noisy"], data, study=__file__)
         ladder_figure(data["rows"], methods, ROOT / "docs" / "ladder.png")
     print(text)
     return 0

@@ -128,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
 
         write_artifact(f"physics-grading.{args.artifact}", cmd + f" --artifact {args.artifact}",
                        ["grid", "physics-exact", "physics-noisy"],
-                       artifact_data(args, fid.label, methods, out))
+                       artifact_data(args, fid.label, methods, out), study=__file__)
     print(text)
     return 0
 

@@ -124,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
                + ("" if args.methods == p.get_default("methods") else
                   f" --methods {args.methods}") + f" --artifact {args.artifact}")
         write_artifact(f"reward-design.{args.artifact}", cmd, ["grid"],
-                       artifact_data(args, methods, facts, grid))
+                       artifact_data(args, methods, facts, grid), study=__file__)
     print(text)
     return 0
 

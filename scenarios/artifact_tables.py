@@ -170,6 +170,58 @@ def _physics_opt(rows: list[dict[str, Any]], m: str) -> str:
                 "—")
 
 
+@renderer("scaling")
+def scaling(d: dict[str, Any]) -> str:
+    """Arenas of growing size: optimal seeds · median [q25, q75] episodes to a stable optimal
+    route · median wall time per run, and each method's growth exponents."""
+    sizes, seeds = d["sizes"], d["seeds"]
+    first = next(iter(d["rows"].values()))
+    lines = [f"Rewards `{d['rewards']}`, {seeds} seeds; columns: n × n cells (route length in "
+             "moves, episode budget 60n); cells: optimal seeds / seeds · median [q25, q75] "
+             "episodes to a stable optimal route · median wall time per run; exponent: slope "
+             "of log median over log states, over the sizes with a finite median "
+             "(episodes, wall time).", "",
+             "| method | " + " | ".join(f"{q['n']}×{q['n']} ({q['route']}, {60 * q['n']})"
+                                       for q in first) + " | exponent |",
+             "|---|" + "---|" * (len(sizes) + 1)]
+    for m, pts in d["rows"].items():
+        cells = [f"{round(q['optimal'] * seeds)}/{seeds} · "
+                 + _q([q["episodes"][k] for k in ("median", "q25", "q75")])
+                 + f" · {q['wall']['median']:.2f} s" for q in pts]
+        fit = pts[0]["fit"]
+        lines.append(f"| {m} | " + " | ".join(cells) + f" | {fit['episodes']}, {fit['wall']} |")
+    return "\n".join(lines) + "\n"
+
+
+@renderer("scaling-maps")
+def scaling_maps(d: dict[str, Any]) -> str:
+    """Generated maps, one table per size: optimal seeds / seeds · median [q25, q75]
+    episodes to a stable optimal route · median wall time per run, per row and map kind."""
+    out = []
+    for size in sorted({p["size"] for p in d["points"]}):
+        pts = [p for p in d["points"] if p["size"] == size]
+        kinds = list(dict.fromkeys(p["kind"] for p in pts))
+        route = {p["kind"]: p["route"] for p in pts}
+        lines = ["| method | " + " | ".join(f"{k} {size}² (route {route[k]})" for k in kinds)
+                 + " |", "|---|" + "---|" * len(kinds)]
+        for row in dict.fromkeys(p["row"] for p in pts):
+            by = {p["kind"]: p for p in pts if p["row"] == row}
+            cells = []
+            for k in kinds:
+                p = by.get(k)
+                if p is None:
+                    cells.append("–")
+                    continue
+                q25, med, q75 = p["episodes"]
+                w = p["wall"][1]
+                cells.append(f"{p['optimal']}/{p['seeds']} · {_q([med, q25, q75])} · "
+                             f"{w:.{2 if w < 10 else 1}f} s")
+            lines.append(f"| {row} | " + " | ".join(cells) + " |")
+        out.append("\n".join(lines))
+    return ("Cells: optimal seeds / seeds · median [q25, q75] episodes to a stable optimal "
+            "route · median wall time per run.\n\n" + "\n\n".join(out) + "\n")
+
+
 def scenario_table() -> str:
     """The built-in scenarios, listed from the code (not a measurement: no artifact)."""
     from sim.grid import build_model

@@ -120,6 +120,17 @@ def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any
     return path
 
 
+ARTIFACT_NAME = re.compile(r"[a-z0-9][a-z0-9-]{0,63}")
+
+
+def check_artifact_name(parser: Any, name: str) -> None:
+    """Refuse an ``--artifact NAME`` that is not a short lower-case word (it becomes a file
+    name and a Cog call) before any work starts: argparse's usage error, exit 2."""
+    if not ARTIFACT_NAME.fullmatch(name):
+        parser.error(f"--artifact {name!r}: use lower-case letters, digits and '-' "
+                     "(at most 64), e.g. --artifact seed7")
+
+
 def load_artifact(name: str, directory: Path = RESULTS_DIR) -> dict[str, Any]:
     path = directory / f"{name}.json"
     try:

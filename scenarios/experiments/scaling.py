@@ -101,10 +101,17 @@ class Args:
     rewards: str = arg("goal-only", "reward scheme (a preset, or goal=,bump=,step=)")
     jobs: int | None = arg(None, "worker processes [default: all cores]")
     resume: bool = arg(False, "skip runs already finished in --out")
+    artifact: str | None = arg(None, "also write docs/results/scaling.NAME.json (the docs' "
+                               "table) and redraw docs/scaling.png from it", metavar="NAME")
 
 
 def main(argv: list[str] | None = None) -> int:
     args = parse(Args, __doc__, argv)
+    if args.artifact:
+        from scenarios.artifacts import check_artifact_name
+        from scenarios.experiments.args import parser_of
+
+        check_artifact_name(parser_of(Args, __doc__), args.artifact)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     sizes = [int(s) for s in args.sizes.split(",")]
@@ -134,10 +141,11 @@ def main(argv: list[str] | None = None) -> int:
     title = (f"Scaling, rewards {args.rewards}: arenas {', '.join(f'{n}x{n}' for n in sizes)}, "
              f"steps/episode 12n, episodes 60n, {args.seeds} seeds")
     figure(rows, out / "scaling.png", title)
-    lines = [f"# {title}", "",
-             f"Command: `python -m scenarios.experiments.scaling --out {args.out} --sizes "
-             f"{args.sizes} --methods {args.methods} --seeds {args.seeds} --rewards "
-             f"{args.rewards}`", "",
+    command = (f"python -m scenarios.experiments.scaling --out {args.out} --sizes {args.sizes} "
+               f"--methods {args.methods} --seeds {args.seeds} --rewards {args.rewards}")
+    if args.artifact:
+        write_scaling_artifact(args, command, sizes, rows, title)
+    lines = [f"# {title}", "", f"Command: `{command}`", "",
              "Cells: seeds whose final greedy route is optimal, median [q25, q75] episodes to a "
              "stable optimal route, median wall time per run. Exponent: slope of log median "
              "over log states (finite medians only).", "",
@@ -160,6 +168,29 @@ def main(argv: list[str] | None = None) -> int:
     atomic_write_text(out / "scaling.md", text)
     print(text)
     return 0
+
+
+def write_scaling_artifact(args: Args, command: str, sizes: list[int],
+                           rows: dict[str, list[dict[str, Any]]], title: str) -> None:
+    """``docs/results/scaling.NAME.json`` (the docs' table) and ``docs/scaling.png`` drawn
+    from it (:func:`figure_from_artifact`)."""
+    from scenarios.artifacts import write_artifact
+
+    data = {"title": title, "sizes": sizes, "seeds": args.seeds, "rewards": args.rewards,
+            "rows": rows}
+    write_artifact(f"scaling.{args.artifact}", f"{command} --artifact {args.artifact}",
+                   ["grid"], data, study=__file__)
+    figure_from_artifact(f"scaling.{args.artifact}")
+
+
+def figure_from_artifact(name: str, path: Path | None = None) -> Path:
+    """Redraw ``docs/scaling.png`` (or ``path``) from artifact ``name``."""
+    from scenarios.artifacts import ROOT, load_artifact
+
+    data = load_artifact(name)["data"]
+    path = path or ROOT / "docs" / "scaling.png"
+    figure(data["rows"], path, data["title"])
+    return path
 
 
 if __name__ == "__main__":

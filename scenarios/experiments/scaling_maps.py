@@ -39,9 +39,11 @@ from sim.maps import movingai_to_cell, write_free_grid
 
 METHODS = ("rnh-ql+", "haql", "dyna-q")
 # (label, method, overrides, uniform starts only)
-ABLATION = (("rnh-ql+, random starts only", "rnh-ql+", (), True),
-            ("rnh-ql+, no known-route test", "rnh-ql+", (("known_route", 0.0),), False),
-            ("rnh-ql+, prioritized sweeping", "rnh-ql+", (("sweeping", 1.0),), False))
+ABLATION = {"uniform": ("rnh-ql+, random starts only", "rnh-ql+", (), True),
+            "no-known": ("rnh-ql+, no known-route test", "rnh-ql+", (("known_route", 0.0),),
+                         False),
+            "sweeping": ("rnh-ql+, prioritized sweeping", "rnh-ql+", (("sweeping", 1.0),),
+                         False)}
 
 
 def write_problem(kind: str, size: int, seed: int, share: float, folder: Path
@@ -77,6 +79,26 @@ def cell(stat: dict[str, Any], seeds: int) -> str:
             f"[{f(e['q25'])}, {f(e['q75'])}] · {stat['wall_time_s']['median']:.1f} s")
 
 
+def reachable_cells(toml: Path) -> int:
+    """Free cells with a route to G: the states a learner can explore."""
+    from scenarios.runs.spec import load
+
+    _, model = load(str(toml))
+    return int((model.distance_to_goal >= 0).sum())
+
+
+def point(row: str, method: str, ablation: bool, kind: str, size: int, route: int,
+          states: int, stat: dict[str, Any]) -> dict[str, Any]:
+    """One row's cell on one map, as the artifact keeps it (quartiles as q25, median, q75)."""
+    e, w = stat["episodes_to_stable_optimal"], stat["wall_time_s"]
+    seeds = int(stat["seeds"])
+    return {"row": row, "method": method, "ablation": ablation, "kind": kind, "size": size,
+            "route": route, "states": states, "seeds": seeds,
+            "optimal": round(stat["optimal_route_fraction"] * seeds),
+            "episodes": [e["q25"], e["median"], e["q75"]],
+            "wall": [w["q25"], w["median"], w["q75"]]}
+
+
 def main(argv: list[str] | None = None) -> int:
     p = script_parser(__doc__)
     p.add_argument("--out", default="results/scaling-maps", help="output folder")
@@ -88,19 +110,34 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--s-starts", type=float, default=0.1,
                    help="share of episodes starting at S (0: the paper's uniform starts)")
     p.add_argument("--ablation", action="store_true",
-                   help="add rnh-ql+ with uniform starts only and without the known-route test")
+                   help="add rnh-ql+ rows: uniform starts only, without the known-route test, "
+                        "with prioritized sweeping")
+    p.add_argument("--ablation-rows", default=",".join(ABLATION), metavar="ROWS",
+                   help=f"which --ablation rows, of {', '.join(ABLATION)}")
     p.add_argument("--rewards", default="goal-only", help="reward scheme")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: cores)")
     p.add_argument("--resume", action="store_true", help="skip runs already in --out")
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/scaling-maps.NAME.json (the docs' table; "
+                        "docs/scaling-maps.png is drawn from these artifacts)")
     args = p.parse_args(argv)
+    if args.artifact:
+        from scenarios.artifacts import check_artifact_name
+
+        check_artifact_name(p, args.artifact)
     out = Path(args.out)
     sizes = [int(s) for s in args.sizes.split(",")]
     kinds = [k for k in args.kinds.split(",") if k]
     methods = [m for m in args.methods.split(",") if m]
+    ablation_rows = [r for r in args.ablation_rows.split(",") if r]
+    unknown = sorted(set(ablation_rows) - set(ABLATION))
+    if unknown:
+        p.error(f"--ablation-rows: unknown {unknown}; use some of {', '.join(ABLATION)}")
     jobs = args.jobs or os.cpu_count() or 1
     seeds = list(range(args.seeds))
     rows: dict[str, dict[str, str]] = {}
     columns = []
+    points: list[dict[str, Any]] = []
     for n in sizes:
         for kind in kinds:
             main_toml, uniform_toml, route = write_problem(kind, n, args.map_seed, args.s_starts,
@@ -111,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
             sweeps = [(None, main_toml, make_specs(str(main_toml), methods, seeds, episodes,
                                                    ["grid"], rewards=args.rewards))]
             if args.ablation:
-                for label, m, ov, uniform in ABLATION:
+                for label, m, ov, uniform in (ABLATION[r] for r in ablation_rows):
                     toml = uniform_toml if uniform else main_toml
                     sweeps.append((label, toml, make_specs(str(toml), [m], seeds, episodes,
                                                            ["grid"], overrides=ov,
@@ -125,6 +162,8 @@ def main(argv: list[str] | None = None) -> int:
                 for m in ([label] if label else methods):
                     key = m if label is None else specs[0].method
                     rows.setdefault(m, {})[col] = cell(res["summary"][key]["grid"], args.seeds)
+                    points.append(point(m, key, label is not None, kind, n, route,
+                                        reachable_cells(main_toml), res["summary"][key]["grid"]))
     title = (f"Route learning on {', '.join(f'{n}x{n}' for n in sizes)} maps: "
              f"{args.seeds} seeds, episodes 8n, steps/episode max(600, 4 x route), rewards "
              f"{args.rewards}, {args.s_starts:.0%} of episodes start at S")
@@ -132,7 +171,9 @@ def main(argv: list[str] | None = None) -> int:
              f"Command: `python -m scenarios.experiments.scaling_maps --out {args.out} --sizes "
              f"{args.sizes} --kinds {args.kinds} --methods {args.methods} --seeds {args.seeds} "
              f"--map-seed {args.map_seed} --s-starts {args.s_starts}"
-             f"{' --ablation' if args.ablation else ''}`", "",
+             f"{' --ablation' if args.ablation else ''}"
+             + ("" if not args.ablation or args.ablation_rows == p.get_default("ablation_rows")
+                else f" --ablation-rows {args.ablation_rows}") + "`", "",
              "Cells: seeds whose final greedy route is optimal · median [q25, q75] episodes to "
              "a stable optimal route · median wall time per run.", "",
              "| method | " + " | ".join(columns) + " |", "|---|" + "---|" * len(columns)]
@@ -140,6 +181,13 @@ def main(argv: list[str] | None = None) -> int:
         lines.append(f"| {m} | " + " | ".join(cells.get(c, "–") for c in columns) + " |")
     text = "\n".join(lines) + "\n"
     atomic_write_text(out / "scaling-maps.md", text)
+    if args.artifact:
+        from scenarios.artifacts import write_artifact
+
+        command = lines[2].removeprefix("Command: `").removesuffix("`")
+        write_artifact(f"scaling-maps.{args.artifact}", f"{command} --artifact {args.artifact}",
+                       ["grid"], {"title": title, "seeds": args.seeds, "columns": columns,
+                                  "points": points}, study=__file__)
     print(text)
     return 0
 

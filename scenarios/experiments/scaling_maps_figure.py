@@ -1,9 +1,11 @@
 """The scaling study's log-log figure and growth exponents, from finished study folders.
 
-    python -m scenarios.experiments.scaling_maps_figure results/scaling-maps-small \\
-        results/scaling-maps results/scaling-maps-512 --out docs/scaling-maps.png
+    python -m scenarios.experiments.scaling_maps_figure --artifacts small seed7 512 \\
+        --out docs/scaling-maps.png
+    python -m scenarios.experiments.scaling_maps_figure results/scaling-maps --out x.png
 
-Reads the main sweep (``<kind>-<n>/sweep0/results.json``, not the ablation's) of every
+Reads the committed artifacts ``docs/results/scaling-maps.NAME.json`` (their main rows,
+not the ablation's), or the main sweep (``<kind>-<n>/sweep0/results.json``) of every
 folder written by :mod:`scenarios.experiments.scaling_maps`, and draws, over the
 number of free cells with a route to G on log-log axes, each method's median episodes to a
 stable optimal route (bars: quartiles; a point only where at least half the seeds
@@ -69,6 +71,22 @@ def read_points(folders: Sequence[Path]) -> list[Point]:
                     method, kind, int(size), int((model.distance_to_goal >= 0).sum()), seeds,
                     round(st["optimal_route_fraction"] * seeds),
                     (e["q25"], e["median"], e["q75"]), (w["q25"], w["median"], w["q75"]))
+    return sorted(found.values(), key=lambda p: (p.method, p.kind, p.size))
+
+
+def points_from_artifacts(names: Sequence[str]) -> list[Point]:
+    """The main rows (not the ablation's) of artifacts ``scaling-maps.NAME``; a later
+    artifact's point for the same method, kind and size replaces an earlier one."""
+    from scenarios.artifacts import load_artifact
+
+    found: dict[tuple[str, str, int], Point] = {}
+    for name in names:
+        for p in load_artifact(f"scaling-maps.{name}")["data"]["points"]:
+            if p["ablation"]:
+                continue
+            found[(p["method"], p["kind"], p["size"])] = Point(
+                p["method"], p["kind"], p["size"], p["states"], p["seeds"], p["optimal"],
+                tuple(p["episodes"]), tuple(p["wall"]))
     return sorted(found.values(), key=lambda p: (p.method, p.kind, p.size))
 
 
@@ -156,14 +174,21 @@ def table(points: Sequence[Point]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     p = script_parser(__doc__)
-    p.add_argument("folders", nargs="+", type=Path,
+    p.add_argument("folders", nargs="*", type=Path,
                    help="output folders of scenarios.experiments.scaling_maps")
+    p.add_argument("--artifacts", nargs="+", default=None, metavar="NAME",
+                   help="read docs/results/scaling-maps.NAME.json instead of folders")
     p.add_argument("--out", type=Path, default=Path("results/scaling-maps.png"),
                    help="the figure (PNG); its table goes beside it as .md")
     args = p.parse_args(argv)
+    if bool(args.folders) == bool(args.artifacts):
+        p.error("give study folders or --artifacts NAME..., one of the two")
+    from scenarios.artifacts import ArtifactError
+
     try:
-        points = read_points(args.folders)
-    except (FileNotFoundError, json.JSONDecodeError, KeyError) as err:
+        points = (points_from_artifacts(args.artifacts) if args.artifacts
+                  else read_points(args.folders))
+    except (FileNotFoundError, json.JSONDecodeError, KeyError, ArtifactError) as err:
         print(f"scaling_maps_figure: error: {err}", file=sys.stderr)
         return 2
     out = draw(points, args.out)

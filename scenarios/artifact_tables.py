@@ -8,6 +8,7 @@ from collections.abc import Callable
 from typing import Any
 
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {}
+ROW_RENDERERS: dict[str, Callable[[list[dict[str, Any]]], str]] = {}
 
 
 def renderer(kind: str) -> Callable[[Callable[[dict[str, Any]], str]], Callable]:
@@ -220,6 +221,56 @@ def scaling_maps(d: dict[str, Any]) -> str:
         out.append("\n".join(lines))
     return ("Cells: optimal seeds / seeds · median [q25, q75] episodes to a stable optimal "
             "route · median wall time per run.\n\n" + "\n\n".join(out) + "\n")
+
+
+def row_renderer(kind: str) -> Callable[[Callable[[list[dict[str, Any]]], str]], Callable]:
+    def deco(fn: Callable[[list[dict[str, Any]]], str]) -> Callable:
+        ROW_RENDERERS[kind] = fn
+        return fn
+    return deco
+
+
+@row_renderer("aliasing")
+def aliasing_rows(ds: list[dict[str, Any]]) -> str:
+    """Aliasing at several fidelities: a row each."""
+    lines = ["| scenario | fidelity | (cell, action) pairs × drives | pairs with more than one "
+             "next cell | mean next-cell entropy | mean bump probability |",
+             "|---|---|---|---|---|---|"]
+    for d in ds:
+        lines.append(f"| {d['scenario']} | `{d['fidelity']}` | {d['pairs']:,} × {d['repeats']} "
+                     f"| {d['multi_outcome_fraction']:.4f} | {d['mean_entropy_bits']:.4f} bits "
+                     f"| {d['mean_bump_probability']:.4f} |")
+    return "\n".join(lines) + "\n"
+
+
+@renderer("aliasing")
+def aliasing_one(d: dict[str, Any]) -> str:
+    return aliasing_rows([d])
+
+
+@renderer("physics-batch")
+def physics_batch(d: dict[str, Any]) -> str:
+    """The batched physics world's speed: random primitives per second against robots per
+    Space, and one learning run's rate and where its time goes."""
+    m = d["machine"]
+    maps = list(d["scaling"])
+    sizes = list(d["scaling"][maps[0]])
+    lines = [f"Measured on {m['cores']} cores ({m['cpu']}, Python {m['python']}; 1-minute load "
+             f"{m['load_1min'][0]} before, {m['load_1min'][1]} after: other work on the "
+             "machine lowers every figure). Random primitives per second on one core, by "
+             "robots in one Space:", "",
+             "| map | " + " | ".join(sizes) + " |", "|---|" + "---|" * len(sizes)]
+    for name in maps:
+        lines.append(f"| {name} | " + " | ".join(
+            f"{d['scaling'][name][n]['primitives_per_s'] / 1000:.0f}k" for n in sizes) + " |")
+    le = d["learning"]
+    split = ", ".join(f"{k} {100 * v:.0f} %" for k, v in
+                      sorted(le["split_fraction_of_training"].items(), key=lambda kv: -kv[1]))
+    lines += ["", f"A learning run as `compare --world physics` trains it ({le['runs']} runs × "
+              f"{le['episodes']} episodes at `{le['fidelity']}`, one batch, one core): "
+              f"**{le['primitives_per_s_training'] / 1000:.0f}k primitives/s** "
+              f"({le['primitives']:,} primitives); time split: {split}."]
+    return "\n".join(lines) + "\n"
 
 
 def scenario_table() -> str:

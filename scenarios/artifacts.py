@@ -185,6 +185,29 @@ def rendered(name: str) -> str:
     return f"{head}{body}\n\n{tail}\n"
 
 
+def rendered_rows(names: Iterable[str]) -> str:
+    """One table with a row per artifact (all of one kind, e.g. aliasing at three
+    fidelities), then each artifact's provenance; a stale one's banner above the table."""
+    from scenarios.artifact_tables import ROW_RENDERERS
+
+    docs = [load_artifact(n) for n in names]
+    kinds = {d["name"].split(".")[0] for d in docs}
+    if len(kinds) != 1 or next(iter(kinds)) not in ROW_RENDERERS:
+        raise ArtifactError(f"{list(names)}: give artifacts of one kind with a row renderer")
+    now = behaviour_digests()
+    body = ROW_RENDERERS[kinds.pop()]([d["data"] for d in docs]).rstrip("\n")
+    heads = [provenance(d, now).split("\n\n")[0] for d in docs if stale_parts(d, now)]
+    tails = [provenance(d, now).split("\n\n")[-1] for d in docs]
+    return "".join(h + "\n\n" for h in heads) + body + "\n\n" + "\n\n".join(tails) + "\n"
+
+
+def render_rows(names: list[str]) -> None:
+    """For Cog blocks: :func:`rendered_rows`."""
+    import cog
+
+    cog.out(rendered_rows(names))
+
+
 def render(name: str) -> None:
     """For Cog blocks: write artifact ``name``'s Markdown into the page."""
     import cog  # only inside a Cog run

@@ -9,13 +9,13 @@
   core), with the time split between learners, the compiled world kernel, Chipmunk
   (casts and contact checks), episode bookkeeping and the rest of the loop.
 
-Run: ``python -m scenarios.bench.physics_batch [--quick] [--plot FILE.png]``;
+Run: ``python -m scenarios.bench.physics_batch [--quick] [--plot FILE.png]
+[--artifact NAME]``;
 ``rnhql bench --physics`` includes it.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import tempfile
 import time
@@ -125,6 +125,8 @@ def plot(figures: dict[str, Any], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from scenarios.figures.save import save_figure
+
     fig, ax = plt.subplots(figsize=(6, 4))
     for name, rows in figures["scaling"].items():
         n = [int(k) for k in rows]
@@ -137,19 +139,57 @@ def plot(figures: dict[str, Any], path: Path) -> None:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path)
     plt.close(fig)
 
 
-if __name__ == "__main__":
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def figure_from_artifact(name: str, path: Path) -> None:
+    """Redraw the scaling plot from artifact ``name`` (``rnhql report --figures``)."""
+    from scenarios.artifacts import load_artifact
+
+    plot(load_artifact(name)["data"], path)
+
+
+def main(argv: list[str] | None = None) -> int:
+    from scenarios.experiments.args import script_parser
+
+    ap = script_parser(__doc__)
     ap.add_argument("--quick", action="store_true", help="shorter timings, 30 episodes")
     ap.add_argument("--episodes", type=int, default=None,
                     help="episodes of the learning run (default 300; 30 with --quick)")
     ap.add_argument("--plot", type=Path, default=None, help="write the scaling plot here")
-    args = ap.parse_args()
+    ap.add_argument("--artifact", default=None, metavar="NAME",
+                    help="also write docs/results/physics-batch.NAME.json (the docs' table) "
+                         "and redraw docs/physics_batch.png from it")
+    args = ap.parse_args(argv)
+    if args.artifact:
+        from scenarios.artifacts import check_artifact_name
+
+        check_artifact_name(ap, args.artifact)
+    import os
+
+    load_before = os.getloadavg()[0]  # other work on the machine skews every timing
     figs = {"scaling": scaling(0.5 if args.quick else 2.0, (1, 16, 256) if args.quick else SIZES),
             "learning": learning(args.episodes or (30 if args.quick else 300))}
     if args.plot is not None:
         plot(figs, args.plot)
+    if args.artifact:
+        import platform
+
+        from scenarios.artifacts import ROOT, write_artifact
+
+        figs["machine"] = {"cores": os.cpu_count(), "cpu": platform.processor() or
+                           platform.machine(), "python": platform.python_version(),
+                           "load_1min": [round(load_before, 2), round(os.getloadavg()[0], 2)]}
+        cmd = ("python -m scenarios.bench.physics_batch" + (" --quick" if args.quick else "")
+               + ("" if args.episodes is None else f" --episodes {args.episodes}")
+               + f" --artifact {args.artifact}")
+        write_artifact(f"physics-batch.{args.artifact}", cmd, ["physics-exact"], _round(figs),
+                       study=__file__)
+        figure_from_artifact(f"physics-batch.{args.artifact}", ROOT / "docs" / "physics_batch.png")
     print(json.dumps(_round(figs), indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

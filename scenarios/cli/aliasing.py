@@ -11,11 +11,18 @@ from scenarios.cli.args import check_output_file, scenario_key
 def cmd_aliasing(args: argparse.Namespace) -> int:
     from scenarios.experiments.aliasing import run
 
+    if args.artifact:
+        from scenarios.artifacts import ARTIFACT_NAME
+        from sim.errors import InputError
+
+        if not ARTIFACT_NAME.fullmatch(args.artifact):
+            raise InputError("command line", "--artifact", f"{args.artifact!r} is not a name",
+                             "use lower-case letters, digits and '-', e.g. paper-50-noisy")
     name, start, goal = scenario_key(args)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         check_output_file(out / "aliasing.json", "--out")
     run(argparse.Namespace(scenario=name, start=start, goal=goal, fidelity=args.fidelity or
                            "exact", repeats=args.repeats, seed=args.seed, rewards=args.rewards,
-                           out=out))
+                           out=out, artifact=args.artifact))
     return 0

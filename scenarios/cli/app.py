@@ -119,6 +119,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="noise and start-pose seed (0)")
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder: aliasing.json, heat map PNG, recording")
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/aliasing.NAME.json (the docs' table and "
+                        "heat map)")
     p.set_defaults(func=aliasing.cmd_aliasing)
 
     p = sub.add_parser("optimum", help="V*: the optimum of the physics world at a fidelity "
@@ -151,6 +154,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="re-run every stale artifact's study, then regenerate the pages")
     p.add_argument("--dry-run", action="store_true",
                    help="with --refresh: print what would run and what it took last time")
+    p.add_argument("--figures", action="store_true",
+                   help="redraw every docs/ figure from its committed artifacts")
     p.set_defaults(func=report.cmd_report)
 
     p = sub.add_parser("bench", help="measure throughput")

@@ -5,8 +5,9 @@ Every generated table in the README and ``docs/`` comes from an artifact in
 and at which code version they were measured, what they took, and whether the code's
 behaviour has changed since (stale), and the tables still typed by hand. ``--refresh``
 re-runs the command of every stale artifact, one after another (each is a study that
-uses every core), then regenerates the pages (``cog -r``). ``--dry-run`` says what a
-refresh would run and how long it took last time.
+uses every core), then redraws the figures and regenerates the pages (``cog -r``).
+``--figures`` redraws every ``docs/`` figure from its artifacts (:mod:`scenarios.artifact_figures`).
+``--dry-run`` says what a refresh would run and how long it took last time.
 """
 
 from __future__ import annotations
@@ -55,6 +56,19 @@ def cmd_report(args: argparse.Namespace) -> int:
               f"{_took(doc.get('wall_s'))} | {state}")
         if parts:
             stale.append(doc)
+    from scenarios.artifact_figures import FIGURES, redraw
+
+    print("\nfigure | drawn from | state")
+    names = set(artifact_names())
+    for fig in FIGURES:
+        missing = [a for a in fig.artifacts if a not in names]
+        stale_of = [a for a in fig.artifacts if a in names and stale_parts(load_artifact(a), now)]
+        state = (f"MISSING ({', '.join(missing)})" if missing else
+                 f"STALE ({', '.join(stale_of)})" if stale_of else "fresh")
+        print(f"{fig.path} | {', '.join(fig.artifacts)} | {state}")
+    if getattr(args, "figures", False):
+        for path in redraw():
+            print(f"redrew {path.relative_to(ROOT)}")
     hand = legacy_tables()
     if hand:
         print(f"\ntyped by hand ({len(hand)}; re-run with --artifact and render them):")
@@ -81,5 +95,7 @@ def cmd_report(args: argparse.Namespace) -> int:
             return 1
     if args.dry_run:
         return 0
+    for path in redraw():
+        print(f"redrew {path.relative_to(ROOT)}")
     pages = [str(p) for p in generated_pages()]
     return subprocess.call([sys.executable, "-m", "cogapp", "-r", "-I", str(ROOT), *pages])

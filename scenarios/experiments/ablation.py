@@ -341,10 +341,21 @@ def write_ablation_artifact(a: argparse.Namespace, labels: list[str], maps: list
                    "python -m scenarios.experiments.ablation " + " ".join(argv),
                    ["grid"], data, study=__file__)
     with ctrl_c_held():
-        figure(summary, maps, labels, ROOT / "docs" / "ablation.png",
-               f"rnh-ql+ ablation, rewards {a.rewards}, {a.seeds} seeds x {a.episodes} "
-               "episodes: optimal seeds (colour, top) and median episodes to stable optimal "
-               "(bottom)")
+        figure_from_artifact(f"ablation.{a.artifact}", ROOT / "docs" / "ablation.png")
+
+
+def figure_from_artifact(name: str, path: Path) -> None:
+    """Draw the ablation's figure from artifact ``name`` (what ``rnhql report --figures``
+    redraws ``docs/ablation.png`` with)."""
+    from scenarios.artifacts import load_artifact
+
+    d = load_artifact(name)["data"]
+    summary = {lab: {m: {**c, "median": math.inf if c["median"] is None else c["median"]}
+                     for m, c in row.items()} for lab, row in d["summary"].items()}
+    figure(summary, d["maps"], d["labels"], path,
+           f"rnh-ql+ ablation, rewards {d['rewards']}, {d['seeds']} seeds x {d['episodes']} "
+           "episodes: optimal seeds (colour, top) and median episodes to stable optimal "
+           "(bottom)")
 
 
 if __name__ == "__main__":

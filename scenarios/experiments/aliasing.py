@@ -139,32 +139,72 @@ def heat_map(sc: Scenario, model: TabularModel, result: dict[str, Any]) -> np.nd
     return grid.reshape(sc.ny, sc.nx)
 
 
-def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str, Any]) -> None:
+def heat_map_figure(grid: np.ndarray, title: str, path: Path) -> None:
+    """The heat map PNG: each cell's largest next-cell entropy (grey: blocked or not
+    reaching G)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from scenarios.figures.save import save_figure
+
+    fig, ax = plt.subplots(figsize=(6, 5.4))
+    cmap = plt.get_cmap("magma").with_extremes(bad="0.75")  # blocked / not reaching G: grey
+    im = ax.imshow(grid, origin="lower", cmap=cmap, vmin=0.0,
+                   vmax=max(1.0, float(np.nanmax(grid)) if np.isfinite(grid).any() else 1.0))
+    fig.colorbar(im, ax=ax, label="largest next-cell entropy over the 4 actions [bits]")
+    ax.set_title(title, fontsize=9)
+    ax.set_xlabel("x [cells]  (grey: blocked or not reaching G)")
+    ax.set_ylabel("y [cells]")
+    fig.tight_layout()
+    save_figure(fig, path)
+    plt.close(fig)
+
+
+def write_artifact_of(name: str, command: str, sc: Scenario, model: TabularModel,
+                      result: dict[str, Any]) -> None:
+    """``docs/results/aliasing.NAME.json``: the summary figures and the heat map's cells
+    (None: blocked or not reaching G), what the docs' table and figure are drawn from."""
+    from scenarios.artifacts import write_artifact
+
+    grid = heat_map(sc, model, result)
+    keep = ("scenario", "fidelity", "repeats", "seed", "pairs", "primitives",
+            "multi_outcome_fraction", "mean_entropy_bits", "mean_bump_probability")
+    data = {k: result[k] for k in keep}
+    data["heat_map"] = [[None if np.isnan(v) else round(float(v), 4) for v in row]
+                        for row in grid]
+    write_artifact(f"aliasing.{name}", command, ["physics-exact", "physics-noisy"], data,
+                   study=__file__)
+
+
+def figure_from_artifact(name: str, path: Path) -> None:
+    """Redraw the heat map from artifact ``name`` (``rnhql report --figures``)."""
+    from scenarios.artifacts import load_artifact
+
+    d = load_artifact(name)["data"]
+    grid = np.array([[np.nan if v is None else v for v in row] for row in d["heat_map"]])
+    heat_map_figure(grid, f"{d['scenario']}, fidelity {d['fidelity']}: "
+                    f"{100 * d['multi_outcome_fraction']:.1f} % of (cell, action) pairs alias",
+                    path)
+
+
+def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str, Any]) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
     from scenarios.recording.file import RecordingFile
 
     out.mkdir(parents=True, exist_ok=True)
     public = {k: v for k, v in result.items() if not k.startswith("_")}
     atomic_write_text(out / "aliasing.json", json.dumps(public, indent=1))
     grid = heat_map(sc, model, result)
-    fig, ax = plt.subplots(figsize=(6, 5.4))
-    cmap = plt.get_cmap("magma").with_extremes(bad="0.75")  # blocked / not reaching G: grey
-    im = ax.imshow(grid, origin="lower", cmap=cmap, vmin=0.0,
-                   vmax=max(1.0, float(np.nanmax(grid)) if np.isfinite(grid).any() else 1.0))
-    fig.colorbar(im, ax=ax, label="largest next-cell entropy over the 4 actions [bits]")
-    ax.set_title(f"{sc.name}, fidelity {result['fidelity']}: "
-                 f"{100 * result['multi_outcome_fraction']:.1f} % of (cell, action) pairs "
-                 "alias", fontsize=9)
-    ax.set_xlabel("x [cells]  (grey: blocked or not reaching G)")
-    ax.set_ylabel("y [cells]")
-    fig.tight_layout()
-    save_figure(fig, out / "aliasing.png")
-    plt.close(fig)
+    heat_map_figure(grid, f"{sc.name}, fidelity {result['fidelity']}: "
+                    f"{100 * result['multi_outcome_fraction']:.1f} % of (cell, action) pairs "
+                    "alias", out / "aliasing.png")
+    cmap = plt.get_cmap("magma").with_extremes(bad="0.75")
     import rerun as rr
 
     with RecordingFile(out / "aliasing.rrd",
@@ -190,7 +230,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0, help="noise and start-pose seed (0)")
     ap.add_argument("--rewards", default=None, help="reward scheme (does not change aliasing)")
     ap.add_argument("--out", required=True, type=Path, metavar="DIR")
+    ap.add_argument("--artifact", default=None, metavar="NAME",
+                    help="also write docs/results/aliasing.NAME.json (the docs' table and "
+                         "heat map)")
     args = ap.parse_args(argv)
+    if args.artifact:
+        from scenarios.artifacts import check_artifact_name
+
+        check_artifact_name(ap, args.artifact)
     run(args)
     return 0
 
@@ -206,6 +253,12 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                      args.rewards)
     result = measure_aliasing(sc, model, fid, args.repeats, args.seed)
     write_outputs(args.out, sc, model, result)
+    if getattr(args, "artifact", None):
+        command = (f"rnhql aliasing {args.scenario} --fidelity {args.fidelity} --out {args.out}"
+                   + ("" if args.repeats == 20 else f" --repeats {args.repeats}")
+                   + ("" if args.seed == 0 else f" --seed {args.seed}")
+                   + f" --artifact {args.artifact}")
+        write_artifact_of(args.artifact, command, sc, model, result)
     print(f"{sc.name}, fidelity {result['fidelity']}: {result['pairs']} (cell, action) pairs x "
           f"{result['repeats']} drives in {result['seconds']:.1f} s; multi_outcome_fraction "
           f"{result['multi_outcome_fraction']:.4f}, mean entropy "

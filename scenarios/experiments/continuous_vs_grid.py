@@ -135,9 +135,18 @@ def main(argv: list[str] | None = None) -> int:
         write_artifact(f"ladder.{args.artifact}", ladder_command(args)
                        + f" --artifact {args.artifact}", ["grid", "physics-exact",
                                                           "physics-noisy"], data, study=__file__)
-        ladder_figure(data["rows"], methods, ROOT / "docs" / "ladder.png")
+        figure_from_artifact(f"ladder.{args.artifact}", ROOT / "docs" / "ladder.png")
     print(text)
     return 0
+
+
+def figure_from_artifact(name: str, path: Path) -> None:
+    """Draw the ladder's figure from artifact ``name`` (``rnhql report --figures``)."""
+    from scenarios.artifacts import load_artifact
+
+    d = load_artifact(name)["data"]
+    methods = list(dict.fromkeys(r["method"] for r in d["rows"]))
+    ladder_figure(d["rows"], methods, path)
 
 
 def _slug(name: str) -> str:

@@ -191,7 +191,25 @@ def scaling(d: dict[str, Any]) -> str:
                  + f" · {q['wall']['median']:.2f} s" for q in pts]
         fit = pts[0]["fit"]
         lines.append(f"| {m} | " + " | ".join(cells) + f" | {fit['episodes']}, {fit['wall']} |")
+    lines += ["", "Where most seeds reach a stable optimal route (generated from the table): "
+              + "; ".join(
+        _scaling_sentence(m, pts, seeds) for m, pts in d["rows"].items()) + "."]
     return "\n".join(lines) + "\n"
+
+
+def _scaling_sentence(method: str, pts: list[dict[str, Any]], seeds: int) -> str:
+    """Up to which size a method keeps a stable optimal route in most seeds."""
+    good = [q for q in pts if q["episodes"]["median"] is not None
+            and round(q["optimal"] * seeds) * 2 > seeds]
+    if not good:
+        return f"`{method}` at no size"
+    if len(good) == len(pts):
+        lo, hi = pts[0]["episodes"]["median"], pts[-1]["episodes"]["median"]
+        return (f"`{method}` at every size, median {lo:.0f} to {hi:.0f} episodes "
+                f"(exponent {pts[0]['fit']['episodes']})")
+    last = good[-1]
+    return (f"`{method}` up to {last['n']}×{last['n']} only "
+            f"(median {last['episodes']['median']:.0f} episodes there)")
 
 
 @renderer("scaling-maps")

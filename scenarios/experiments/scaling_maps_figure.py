@@ -172,6 +172,26 @@ def table(points: Sequence[Point]) -> str:
     return "\n".join(rows) + "\n"
 
 
+def points_text(points: Sequence[Point]) -> str:
+    return ("Cells: free cells with a route to G: seeds optimal · median [q25, q75] episodes "
+            "to a stable optimal route · median wall time per run. Exponents: least-squares "
+            "slope over log free cells.\n\n" + table(points))
+
+
+def render_points(names: Sequence[str]) -> None:
+    """For a Cog block: every point of artifacts ``scaling-maps.NAME``, each artifact's
+    provenance (and stale banner) under the table."""
+    import cog
+
+    from scenarios.artifacts import load_artifact, provenance
+
+    docs = [load_artifact(f"scaling-maps.{n}") for n in names]
+    heads = [provenance(d).split("\n\n")[0] for d in docs if "\n\n" in provenance(d)]
+    tails = [provenance(d).split("\n\n")[-1] for d in docs]
+    cog.out("".join(h + "\n\n" for h in heads) + points_text(points_from_artifacts(names))
+            + "\n" + "\n\n".join(tails) + "\n")
+
+
 def main(argv: list[str] | None = None) -> int:
     p = script_parser(__doc__)
     p.add_argument("folders", nargs="*", type=Path,
@@ -192,9 +212,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"scaling_maps_figure: error: {err}", file=sys.stderr)
         return 2
     out = draw(points, args.out)
-    text = ("Cells: free cells with a route to G: seeds optimal · median [q25, q75] episodes "
-            "to a stable optimal route · median wall time per run. Exponents: least-squares "
-            "slope over log free cells.\n\n" + table(points))
+    text = points_text(points)
     atomic_write_text(args.out.with_suffix(".md"), text)
     print(text)
     print(f"wrote {out} and {args.out.with_suffix('.md')}", file=sys.stderr)

@@ -91,6 +91,26 @@ def process_wall_s() -> float | None:
         return None
 
 
+def machine_load() -> dict[str, Any]:
+    """Cores and the 1-minute load average when the study ended: wall times measured on a
+    busy machine are longer, and the table says so."""
+    try:
+        load = round(os.getloadavg()[0], 2)
+    except OSError:
+        load = None
+    return {"cores": os.cpu_count(), "load_1min": load}
+
+
+def busy_note(doc: dict[str, Any]) -> str:
+    """`` (machine busy: ...)`` when the study ended with more runnable work than cores."""
+    m = doc.get("machine") or {}
+    load, cores = m.get("load_1min"), m.get("cores")
+    if load is None or not cores or load <= cores:
+        return ""
+    return (f" The machine was busy (load {load:g} on {cores} cores at the end): wall times "
+            "are longer than on a quiet machine.")
+
+
 def study_digest(path: str | Path) -> dict[str, str]:
     """The study script a table came from, and a hash of its text: a change of the study's
     own code (a row's settings, what it measures) is not in the behaviour digests."""
@@ -112,7 +132,7 @@ def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any
     doc = {"format": FORMAT, "name": name, "command": command,
            "date": _dt.date.today().isoformat(), "code_version": code_version(),
            "behaviour": {p: digests[p] for p in parts}, "wall_s": process_wall_s(),
-           "data": data}
+           "machine": machine_load(), "data": data}
     if study is not None:
         doc["study"] = study_digest(study)
     path = directory / f"{name}.json"
@@ -161,7 +181,8 @@ def provenance(doc: dict[str, Any], now: dict[str, str] | None = None) -> str:
     """The line under a generated table, and the stale banner above it when due."""
     stale = stale_parts(doc, now)
     line = (f"<sub>Generated from `docs/results/{doc['name']}.json`, written by "
-            f"`{doc['command']}` on {doc['date']} at {doc['code_version']}.</sub>")
+            f"`{doc['command']}` on {doc['date']} at {doc['code_version']}."
+            f"{busy_note(doc)}</sub>")
     if not stale:
         return line
     return (f"> **Stale**: the code's behaviour ({', '.join(stale)}) changed since these "

@@ -88,3 +88,42 @@ def test_editing_the_study_script_marks_its_artifact_stale(tmp_path):
     assert stale_parts(doc) == []
     study.write_text("ROWS = [('a', 2)]\n")
     assert stale_parts(doc) == [f"the study {study}"]
+
+
+def test_an_artifact_records_the_machine_load_and_a_busy_machine_is_named():
+    from scenarios.artifacts import busy_note
+
+    quiet = {"machine": {"cores": 2, "load_1min": 1.5}}
+    busy = {"machine": {"cores": 2, "load_1min": 3.9}}
+    assert busy_note(quiet) == "" and busy_note({}) == ""
+    assert "load 3.9 on 2 cores" in busy_note(busy)
+
+
+def test_artifact_names_are_checked_before_any_work():
+    import argparse
+
+    from scenarios.artifacts import check_artifact_name
+
+    p = argparse.ArgumentParser()
+    check_artifact_name(p, "paper-50-noisy")
+    for bad in ("A", "a b", "../x", "", "x" * 65, "a.b"):
+        with pytest.raises(SystemExit) as err:
+            check_artifact_name(p, bad)
+        assert err.value.code == 2
+
+
+def test_rows_of_several_artifacts_make_one_table_with_each_provenance(tmp_path, monkeypatch):
+    from scenarios.artifacts import rendered_rows
+
+    monkeypatch.setattr(artifacts, "RESULTS_DIR", tmp_path)
+    for name, mof in (("exact", 0.0), ("noisy", 0.0245)):
+        data = {"scenario": "paper-50", "fidelity": name, "repeats": 20, "seed": 0,
+                "pairs": 8, "primitives": 160, "multi_outcome_fraction": mof,
+                "mean_entropy_bits": 0.01, "mean_bump_probability": 0.06}
+        write_artifact(f"aliasing.{name}", f"rnhql aliasing --fidelity {name}", ["grid"],
+                       data, directory=tmp_path)
+    monkeypatch.setattr(artifacts, "load_artifact",
+                        lambda n, directory=tmp_path: load_artifact(n, directory))
+    text = rendered_rows(["aliasing.exact", "aliasing.noisy"])
+    assert text.count("| paper-50 |") == 2 and "0.0245" in text
+    assert text.count("<sub>Generated from") == 2

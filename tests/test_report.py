@@ -31,8 +31,19 @@ def test_a_dry_refresh_names_the_stale_commands_and_runs_nothing(capsys, monkeyp
     out = capsys.readouterr().out
     names = artifact_names()
     assert f"refresh: {len(names)} stale artifact(s)" in out
-    assert out.count("STALE") == len(names)
+    stale_lines = [ln for ln in out.splitlines()
+                   if ln.split(" | ")[0] in names and "STALE" in ln]
+    assert len(stale_lines) == len(names)
     assert ran == []
+
+
+def test_report_lists_every_docs_figure_with_its_artifacts(capsys):
+    from scenarios.artifact_figures import FIGURES
+
+    assert main(["report"]) == 0
+    out = capsys.readouterr().out
+    for fig in FIGURES:
+        assert f"{fig.path} | {', '.join(fig.artifacts)} |" in out
 
 
 @pytest.mark.parametrize("command, head", [

@@ -241,6 +241,20 @@ def scaling_maps(d: dict[str, Any]) -> str:
             "route · median wall time per run.\n\n" + "\n\n".join(out) + "\n")
 
 
+@renderer("paper-claims")
+def paper_claims(d: dict[str, Any]) -> str:
+    """The paper's claims, one by one: whether each holds here and what was measured."""
+    held = sum(c["holds"] for c in d["claims"])
+    lines = [f"{held} of {len(d['claims'])} claims hold ({d['seeds']} seeds × {d['episodes']} "
+             f"episodes, rewards: {d['rewards']}).", "",
+             "| claim | holds | measured |", "|---|---|---|"]
+    lines += [f"| {c['claim']} | {'yes' if c['holds'] else '**no**'} | {c['measured']} |"
+              for c in d["claims"]]
+    lines += ["", "Why (value iteration on paper-50, computed by the study):", "",
+              *d["value_notes"]]
+    return "\n".join(lines) + "\n"
+
+
 def row_renderer(kind: str) -> Callable[[Callable[[list[dict[str, Any]]], str]], Callable]:
     def deco(fn: Callable[[list[dict[str, Any]]], str]) -> Callable:
         ROW_RENDERERS[kind] = fn

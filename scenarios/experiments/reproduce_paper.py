@@ -180,7 +180,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--resume", action="store_true", help="skip runs already finished")
     p.add_argument("--rewards", default=None,
                    help="reward scheme (default: the scenarios' own, the paper's)")
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/paper-claims.NAME.json (the docs' table)")
     args = p.parse_args(argv)
+    if args.artifact:
+        from scenarios.artifacts import check_artifact_name
+
+        check_artifact_name(p, args.artifact)
     out = Path(args.out)
     seeds = list(range(args.seeds))
     if args.backend == "local":
@@ -201,8 +207,22 @@ def main(argv: list[str] | None = None) -> int:
     alpha = {a: sweep(f"alpha-{a:g}", "paper-50", SWEEP_METHODS, (("alpha", a),))
              for a in ALPHAS}
     eps = {e: sweep(f"eps-{e:g}", "paper-50", SWEEP_METHODS, (("eps", e),)) for e in EPSILONS}
-    text = report(claims(compare, alpha, eps, args.episodes), args)
+    rows = claims(compare, alpha, eps, args.episodes)
+    text = report(rows, args)
     atomic_write_text(out / "REPORT.md", text)
+    if args.artifact:
+        from scenarios.artifacts import write_artifact
+
+        command = (f"python -m scenarios.experiments.reproduce_paper --out {args.out} --seeds "
+                   f"{args.seeds} --episodes {args.episodes}"
+                   + (f" --rewards {args.rewards}" if args.rewards else "")
+                   + f" --artifact {args.artifact}")
+        write_artifact(f"paper-claims.{args.artifact}", command, ["grid"],
+                       {"seeds": args.seeds, "episodes": args.episodes,
+                        "rewards": args.rewards or "the scenarios' own (paper)",
+                        "claims": [{"claim": c, "holds": bool(h), "measured": e}
+                                   for c, h, e in rows],
+                        "value_notes": _value_notes(args)}, study=__file__)
     print(text)
     return 0
 

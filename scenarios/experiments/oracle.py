@@ -71,7 +71,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seeds", type=int, default=10)
     p.add_argument("--episodes", type=int, default=3000)
     p.add_argument("--gamma", type=float, default=0.95)
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/oracle.NAME.json (the docs' table)")
     args = p.parse_args(argv)
+    if args.artifact:
+        from scenarios.artifacts import check_artifact_name
+
+        check_artifact_name(p, args.artifact)
+    rows: list[dict] = []
     lines = [f"# Oracle bound on {args.scenario}: Q-learning shaped by the best potential each "
              "feature set can represent", "",
              f"Command: `python -m scenarios.experiments.oracle --out {args.out} --scenario "
@@ -104,12 +111,24 @@ def main(argv: list[str] | None = None) -> int:
                 return "never" if not np.isfinite(v) else f"{v:.0f}"
 
             err = float(np.mean(np.abs(pot[free] - v_star[free])))
+            rows.append({"rewards": scheme, "potential": name, "fit_error": err,
+                         "v_star_s": float(v_star[model.start]), "seeds": args.seeds,
+                         "optimal": int(sum(r[0] for r in runs)),
+                         "stable": [None if not np.isfinite(v) else float(v)
+                                    for v in (med, q25, q75)]})
             lines.append(f"| {scheme} | {name} | {err:.3g} | {v_star[model.start]:.3g} | "
                          f"{sum(r[0] for r in runs)}/{args.seeds} · {f(med)} [{f(q25)}, "
                          f"{f(q75)}] |")
             print(f"done: {scheme}, {name}", file=sys.stderr, flush=True)  # progress only
     text = "\n".join(lines) + "\n"
     atomic_write_text(Path(args.out) / "ORACLE.md", text)
+    if args.artifact:
+        from scenarios.artifacts import write_artifact
+
+        write_artifact(f"oracle.{args.artifact}", lines[2].removeprefix("Command: `")
+                       .removesuffix("`") + f" --artifact {args.artifact}", ["grid"],
+                       {"scenario": args.scenario, "episodes": args.episodes,
+                        "gamma": args.gamma, "rows": rows}, study=__file__)
     print(text)
     return 0
 

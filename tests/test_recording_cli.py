@@ -25,7 +25,8 @@ def test_recorded_run_equals_unrecorded_run(tmp_path):
 
 def test_train_route_compare_record(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    assert main(["train", "paper-40", "--episodes", "20", "--save", "a.npz", "--record"]) == 0
+    assert main(["train", "paper-40", "--method", "rnh-ql", "--episodes", "20", "--save", "a.npz",
+                 "--record"]) == 0
     assert main(["route", "paper-40", "--agent", "a.npz", "--record", "route.rrd"]) == 0
     assert main(["compare", "paper-40", "--methods", "st-ql,rnh-ql", "--seeds", "1",
                  "--episodes", "20", "--jobs", "1", "--out", "cmp", "--record", "cmp.rrd"]) == 0

@@ -73,7 +73,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("train", help="train one method on one scenario")
     add_scenario_args(p, learning=True)
-    p.add_argument("--method", default="rnh-ql", help="method (default rnh-ql)")
+    p.add_argument("--method", default="rnh-ql+",
+                   help="method (default rnh-ql+: it learns the route on every built-in map, so "
+                        "a first run shows learning; rnh-ql is the paper's method as published, "
+                        "which fails on most maps, see the README's findings)")
     p.add_argument("--seed", type=int, default=0, help="the run's seed")
     add_training_args(p, "grid (default) or physics")
     p.add_argument("--save", metavar="AGENT.npz", help="save the trained agent")

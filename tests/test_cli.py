@@ -272,3 +272,24 @@ def test_optimum_prints_v_star_next_to_the_exact_and_continuous_optima(capsys):
     assert main(["optimum", "paper-40"]) == 0  # a new process: from the disk cache
     assert "loaded from the cache" in capsys.readouterr().out
     stochastic_model.cache_clear()
+
+
+def test_version_prints_the_installed_version(capsys):
+    with pytest.raises(SystemExit) as err:
+        main(["--version"])
+    assert err.value.code == 0
+    assert capsys.readouterr().out.startswith("rnhql ")
+
+
+def test_train_defaults_to_a_method_that_learns_the_route(capsys):
+    assert main(["train", "paper-40", "--episodes", "200"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("RNH-QL+ on paper-40")
+    assert "this tool's default (the paper's own scheme is --rewards paper)" in out
+    assert "G not reached" not in out
+
+
+def test_ablation_target_scales_with_the_seeds():
+    from scenarios.experiments.ablation import target_seeds
+
+    assert [target_seeds(n) for n in (1, 3, 5, 10, 20)] == [1, 3, 5, 9, 18]

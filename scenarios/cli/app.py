@@ -57,11 +57,22 @@ class _Help(argparse.HelpFormatter):
         return f"{text} (default: {d})"
 
 
+def _version() -> str:
+    """The installed package's version (what results.json records)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("rnhql")
+    except PackageNotFoundError:
+        return "unknown (not installed)"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="rnhql", formatter_class=_Help,
         description="Route searching with RBF-network heuristic Q-learning (RNH-QL) and its "
                     "baselines, on a grid and in a Pymunk physics world.")
+    parser.add_argument("--version", action="version", version=f"rnhql {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     _add = sub.add_parser
     sub.add_parser = lambda *a, **k: _add(*a, formatter_class=_Help, **k)  # type: ignore
@@ -118,8 +129,8 @@ def build_parser() -> argparse.ArgumentParser:
                                         "physics fidelity: JSON, heat map, recording")
     add_scenario_args(p)
     add_fidelity_arg(p)
-    p.add_argument("--repeats", type=int, default=20, help="drives per (cell, action) (20)")
-    p.add_argument("--seed", type=int, default=0, help="noise and start-pose seed (0)")
+    p.add_argument("--repeats", type=int, default=20, help="drives per (cell, action)")
+    p.add_argument("--seed", type=int, default=0, help="noise and start-pose seed")
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder: aliasing.json, heat map PNG, recording")
     p.add_argument("--artifact", default=None, metavar="NAME",

@@ -107,7 +107,7 @@ def rewards_note(args: argparse.Namespace) -> str:
     """What the output says about a default reward scheme (empty when one was given)."""
     if args.rewards is not None:
         return ""
-    return ", the default (the paper's: --rewards paper)"
+    return ", this tool's default (the paper's own scheme is --rewards paper)"
 
 
 def add_fidelity_arg(p: argparse.ArgumentParser) -> None:

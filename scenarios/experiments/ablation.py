@@ -140,6 +140,12 @@ def table(summary: dict, maps: list[dict], labels: list[str]) -> str:
     return "\n".join(lines)
 
 
+def target_seeds(seeds: int) -> int:
+    """Optimal seeds a map needs to count as solved: 9 of 10, and 90 % of any other count
+    (3 of 3, not 9 of 3)."""
+    return math.ceil(0.9 * seeds - 1e-9)
+
+
 def compact_table(summary: dict, maps: list[dict], labels: list[str], min_seeds: int) -> str:
     """The README's form: optimal seeds · median episodes (— never), and how many maps reach
     ``min_seeds`` optimal seeds."""
@@ -250,13 +256,13 @@ def ablation_files(rows: Sequence[Row], maps: list[dict], labelled: list[tuple[s
         ours = next((lab for lab in labels if lab.endswith("(= rnh-ql+)")), None)
         lines: list[str] = []
         for ref in [lab for lab in labels if lab.startswith("dyna-q")] if ours else []:
-            got = verdict(summary, maps, ours, ref, 9)
+            got = verdict(summary, maps, ours, ref, target_seeds(seeds))
             lines += got if not lines else got[1:]
         if lines:
             md += ("\nTargets of the rnh-ql+ study, computed from the table:\n\n"
                    + "\n".join(lines) + "\n")
         md += ("\nCompact (optimal seeds · median episodes to stable optimal, — never):\n\n"
-               + compact_table(summary, maps, labels, 9) + "\n")
+               + compact_table(summary, maps, labels, target_seeds(seeds)) + "\n")
         payload = dict(maps=maps, variants=[dict(label=lab, method=m, overrides=dict(ov))
                                             for lab, m, ov in rows],
                        summary=summary, runs=runs)
@@ -274,10 +280,10 @@ def ablation_files(rows: Sequence[Row], maps: list[dict], labelled: list[tuple[s
 
 def main(argv: list[str] | None = None) -> int:
     ap = script_parser(__doc__)
-    ap.add_argument("--out", default="results/ablation")
-    ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--episodes", type=int, default=3000)
-    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--out", default="results/ablation", help="output folder")
+    ap.add_argument("--seeds", type=int, default=10, help="seeds per cell (0 .. N-1)")
+    ap.add_argument("--episodes", type=int, default=3000, help="episodes per run")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes")
     ap.add_argument("--resume", action="store_true",
                     help="after Ctrl-C: run only the runs not finished yet")
     ap.add_argument("--maps", default="",
@@ -334,7 +340,8 @@ def write_ablation_artifact(a: argparse.Namespace, labels: list[str], maps: list
     ``docs/ablation.png`` drawn from it."""
     from scenarios.artifacts import ROOT, write_artifact
 
-    data = {"rewards": a.rewards, "seeds": a.seeds, "episodes": a.episodes, "min_seeds": 9,
+    data = {"rewards": a.rewards, "seeds": a.seeds, "episodes": a.episodes,
+            "min_seeds": target_seeds(a.seeds),
             "maps": [{"name": m["name"], "held_out": m["held_out"]} for m in maps],
             "labels": labels, "summary": summary}
     write_artifact(f"ablation.{a.artifact}",

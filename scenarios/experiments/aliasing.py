@@ -226,10 +226,11 @@ def main(argv: list[str] | None = None) -> int:
     ap = script_parser(__doc__)
     ap.add_argument("scenario", help="a built-in name, a .toml or a .map (with --start/--goal)")
     ap.add_argument("--fidelity", default="exact", help="exact (default), noisy, rough, or knobs")
-    ap.add_argument("--repeats", type=int, default=20, help="drives per (cell, action) (20)")
-    ap.add_argument("--seed", type=int, default=0, help="noise and start-pose seed (0)")
+    ap.add_argument("--repeats", type=int, default=20, help="drives per (cell, action)")
+    ap.add_argument("--seed", type=int, default=0, help="noise and start-pose seed")
     ap.add_argument("--rewards", default=None, help="reward scheme (does not change aliasing)")
-    ap.add_argument("--out", required=True, type=Path, metavar="DIR")
+    ap.add_argument("--out", required=True, type=Path, metavar="DIR",
+                    help="output folder: aliasing.json, heat map PNG, recording")
     ap.add_argument("--artifact", default=None, metavar="NAME",
                     help="also write docs/results/aliasing.NAME.json (the docs' table and "
                          "heat map)")

@@ -66,11 +66,11 @@ def train_with_potential(model, potential: np.ndarray, seed: int, episodes: int,
 
 def main(argv: list[str] | None = None) -> int:
     p = script_parser(__doc__)
-    p.add_argument("--out", default="results/oracle")
-    p.add_argument("--scenario", default="paper-50")
-    p.add_argument("--seeds", type=int, default=10)
-    p.add_argument("--episodes", type=int, default=3000)
-    p.add_argument("--gamma", type=float, default=0.95)
+    p.add_argument("--out", default="results/oracle", help="output folder")
+    p.add_argument("--scenario", default="paper-50", help="scenario name or file")
+    p.add_argument("--seeds", type=int, default=10, help="seeds per cell (0 .. N-1)")
+    p.add_argument("--episodes", type=int, default=3000, help="episodes per run")
+    p.add_argument("--gamma", type=float, default=0.95, help="discount")
     p.add_argument("--artifact", default=None, metavar="NAME",
                    help="also write docs/results/oracle.NAME.json (the docs' table)")
     args = p.parse_args(argv)

@@ -171,11 +171,13 @@ def _value_notes(args: argparse.Namespace) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     p = script_parser(__doc__)
-    p.add_argument("--out", default="results/paper")
-    p.add_argument("--seeds", type=int, default=10)
-    p.add_argument("--episodes", type=int, default=3000)
-    p.add_argument("--jobs", type=int, default=None)
-    p.add_argument("--backend", default="local", choices=("local", "ray"))
+    p.add_argument("--out", default="results/paper", help="output folder")
+    p.add_argument("--seeds", type=int, default=10, help="seeds per cell (0 .. N-1)")
+    p.add_argument("--episodes", type=int, default=3000, help="episodes per run")
+    p.add_argument("--jobs", type=int, default=None,
+                   help="worker processes (default: all cores)")
+    p.add_argument("--backend", default="local", choices=("local", "ray"),
+                   help="where the runs execute")
     p.add_argument("--address", default=None, help="Ray cluster address (auto, ray://...)")
     p.add_argument("--resume", action="store_true", help="skip runs already finished")
     p.add_argument("--rewards", default=None,

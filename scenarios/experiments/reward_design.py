@@ -90,12 +90,15 @@ def report(args: argparse.Namespace, methods: list[str], facts: list[RewardFacts
 
 def main(argv: list[str] | None = None) -> int:
     p = script_parser(__doc__)
-    p.add_argument("--out", default="results/reward-design")
-    p.add_argument("--scenario", default="paper-50")
-    p.add_argument("--methods", default=",".join(comparison_methods()))
-    p.add_argument("--seeds", type=int, default=10)
-    p.add_argument("--episodes", type=int, default=3000)
-    p.add_argument("--jobs", type=int, default=None)
+    p.add_argument("--out", default="results/reward-design",
+                   help="output folder")
+    p.add_argument("--scenario", default="paper-50", help="scenario name or file")
+    p.add_argument("--methods", default=",".join(comparison_methods()),
+                   help="comma-separated methods")
+    p.add_argument("--seeds", type=int, default=10, help="seeds per cell (0 .. N-1)")
+    p.add_argument("--episodes", type=int, default=3000, help="episodes per run")
+    p.add_argument("--jobs", type=int, default=None,
+                   help="worker processes (default: all cores)")
     p.add_argument("--resume", action="store_true", help="skip runs already finished")
     p.add_argument("--artifact", default=None, metavar="NAME",
                    help="also write docs/results/reward-design.NAME.json (the table the "

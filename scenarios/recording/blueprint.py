@@ -30,9 +30,9 @@ from sim.scenario import Scenario
 
 def _bounds(sc: Scenario, pad: float = 0.5) -> rrb.VisualBounds2D:
     # in the view's (flipped) frame y runs from -height (top) to 0 (bottom); a strip of
-    # room is left below the arena for the colour key and the route labels
+    # room is left below the arena for the route labels and the colour key
     return rrb.VisualBounds2D(x_range=[-pad, sc.width_m + pad],
-                              y_range=[-sc.height_m - pad, pad + 0.14 * sc.height_m])
+                              y_range=[-sc.height_m - pad, pad + 0.15 * sc.height_m])
 
 
 def map_view(prefix: str, sc: Scenario, name: str = "Map: robot, trajectory, obstacles",
@@ -110,7 +110,7 @@ def map_column(prefix: str, sc: Scenario, world: str, fidelity: str | None) -> A
     view = map_view(prefix, sc, map_title(world, fidelity))
     if world != "physics":
         return view
-    note = rrb.TextDocumentView(origin=path(prefix, "notes/drive"), name="Timelines")
+    note = rrb.TextDocumentView(origin="/" + path(prefix, "notes/drive"), name="Timelines")
     return rrb.Vertical(view, note, row_shares=[12, 1.4])
 
 
@@ -146,20 +146,21 @@ def run_blueprint(prefix: str, sc: Scenario, method: str | None = None, world: s
                                         column_shares=[5, 4]), *_panels())
 
 
-def key_view(size: tuple[float, float]) -> rrb.Spatial2DView:
+def key_view(bounds: tuple[tuple[float, float], tuple[float, float]]) -> rrb.Spatial2DView:
     """The comparison's key (:func:`scenarios.recording.scene.log_comparison_key`)."""
-    w, h = size
+    (x0, x1), (y0, y1) = bounds
     return rrb.Spatial2DView(origin="/key", name="Key", background=(255, 255, 255),
-                             visual_bounds=rrb.VisualBounds2D(x_range=[-w, w],
-                                                              y_range=[-0.8, h + 0.8]))
+                             visual_bounds=rrb.VisualBounds2D(x_range=[x0, x1],
+                                                              y_range=[y0, y1]))
 
 
 def comparison_blueprint(runs: Sequence[tuple[str, int]], sc: Scenario, prefix_of: Any,
-                         key_size: tuple[float, float] | None = None) -> rrb.Blueprint:
+                         key: tuple[tuple[float, float], tuple[float, float]] | None = None
+                         ) -> rrb.Blueprint:
     """Methods x seeds: one map per method (its first seed), and per method one median curve
     with its interquartile band (:mod:`scenarios.recording.summary`). The per-seed curves
-    stay in the file under each run, out of the default views. With ``key_size`` (the key
-    is logged), a key panel beside the curves names the maps' lines and the methods'
+    stay in the file under each run, out of the default views. With ``key`` (the bounds of
+    the logged key), a key panel beside the curves names the maps' lines and the methods'
     colours, so no plot carries a legend over its curves."""
     methods: list[str] = []
     for m, _ in runs:
@@ -169,8 +170,8 @@ def comparison_blueprint(runs: Sequence[tuple[str, int]], sc: Scenario, prefix_o
     maps = [map_view(prefix_of(m, first[m]), sc, name=f"{m} (seed {first[m]})", legend=False)
             for m in methods]
     curves = [rrb.TimeSeriesView(name=title, origin=f"/summary/{fig}", axis_x=whole_run(),
-                                 plot_legend=rrb.PlotLegend(visible=key_size is None and i == 0))
+                                 plot_legend=rrb.PlotLegend(visible=key is None and i == 0))
               for i, (fig, title) in enumerate(SUMMARY_FIGURES.items())]
-    row = (rrb.Horizontal(key_view(key_size), *curves, column_shares=[2, 3, 3, 3])
-           if key_size else rrb.Horizontal(*curves))
+    row = (rrb.Horizontal(key_view(key), *curves, column_shares=[2.4, 3, 3, 3])
+           if key else rrb.Horizontal(*curves))
     return rrb.Blueprint(rrb.Vertical(rrb.Grid(*maps), row, row_shares=[3, 2]), *_panels())

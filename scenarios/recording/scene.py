@@ -167,12 +167,16 @@ def meta_markdown(meta: dict[str, Any], sc: Scenario, prefix: str) -> str:
   shortest route. Orange is a training episode, purple a greedy test from S; dots mark the
   cells it visited, pink points are contacts (bumps). The red disc ("robot" in the key) and its
   red arrow are the robot and its heading.
+  The teal line is the final greedy route; its length is written under the map.
 * **Timelines**: `episode` is the training episode (curves, heatmaps, the latest recorded
-  trajectory). `step` plays the recorded episodes back to back, one row per move
-  (`sim_time` does the same in simulated seconds for the physics world).
-* **Values**: V_NN (upper-layer RBF network) and max_a Q over the free cells, colour-mapped
-  with viridis (dark low, yellow high; hover a cell for its value, shown as "depth").
-  Arrows are the greedy action: green where it is a shortest-route move, red where not.
+  trajectory). `step` plays the recorded episodes back to back, one row per move;
+  `sim_time` (physics world) plays every physics step of the drive at real speed: pick it
+  in the time panel's timeline menu.
+* **Values**: the potential the method shapes with (V_NN, the RBF upper layer, for rnh-ql;
+  Φ, the optimistic model's value, for rnh-ql+) and max_a Q over the free cells,
+  colour-mapped with viridis (dark low, yellow high; hover a cell for its value, shown as
+  "depth"). Arrows are the greedy action on every k-th cell, drawn k cells long: green
+  where it is a shortest-route move, red where not.
 * Entities live under `{p or '/'}`.
 """
 
@@ -198,12 +202,13 @@ def grid_lines(sc: Scenario) -> list[np.ndarray]:
 
 
 def route_label_anchor(bounds: tuple[float, float, float, float], index: int) -> np.ndarray:
-    """Where the ``index``-th route's label goes: centred under the arena, below the colour
-    key, one line per route. Outside the arena a label never covers an obstacle, S, G or a
-    route, whatever the map (inside it, text as wide as half a small map always did)."""
+    """Where the ``index``-th route's label goes: centred just under the arena (the viewer
+    draws a label's text below its anchor), above the colour key; a second route's under
+    the key. Outside the arena a label never covers an obstacle, S, G or a route, whatever
+    the map (inside it, text as wide as half a small map always did)."""
     xmin, ymin, xmax, ymax = bounds
     h = ymax - ymin
-    return np.array([(xmin + xmax) / 2, ymin - (0.085 + 0.045 * index) * h])
+    return np.array([(xmin + xmax) / 2, ymin - (0.012 + 0.1 * index) * h])
 
 
 ARROWS_ACROSS = 20  # policy arrows across the longer side of a map, at most
@@ -221,6 +226,13 @@ def potential_names(method: str | None) -> tuple[str, str] | None:
     """(short name, panel title) of the potential ``method`` shapes with, or None."""
     base = (method or "").split(" ", 1)[0]
     return POTENTIALS.get(base)
+
+
+def key_positions(labels: Sequence[str], width: float, gap_chars: float = 4.0) -> np.ndarray:
+    """x of each label's centre, in a row across ``width``: each label gets a share of the
+    width in proportion to its length plus a gap."""
+    share = np.array([len(t) + gap_chars for t in labels], dtype=float)
+    return (np.cumsum(share) - share / 2) / share.sum() * width
 
 
 def route_points(model: TabularModel, states: Sequence[int] | np.ndarray) -> np.ndarray:
@@ -258,12 +270,14 @@ def log_scene(rec: rr.RecordingStream, prefix: str, sc: Scenario, model: Tabular
         [route_points(model, route)], radii=0.12 * c, colors=[BFS_ROUTE],
         labels=[f"BFS optimum: {len(route) - 1} moves"], show_labels=False,
         draw_order=Z_ROUTE), static=True)
-    # a colour key below the arena
-    keys = [("training episode", TRAIN), ("greedy test from S", GREEDY),
-            (f"BFS shortest route ({len(route) - 1} moves)", BFS_ROUTE),
-            ("contact / bump", CONTACT), ("robot", ROBOT)]
-    xs = np.linspace(0.02, 0.82, len(keys)) * wd
-    rec.log(f"{w}/legend", rr.Points2D(np.column_stack([xs, np.full(len(keys), -0.04 * ht)]),
+    # a colour key below the arena and the route labels (route_label_anchor), each label
+    # given room in proportion to its length (labels are centred on their dots; evenly
+    # spaced dots let long labels overlap)
+    keys = [("training episode", TRAIN), ("greedy test", GREEDY),
+            (f"BFS optimum ({len(route) - 1} moves)", BFS_ROUTE),
+            ("contact", CONTACT), ("robot", ROBOT)]
+    xs = key_positions([k[0] for k in keys], wd)
+    rec.log(f"{w}/legend", rr.Points2D(np.column_stack([xs, np.full(len(keys), -0.075 * ht)]),
                                        radii=0.35 * c, colors=[k[1] for k in keys],
                                        labels=[k[0] for k in keys], show_labels=True),
             static=True)
@@ -321,21 +335,23 @@ def log_drive_note(rec: rr.RecordingStream, prefix: str) -> None:
             static=True)
 
 
-KEY_LINES = (("BFS shortest route", BFS_ROUTE), ("final greedy route (moves: under the map)",
-                                                  ROUTE_PALETTE[0]),
-             ("latest recorded training episode", TRAIN), ("greedy test from S", GREEDY))
+KEY_LINES = (("BFS shortest route", BFS_ROUTE), ("final greedy route", ROUTE_PALETTE[0]),
+             ("last training episode", TRAIN), ("greedy test from S", GREEDY))
+KEY_COLUMN = 2.8  # the key's two columns are centred at -/+ this (a row is 1 unit tall)
 
 
-def log_comparison_key(rec: rr.RecordingStream, labels: Sequence[str]) -> tuple[float, float]:
-    """The comparison's key at ``key``: the maps' line colours, then every method's colour
-    (its curves'), as coloured text in one column; returns the (half width, height) of the
-    area it fills, for the key view's bounds."""
-    maps = [("maps:", WALL), *KEY_LINES]
-    methods = [("methods (median over seeds; thin: IQR):", WALL),
-               *[(lab, label_colour(lab)) for lab in labels]]
-    ys = np.r_[np.arange(len(maps)), len(maps) + 0.6 + np.arange(len(methods))]
-    rows = maps + methods
-    rec.log("key", rr.Points2D(np.column_stack([np.zeros(len(rows)), ys]), radii=0.0,
-                               colors=[c for _, c in rows], labels=[t for t, _ in rows],
-                               show_labels=True), static=True)
-    return 1.0, float(ys[-1])
+def log_comparison_key(rec: rr.RecordingStream, labels: Sequence[str]
+                       ) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The comparison's key at ``key``, as coloured text: the maps' lines on the left,
+    every method in its colour (its curves') on the right. Returns the (x, y) ranges it
+    fills, for the key view's bounds: with a row a unit tall, the columns ~5.6 units
+    apart keep ~20-character names apart at any panel size (the view keeps the aspect)."""
+    left = [("maps:", WALL), *KEY_LINES]
+    right = [("methods:", WALL), *[(lab, label_colour(lab)) for lab in labels]]
+    rows = left + right
+    xy = np.array([(-KEY_COLUMN, i) for i in range(len(left))]
+                  + [(KEY_COLUMN, i) for i in range(len(right))], dtype=float)
+    rec.log("key", rr.Points2D(xy, radii=0.0, colors=[c for _, c in rows],
+                               labels=[t for t, _ in rows], show_labels=True), static=True)
+    half = 2 * KEY_COLUMN
+    return (-half, half), (-0.8, max(len(left), len(right)) + 0.2)

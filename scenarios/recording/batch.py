@@ -205,14 +205,12 @@ def _strips(xy: np.ndarray, offs: np.ndarray) -> rr.ComponentColumnList:
         return rr.LineStrips2D.columns(strips=np.split(xy, offs[1:-1]))
 
 
-VALUE_LABELS = {"v_nn": "V_NN", "max_q": "max_a Q"}
-
-
 def send_values(stream: rr.RecordingStream, prefix: str, model: TabularModel,
-                frames: list[ValueFrame]) -> None:
-    """Heat maps (DepthImage rows), their legends and the policy arrows of many frames."""
+                frames: list[ValueFrame], potential: str = "V_NN") -> None:
+    """Heat maps (DepthImage rows), their legends and the policy arrows of many frames;
+    ``potential`` names the ``v_nn`` map in its legend (what the method shapes with)."""
     p = scene.path
-    for name, label in VALUE_LABELS.items():
+    for name, label in (("v_nn", potential), ("max_q", "max_a Q")):
         fs = [f for f in frames if getattr(f, name) is not None]
         if not fs:
             continue

@@ -43,7 +43,6 @@ Comparisons (methods x seeds): each run is a subtree ``runs/<method>/s<seed>``
 from __future__ import annotations
 
 import dataclasses
-import json
 import time
 from collections.abc import Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -53,6 +52,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
+from scenarios.recording import blueprint as layouts
 from scenarios.recording import scene
 from scenarios.recording.batch import EpisodeRecord, ValueFrame, send_episodes, send_values
 from scenarios.recording.file import RecordingFile, rerun_cli, verify_recording
@@ -69,6 +69,15 @@ def run_prefix(method: str, seed: int) -> str:
     return f"runs/{rr.escape_entity_path_part(method)}/s{seed}"
 
 
+def policy_arrow_cells(model: TabularModel, reachable: np.ndarray) -> tuple[int, np.ndarray]:
+    """(k, the reachable cells on the lattice of every k-th cell): where the policy arrows
+    go (:func:`scenarios.recording.scene.policy_arrow_stride`)."""
+    k = scene.policy_arrow_stride(model)
+    ix, iy = reachable % model.nx, reachable // model.nx
+    on = (ix % k == k // 2) & (iy % k == k // 2)
+    return k, reachable[on]
+
+
 class Recorder:
     """Everything one training run logs; see the module docstring."""
 
@@ -77,6 +86,7 @@ class Recorder:
                  flush_rows: int = 20_000, flush_interval_s: float = 5.0) -> None:
         self.file, self.stream, self.prefix = file, file.stream, prefix.strip("/")
         self.scenario, self.model, self.world = scenario, model, world
+        self.method = ""  # set by create
         self.owns_file = owns_file
         self.flush_rows, self.flush_interval_s = flush_rows, flush_interval_s
         self._scalars: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}  # entity -> rows
@@ -92,6 +102,7 @@ class Recorder:
         self.curve_stride = 1  # log every n-th episode's curves (curves-only runs: 10)
         self._free = np.flatnonzero(~model.blocked.ravel())
         self._reachable = np.flatnonzero(model.distance_to_goal > 0)
+        self._arrow_stride, self._arrows = policy_arrow_cells(model, self._reachable)
         self._n_routes = 0
         self._pool: ThreadPoolExecutor | None = None
         self._pending: Future | None = None
@@ -124,6 +135,7 @@ class Recorder:
                                  recording_id=recording_id, recording_name=name)
         rec = cls(file, prefix, scenario, model, world=world, owns_file=owns,
                   flush_rows=flush_rows, flush_interval_s=flush_interval_s)
+        rec.method = method
         st = rec.stream
         if dataclasses.is_dataclass(config) and not isinstance(config, type):
             config = dataclasses.asdict(config)
@@ -133,12 +145,13 @@ class Recorder:
             meta["fidelity"] = fidelity
         st.log(rec._p("meta"), rr.TextDocument(scene.meta_markdown(meta, scenario, rec.prefix),
                                                 media_type="text/markdown"), static=True)
-        props = {k: (v if isinstance(v, int | float | str) else json.dumps(v, default=str))
-                 for k, v in meta.items()}
-        st.send_property(f"rnhql/{rec.prefix}" if rec.prefix else "rnhql",
-                         rr.AnyValues(**props))
+        if not rec.prefix:  # a recording of its own: what a folder of them is filtered by
+            st.send_property("rnhql", rr.AnyValues(**scene.run_properties(meta, scenario,
+                                                                          fidelity)))
         if with_scene:  # a curves-only run in a comparison needs no map of its own
             scene.log_scene(st, rec.prefix, scenario, model)
+            if world == "physics":
+                scene.log_drive_note(st, rec.prefix)
         else:  # its per-seed curves stay in the file, every 10th episode (the comparison's
             rec.curve_stride = 10  # summary curves use every episode of every seed)
         if rec.prefix:  # one of several runs in a file: label and colour its curves
@@ -147,7 +160,7 @@ class Recorder:
         else:
             scene.log_series_styles(st, rec.prefix)
         if blueprint:  # True: a training run's; "route": a saved agent's route, no curves
-            bp = (scene.route_blueprint if blueprint == "route" else scene.run_blueprint)
+            bp = (layouts.route_blueprint if blueprint == "route" else layouts.run_blueprint)
             st.send_blueprint(bp(rec.prefix, scenario, method, world, fidelity),
                               make_active=True, make_default=True)
         return rec
@@ -180,7 +193,9 @@ class Recorder:
         if episodes:
             send_episodes(self.stream, self.prefix, self.model, self.world, episodes)
         if frames:
-            send_values(self.stream, self.prefix, self.model, frames)
+            names = scene.potential_names(self.method)
+            send_values(self.stream, self.prefix, self.model, frames,
+                        potential=names[0] if names else "potential")
         for entity, rows in scalars.items():
             self.stream.send_columns(
                 entity, indexes=[rr.TimeColumn("episode",
@@ -325,26 +340,32 @@ class Recorder:
     def log_values(self, episode: int, q: np.ndarray, greedy: np.ndarray | None = None,
                    v_nn: np.ndarray | None = None,
                    value_range: tuple[float, float] | None = None) -> None:
-        """Heat maps of V_NN and max_a Q, and the greedy policy as arrows (reachable cells).
+        """Heat maps of the method's potential (``v_nn``: V_NN of rnh-ql, Φ of rnh-ql+) and
+        max_a Q, and the greedy policy as arrows.
 
         ``greedy`` defaults to argmax Q (first of ties); ``value_range`` fixes the
-        colour scale (default: min..max over the free cells of each frame). Sent
-        with the next flush, like the episodes.
+        colour scale (default: min..max over the free cells of each frame). The share of
+        optimal greedy moves counts every reachable cell; the arrows are drawn on every
+        ``k``-th cell (:func:`policy_arrow_cells`). Sent with the next flush.
         """
         m = self.model
         q = np.asarray(q, dtype=np.float64)
         greedy = np.argmax(q, axis=1) if greedy is None else np.asarray(greedy, np.int64)
         s = self._reachable
         g = greedy[s]
-        d = self._deltas[g]
         ok = m.distance_to_goal[m.next_state[s, g]] == m.distance_to_goal[s] - 1
+        a = self._arrows
+        d = self._deltas[greedy[a]]
+        ok_a = m.distance_to_goal[m.next_state[a, greedy[a]]] == m.distance_to_goal[a] - 1
+        k = self._arrow_stride
         self._values.append(ValueFrame(
             episode=int(episode), step=max(self._step - 1, 0),
             v_nn=None if v_nn is None else self._heat(v_nn, value_range),
             max_q=self._heat(q.max(axis=1), value_range),
-            # most of a cell long: at a few pixels a cell, a shorter arrow is a dot
-            origins=(m.coords[s] - 0.42 * d).astype(np.float32),
-            vectors=(0.84 * d).astype(np.float32), optimal=ok))
+            # k cells long on a lattice of every k-th cell: a field of arrows readable at
+            # a few pixels a cell (one per cell, each a cell long, was a grey texture)
+            origins=(m.coords[a] - 0.4 * k * d).astype(np.float32),
+            vectors=(0.8 * k * d).astype(np.float32), optimal=ok_a))
         self._add_scalars("policy_optimal", np.array([episode], np.int64),
                           np.array([float(ok.mean()) if len(s) else 0.0]))
         self._rows += m.n_states // 10
@@ -366,16 +387,12 @@ class Recorder:
                      else f"{name}: no G (loops at {len(pts) - 1})")
         if path_m is not None and len(path_m) > 1:
             pts = np.asarray(path_m, dtype=np.float64)[:, :2]
-        sc, m = self.scenario, self.model
+        sc = self.scenario
         strip = rr.LineStrips2D([pts], radii=0.1 * sc.cell_size_m, colors=[colour],
                                 labels=[label], show_labels=False,
                                 draw_order=scene.Z_ROUTE + 1)
-        # the text on its own anchor: away from S and G, inside the map
-        sg = [tuple(m.coords[m.start]), tuple(m.coords[m.goal])]
-        # text is drawn at a fixed pixel size, centred on its anchor: a map view is a few
-        # hundred pixels wide, so a label of k characters needs about k/70 of the width
-        anchor = scene.label_anchor(pts, sg, m.bounds_m,
-                                    margin=min(0.5, len(label) / 70) * sc.width_m)
+        # the text under the arena, in the line's colour: never on an obstacle, S or G
+        anchor = scene.route_label_anchor(self.model.bounds_m, self._n_routes - 1)
         text = rr.Points2D([anchor], radii=0.0, colors=[colour], labels=[label],
                            show_labels=True, draw_order=100.0)
         ent = self._p(f"world/routes/{rr.escape_entity_path_part(name)}")

@@ -1,10 +1,11 @@
-"""What a recording looks like: colours, the static scene, metadata and the blueprints.
+"""What a recording holds besides the runs' data: colours, the static scene, metadata, keys.
 
-Used by :mod:`scenarios.recording.recorder` (the API); see its docstring for the entity
-paths and timelines. Everything spatial lives under ``<prefix>/world`` in metres,
-x right and y up; a static ``Transform3D(scale=[1, -1, 1])`` at ``<prefix>/world``
-turns the viewer's y-down 2-D views the right way up (views are rooted above it,
-so the flip applies; text labels are not mirrored).
+Used by :mod:`scenarios.recording.recorder` (the API; see its docstring for the entity
+paths and timelines); the panels that show it are :mod:`scenarios.recording.blueprint`.
+Everything spatial lives under ``<prefix>/world`` in metres, x right and y up; a static
+``Transform3D(scale=[1, -1, 1])`` at ``<prefix>/world`` turns the viewer's y-down 2-D
+views the right way up (views are rooted above it, so the flip applies; text labels are
+not mirrored).
 """
 
 from __future__ import annotations
@@ -19,9 +20,8 @@ from typing import Any
 
 import numpy as np
 import rerun as rr
-import rerun.blueprint as rrb
 
-from scenarios.palette import method_colour  # noqa: F401  (one colour per method, PNGs too)
+from scenarios.palette import method_colour  # one colour per method, PNGs too
 from sim.grid import TabularModel
 from sim.grid.planning import bfs_route
 from sim.scenario import Scenario
@@ -50,9 +50,11 @@ Z_OBST, Z_SG, Z_POLICY, Z_CONTACT, Z_ROBOT, Z_HEADING = 20.0, 25.0, 28.0, 30.0, 
 
 SUCCESS_WINDOW = 50  # episodes in the moving success rate
 SUMMARY_WINDOW = 50  # episodes per window of a comparison's summary curves
-SUMMARY_FIGURES = {  # figure -> view title (scenarios.recording.summary)
-    "steps": "Steps per episode", "success": f"Success rate (last {SUMMARY_WINDOW} episodes)",
-    "reward_per_step": f"Reward per step (total return / total steps, last {SUMMARY_WINDOW})"}
+SUMMARY_FIGURES = {  # figure -> view title (scenarios.recording.summary); titles are kept
+    # short enough to show whole in a third of a 1600-pixel window (about 36 characters)
+    "steps": "Steps per episode: median, IQR",
+    "success": f"Success (last {SUMMARY_WINDOW}): median, IQR",
+    "reward_per_step": f"Reward/step (last {SUMMARY_WINDOW}): median, IQR"}
 KIND_STYLE = {"train": (TRAIN, TRAIN_VISITED), "greedy-test": (GREEDY, GREEDY_VISITED)}
 METRICS = {  # entity under <prefix>/metrics -> (series name, plot)
     "steps/episode": ("steps", "steps"), "steps/optimal": ("BFS optimum", "steps"),
@@ -61,8 +63,23 @@ METRICS = {  # entity under <prefix>/metrics -> (series name, plot)
     "reward_per_step": (f"reward / step (last {SUCCESS_WINDOW})", "reward_per_step"),
     "wall_time_ms": ("wall time [ms]", "wall_time"),
     "shaping/mean": ("shaping F mean", "shaping"), "shaping/std": ("shaping F std", "shaping"),
-    "policy_optimal": ("cells whose greedy move is optimal", "success"),
+    "policy_optimal": ("cells whose greedy move is optimal", "policy"),
 }
+SERIES_COLOURS = {  # a single run's series: the plot titles name them by these colours
+    "steps/episode": (0, 140, 150), "steps/optimal": BFS_ROUTE,
+    "success": (150, 150, 150), "success_rate": (20, 140, 60),
+    "return": (110, 140, 30), "reward_per_step": (0, 140, 150), "wall_time_ms": (90, 90, 90),
+    "shaping/mean": (150, 60, 200), "shaping/std": (245, 120, 30),
+    "policy_optimal": (20, 140, 60)}
+# the potential a method shapes with, as its value panel names it (learning.readout.potential)
+POTENTIALS = {"rnh-ql": ("V_NN", "V_NN: the RBF upper layer"),
+              "rnh-ql+": ("Φ", "Φ: the optimistic model's value"),
+              "rnh-ql+ablation": ("Φ", "Φ: optimistic model's value or V_NN")}
+
+
+def label_colour(label: str) -> tuple[int, int, int]:
+    """The colour of a comparison's curve label (``haql``, ``haql-physics``): its method's."""
+    return method_colour(label.split("-physics")[0].split("-grid")[0])
 
 
 def path(prefix: str, rest: str) -> str:
@@ -107,6 +124,24 @@ def run_metadata(sc: Scenario, model: TabularModel, *, method: str, config: dict
             "config": config}
 
 
+def run_properties(meta: dict[str, Any], sc: Scenario, fidelity: str | None
+                   ) -> dict[str, Any]:
+    """The recording properties of a run (Rerun shows them per recording and the catalog
+    lists them as ``property:rnhql:<field>`` columns): the fields a folder of recordings is
+    filtered by first, then the rest of the metadata (the config as JSON)."""
+    world = meta["world"]
+    props: dict[str, Any] = {
+        "kind": "run", "method": meta["method"], "seed": int(meta["seed"]), "world": world,
+        "fidelity": fidelity or ("exact" if world == "physics" else "none (grid)"),
+        "rewards": sc.rewards.scheme, "rewards_values": meta["rewards"],
+        "scenario": meta["scenario"], "version": meta["rnhql"]}
+    for k, v in meta.items():
+        key = k.replace("-", "_")
+        if k not in ("rnhql", "rewards", "fidelity") and key not in props:
+            props[key] = v if isinstance(v, int | float | str) else json.dumps(v, default=str)
+    return props
+
+
 def meta_markdown(meta: dict[str, Any], sc: Scenario, prefix: str) -> str:
     rows = "\n".join(f"| {k} | `{v}` |" for k, v in meta.items() if k != "config")
     cfg = json.dumps(meta["config"], indent=2, sort_keys=True, default=str)
@@ -132,12 +167,16 @@ def meta_markdown(meta: dict[str, Any], sc: Scenario, prefix: str) -> str:
   shortest route. Orange is a training episode, purple a greedy test from S; dots mark the
   cells it visited, pink points are contacts (bumps). The red disc ("robot" in the key) and its
   red arrow are the robot and its heading.
+  The teal line is the final greedy route; its length is written under the map.
 * **Timelines**: `episode` is the training episode (curves, heatmaps, the latest recorded
-  trajectory). `step` plays the recorded episodes back to back, one row per move
-  (`sim_time` does the same in simulated seconds for the physics world).
-* **Values**: V_NN (upper-layer RBF network) and max_a Q over the free cells, colour-mapped
-  with viridis (dark low, yellow high; hover a cell for its value, shown as "depth").
-  Arrows are the greedy action: green where it is a shortest-route move, red where not.
+  trajectory). `step` plays the recorded episodes back to back, one row per move;
+  `sim_time` (physics world) plays every physics step of the drive at real speed: pick it
+  in the time panel's timeline menu.
+* **Values**: the potential the method shapes with (V_NN, the RBF upper layer, for rnh-ql;
+  Φ, the optimistic model's value, for rnh-ql+) and max_a Q over the free cells,
+  colour-mapped with viridis (dark low, yellow high; hover a cell for its value, shown as
+  "depth"). Arrows are the greedy action on every k-th cell, drawn k cells long: green
+  where it is a shortest-route move, red where not.
 * Entities live under `{p or '/'}`.
 """
 
@@ -162,25 +201,38 @@ def grid_lines(sc: Scenario) -> list[np.ndarray]:
     return xs + ys
 
 
-def label_anchor(points: np.ndarray, avoid: Sequence[tuple[float, float]],
-                 bounds: tuple[float, float, float, float], margin: float) -> np.ndarray:
-    """Where a route's label goes: the route point farthest from S and G (so the text never
-    sits on them), pulled at least ``margin`` inside the map (so it never runs off the view).
-
-    Labels are drawn centred on their anchor; ``margin`` should be about half the label's
-    width in map units.
-    """
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+def route_label_anchor(bounds: tuple[float, float, float, float], index: int) -> np.ndarray:
+    """Where the ``index``-th route's label goes: centred just under the arena (the viewer
+    draws a label's text below its anchor), above the colour key; a second route's under
+    the key. Outside the arena a label never covers an obstacle, S, G or a route, whatever
+    the map (inside it, text as wide as half a small map always did)."""
     xmin, ymin, xmax, ymax = bounds
-    centre = np.array([(xmin + xmax) / 2, (ymin + ymax) / 2])
-    cand = np.vstack([pts, centre]) if len(pts) else centre[None, :]
-    av = np.asarray(avoid, dtype=np.float64).reshape(-1, 2)
-    far = np.min(np.linalg.norm(cand[:, None, :] - av[None, :, :], axis=2), axis=1)
-    best = cand[int(np.argmax(far))]
-    mx = min(margin, (xmax - xmin) / 2)
-    my = 0.06 * (ymax - ymin)  # about one line of text
-    return np.array([np.clip(best[0], xmin + mx, xmax - mx), np.clip(best[1], ymin + my,
-                                                                       ymax - my)])
+    h = ymax - ymin
+    return np.array([(xmin + xmax) / 2, ymin - (0.012 + 0.1 * index) * h])
+
+
+ARROWS_ACROSS = 20  # policy arrows across the longer side of a map, at most
+
+
+def policy_arrow_stride(model: TabularModel) -> int:
+    """k: the policy arrows go on every k-th cell, k cells long, at most ``ARROWS_ACROSS``
+    across the map, so each is readable at the value panel's default size (a 50-cell map
+    in a ~215-pixel panel: k = 3, arrows ~10 pixels long; one per cell they were ~4 pixels,
+    a grey texture)."""
+    return max(1, -(-max(model.nx, model.ny) // ARROWS_ACROSS))
+
+
+def potential_names(method: str | None) -> tuple[str, str] | None:
+    """(short name, panel title) of the potential ``method`` shapes with, or None."""
+    base = (method or "").split(" ", 1)[0]
+    return POTENTIALS.get(base)
+
+
+def key_positions(labels: Sequence[str], width: float, gap_chars: float = 4.0) -> np.ndarray:
+    """x of each label's centre, in a row across ``width``: each label gets a share of the
+    width in proportion to its length plus a gap."""
+    share = np.array([len(t) + gap_chars for t in labels], dtype=float)
+    return (np.cumsum(share) - share / 2) / share.sum() * width
 
 
 def route_points(model: TabularModel, states: Sequence[int] | np.ndarray) -> np.ndarray:
@@ -218,12 +270,14 @@ def log_scene(rec: rr.RecordingStream, prefix: str, sc: Scenario, model: Tabular
         [route_points(model, route)], radii=0.12 * c, colors=[BFS_ROUTE],
         labels=[f"BFS optimum: {len(route) - 1} moves"], show_labels=False,
         draw_order=Z_ROUTE), static=True)
-    # a colour key below the arena
-    keys = [("training episode", TRAIN), ("greedy test from S", GREEDY),
-            (f"BFS shortest route ({len(route) - 1} moves)", BFS_ROUTE),
-            ("contact / bump", CONTACT), ("robot", ROBOT)]
-    xs = np.linspace(0.02, 0.82, len(keys)) * wd
-    rec.log(f"{w}/legend", rr.Points2D(np.column_stack([xs, np.full(len(keys), -0.04 * ht)]),
+    # a colour key below the arena and the route labels (route_label_anchor), each label
+    # given room in proportion to its length (labels are centred on their dots; evenly
+    # spaced dots let long labels overlap)
+    keys = [("training episode", TRAIN), ("greedy test", GREEDY),
+            (f"BFS optimum ({len(route) - 1} moves)", BFS_ROUTE),
+            ("contact", CONTACT), ("robot", ROBOT)]
+    xs = key_positions([k[0] for k in keys], wd)
+    rec.log(f"{w}/legend", rr.Points2D(np.column_stack([xs, np.full(len(keys), -0.075 * ht)]),
                                        radii=0.35 * c, colors=[k[1] for k in keys],
                                        labels=[k[0] for k in keys], show_labels=True),
             static=True)
@@ -243,7 +297,8 @@ def log_scene(rec: rr.RecordingStream, prefix: str, sc: Scenario, model: Tabular
                                                         draw_order=Z_VISITED), static=True)
         rec.log(f"{k}/contacts", rr.Points2D.from_fields(radii=0.18 * c, colors=[CONTACT],
                                                          draw_order=Z_CONTACT), static=True)
-    rec.log(f"{w}/values/policy", rr.Arrows2D.from_fields(radii=0.13 * c,
+    k = policy_arrow_stride(model)
+    rec.log(f"{w}/values/policy", rr.Arrows2D.from_fields(radii=0.1 * c * k,
                                                           draw_order=Z_POLICY), static=True)
     for name in ("v_nn", "max_q"):  # heat maps: one value per cell, scaled to metres
         rec.log(f"{w}/values/{name}", rr.Transform3D(scale=[c, c, 1.0]),
@@ -256,136 +311,47 @@ def log_scene(rec: rr.RecordingStream, prefix: str, sc: Scenario, model: Tabular
 
 def log_series_styles(rec: rr.RecordingStream, prefix: str, *, label: str = "",
                       colour: tuple[int, int, int] | None = None) -> None:
-    """Static names (and, for comparisons, one colour per method) of the metric series."""
+    """Static names and colours of the metric series: a single run's each in its own colour
+    (:data:`SERIES_COLOURS`, which its plot titles name), a comparison's run in its method's."""
     m = path(prefix, "metrics")
     for ent, (name, _) in METRICS.items():
         full = f"{label} {name}" if label else name
-        kw: dict[str, Any] = {"names": [full]}
-        if colour is not None:
-            kw["colors"] = [colour]
-        elif ent == "steps/optimal":
-            kw["colors"] = [BFS_ROUTE]
+        kw: dict[str, Any] = {"names": [full], "colors": [colour or SERIES_COLOURS[ent]]}
         if ent in ("success",):
             rec.log(f"{m}/{ent}", rr.SeriesPoints(marker_sizes=[1.5], **kw), static=True)
         else:
             rec.log(f"{m}/{ent}", rr.SeriesLines(widths=[1.5], **kw), static=True)
 
 
-# ------------------------------------------------------------------ blueprints
+DRIVE_NOTE = ("**Watch the drive:** pick the `sim_time` timeline in the time panel's menu "
+              "(bottom left, now `episode`) and press play: the robot drives every physics "
+              "step at real speed. `episode` (the default) steps the curves and heat maps.")
 
 
-def _bounds(sc: Scenario, pad: float = 0.5) -> rrb.VisualBounds2D:
-    # in the view's (flipped) frame y runs from -height (top) to 0 (bottom); a strip of
-    # room is left below the arena for the legends
-    return rrb.VisualBounds2D(x_range=[-pad, sc.width_m + pad],
-                              y_range=[-sc.height_m - pad, pad + 0.12 * sc.height_m])
+def log_drive_note(rec: rr.RecordingStream, prefix: str) -> None:
+    """A physics run's note on its timelines: the continuous drive is only on ``sim_time``,
+    which the viewer does not pick by itself (the curves need ``episode``)."""
+    rec.log(path(prefix, "notes/drive"), rr.TextDocument(DRIVE_NOTE, media_type="text/markdown"),
+            static=True)
 
 
-def map_view(prefix: str, sc: Scenario, name: str = "Map: robot, trajectory, obstacles",
-             legend: bool = True) -> rrb.Spatial2DView:
-    w = path(prefix, "world")
-    hide = [] if legend else [f"- /{w}/legend"]
-    return rrb.Spatial2DView(origin=path(prefix, "") or "/", name=name,
-                             contents=[f"+ /{w}/**", f"- /{w}/values/**", *hide],
-                             background=BACKGROUND, visual_bounds=_bounds(sc))
+KEY_LINES = (("BFS shortest route", BFS_ROUTE), ("final greedy route", ROUTE_PALETTE[0]),
+             ("last training episode", TRAIN), ("greedy test from S", GREEDY))
+KEY_COLUMN = 2.8  # the key's two columns are centred at -/+ this (a row is 1 unit tall)
 
 
-def value_view(prefix: str, sc: Scenario, which: str, name: str) -> rrb.Spatial2DView:
-    w = path(prefix, "world")
-    extra = [f"+ /{w}/values/policy"] if which == "max_q" else []
-    return rrb.Spatial2DView(
-        origin=path(prefix, "") or "/", name=name, background=BACKGROUND,
-        contents=[f"+ /{w}", f"+ /{w}/values/{which}/**", f"+ /{w}/values/mask",
-                  f"+ /{w}/obstacles", f"+ /{w}/arena", f"+ /{w}/start", f"+ /{w}/goal",
-                  *extra], visual_bounds=_bounds(sc))
-
-
-def whole_run() -> rrb.TimeAxis:
-    """A curve panel's x axis over the whole run: without it the viewer, which plays the
-    recording on open, follows the time cursor and shows only the last ~1000 episodes,
-    hiding the early learning where methods differ."""
-    every = rrb.TimeRangeBoundary.infinite()
-    return rrb.TimeAxis(view_range=rrb.TimeRange(start=every, end=every))
-
-
-def plot(prefix: str, which: str, name: str) -> rrb.TimeSeriesView:
-    m = path(prefix, "metrics")
-    ents = [f"+ /{m}/{e}" for e, (_, p) in METRICS.items() if p == which]
-    return rrb.TimeSeriesView(name=name, contents=ents, axis_x=whole_run(),
-                              plot_legend=rrb.PlotLegend(corner="LeftTop"))
-
-
-def _panels(timeline: str = "episode") -> list[Any]:
-    return [rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
-            rrb.TimePanel(state="collapsed", timeline=timeline)]
-
-
-def map_title(world: str = "grid", fidelity: str | None = None) -> str:
-    """The map panel's title: what it shows, and in a physics run the fidelity in force and
-    the timeline that replays the drive at real speed."""
-    if world != "physics":
-        return "Map: robot, trajectory, obstacles"
-    return (f"Map · physics ({fidelity or 'exact'}): robot disc, trajectory, contacts · "
-            "timeline sim_time plays at real speed")
-
-
-def value_title(method: str | None) -> str:
-    """The upper-layer panel's title: what the method's potential is."""
-    if method == "rnh-ql+":
-        return "Phi: the optimistic model's value"
-    if method == "rnh-ql+ablation":
-        return "Phi: the optimistic model's value or V_NN (v_target)"
-    return "V_NN (RBF upper layer)"
-
-
-def route_blueprint(prefix: str, sc: Scenario, method: str | None = None,
-                    world: str = "grid", fidelity: str | None = None) -> rrb.Blueprint:
-    """A saved agent's route (``rnhql route --record``): only panels that have data (the map,
-    the value maps and the run card; no training curves exist)."""
-    right = rrb.Vertical(
-        rrb.Horizontal(value_view(prefix, sc, "v_nn", value_title(method)),
-                       value_view(prefix, sc, "max_q", "max_a Q + greedy policy")),
-        rrb.TextDocumentView(origin=path(prefix, "meta") or "/meta", name="Run info"),
-        row_shares=[3, 2])
-    return rrb.Blueprint(rrb.Horizontal(map_view(prefix, sc, map_title(world, fidelity)),
-                                        right, column_shares=[5, 4]), *_panels())
-
-
-def run_blueprint(prefix: str, sc: Scenario, method: str | None = None, world: str = "grid",
-                  fidelity: str | None = None) -> rrb.Blueprint:
-    """One run: the map on the left; values, curves and the run card on the right."""
-    p = path(prefix, "")
-    right = rrb.Vertical(
-        rrb.Horizontal(value_view(prefix, sc, "v_nn", value_title(method)),
-                       value_view(prefix, sc, "max_q", "max_a Q + greedy policy")),
-        plot(prefix, "steps", "Steps per episode vs BFS optimum"),
-        rrb.Horizontal(plot(prefix, "success", "Success"),
-                       plot(prefix, "reward_per_step", "Reward per step")),
-        rrb.Tabs(plot(prefix, "return", "Return"), plot(prefix, "shaping", "Shaping F"),
-                 plot(prefix, "wall_time", "Wall time"),
-                 rrb.TextDocumentView(origin=path(prefix, "meta") or "/meta", name="Run info"),
-                 rrb.TextLogView(origin=p or "/", name="Events")),
-        row_shares=[3, 2, 2, 2])
-    return rrb.Blueprint(rrb.Horizontal(map_view(prefix, sc, map_title(world, fidelity)),
-                                        right, column_shares=[5, 4]), *_panels())
-
-
-def comparison_blueprint(runs: Sequence[tuple[str, int]], sc: Scenario,
-                         prefix_of: Any) -> rrb.Blueprint:
-    """Methods x seeds: one map per method (its first seed), and per method one median curve
-    with its interquartile band (:mod:`scenarios.recording.summary`). The per-seed curves
-    stay in the file under each run, out of the default views."""
-    methods: list[str] = []
-    for m, _ in runs:
-        if m not in methods:
-            methods.append(m)
-    first = {m: min(s for mm, s in runs if mm == m) for m in methods}
-    maps = [map_view(prefix_of(m, first[m]), sc, name=f"{m} (seed {first[m]})", legend=False)
-            for m in methods]
-    curves = rrb.Horizontal(*[
-        rrb.TimeSeriesView(name=f"{title}: median, IQR over seeds", origin=f"/summary/{fig}",
-                           axis_x=whole_run(),
-                           plot_legend=rrb.PlotLegend(corner="RightTop", visible=i == 0))
-        for i, (fig, title) in enumerate(SUMMARY_FIGURES.items())])
-    return rrb.Blueprint(rrb.Vertical(rrb.Grid(*maps), curves, row_shares=[3, 2]),
-                         *_panels())
+def log_comparison_key(rec: rr.RecordingStream, labels: Sequence[str]
+                       ) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The comparison's key at ``key``, as coloured text: the maps' lines on the left,
+    every method in its colour (its curves') on the right. Returns the (x, y) ranges it
+    fills, for the key view's bounds: with a row a unit tall, the columns ~5.6 units
+    apart keep ~20-character names apart at any panel size (the view keeps the aspect)."""
+    left = [("maps:", WALL), *KEY_LINES]
+    right = [("methods:", WALL), *[(lab, label_colour(lab)) for lab in labels]]
+    rows = left + right
+    xy = np.array([(-KEY_COLUMN, i) for i in range(len(left))]
+                  + [(KEY_COLUMN, i) for i in range(len(right))], dtype=float)
+    rec.log("key", rr.Points2D(xy, radii=0.0, colors=[c for _, c in rows],
+                               labels=[t for t, _ in rows], show_labels=True), static=True)
+    half = 2 * KEY_COLUMN
+    return (-half, half), (-0.8, max(len(left), len(right)) + 0.2)

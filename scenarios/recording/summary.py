@@ -73,7 +73,7 @@ def entity(fig: str, label: str, part: str = "") -> str:
 def log_summary(stream: rr.RecordingStream, curves: dict[str, dict[str, np.ndarray]]) -> None:
     """Send every method's curves (one ``send_columns`` per series) with their styles."""
     for label, figs in curves.items():
-        colour = scene.method_colour(label.split("-physics")[0].split("-grid")[0])
+        colour = scene.label_colour(label)
         faded = tuple(int(0.55 * c + 0.45 * 255) for c in colour)
         for fig, arr in figs.items():
             episodes = arr[0].astype(np.int64)

@@ -159,7 +159,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("file", metavar="FILE.rrd", help="a recording written by --record")
     p.add_argument("--web", action="store_true",
                    help="serve the web viewer on 127.0.0.1 instead of the native viewer")
-    p.add_argument("--port", type=int, default=9090, help="web viewer port (with --web)")
+    p.add_argument("--port", type=int, default=9090,
+                   help="web viewer port with --web (another free one if taken; the "
+                        "recording's port is always a free one)")
     p.set_defaults(func=view.cmd_view)
 
     p = sub.add_parser("report", help="the docs' generated tables: which are stale, and a "

@@ -97,13 +97,21 @@ SCREENSHOT_HOW = ("python ../shared/tools/rrd_screenshot.py RECORDING.rrd docs/N
                   "(serves the recording to Rerun's web viewer and screenshots it)")
 
 
-def redraw(figures: tuple[ArtifactFigure, ...] = FIGURES) -> list[Path]:
-    """Redraw every figure from its artifacts (each must load); the paths written."""
-    out = []
+def redraw(figures: tuple[ArtifactFigure, ...] = FIGURES
+           ) -> tuple[list[Path], list[tuple[str, str]]]:
+    """Redraw every figure whose artifacts load: the paths written, and (figure, why) for
+    each one left as it was (a missing or malformed artifact, named)."""
+    from scenarios.artifacts import ArtifactError
+
+    done, skipped = [], []
     for fig in figures:
-        for name in fig.artifacts:
-            load_artifact(name)  # a missing or malformed artifact stops here, by name
+        try:
+            for name in fig.artifacts:
+                load_artifact(name)
+        except ArtifactError as err:
+            skipped.append((fig.path, str(err)))
+            continue
         path = ROOT / fig.path
         fig.draw(path)
-        out.append(path)
-    return out
+        done.append(path)
+    return done, skipped

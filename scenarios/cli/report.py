@@ -44,6 +44,16 @@ def argv_of(command: str) -> list[str]:
     return words
 
 
+def _redraw_figures(redraw) -> bool:
+    """Redraw the docs' figures; say which could not be and why (False if any)."""
+    done, skipped = redraw()
+    for path in done:
+        print(f"redrew {path.relative_to(ROOT)}")
+    for fig, why in skipped:
+        print(f"rnhql report: {fig} not redrawn: {why}", file=sys.stderr)
+    return not skipped
+
+
 def cmd_report(args: argparse.Namespace) -> int:
     now = behaviour_digests()
     stale = []
@@ -66,9 +76,8 @@ def cmd_report(args: argparse.Namespace) -> int:
         state = (f"MISSING ({', '.join(missing)})" if missing else
                  f"STALE ({', '.join(stale_of)})" if stale_of else "fresh")
         print(f"{fig.path} | {', '.join(fig.artifacts)} | {state}")
-    if getattr(args, "figures", False):
-        for path in redraw():
-            print(f"redrew {path.relative_to(ROOT)}")
+    if getattr(args, "figures", False) and not _redraw_figures(redraw):
+        return 1
     hand = legacy_tables()
     if hand:
         print(f"\ntyped by hand ({len(hand)}; re-run with --artifact and render them):")
@@ -95,7 +104,6 @@ def cmd_report(args: argparse.Namespace) -> int:
             return 1
     if args.dry_run:
         return 0
-    for path in redraw():
-        print(f"redrew {path.relative_to(ROOT)}")
+    _redraw_figures(redraw)
     pages = [str(p) for p in generated_pages()]
     return subprocess.call([sys.executable, "-m", "cogapp", "-r", "-I", str(ROOT), *pages])

@@ -29,7 +29,7 @@ import numpy as np
 
 from scenarios.experiments.args import arg, parse
 from scenarios.experiments.compare import make_specs, run_sweep
-from scenarios.figures.save import save_figure
+from scenarios.figures.scaling import figure
 from scenarios.runs.backends import Progress, run_local
 from sim.files import atomic_write_text
 
@@ -57,38 +57,6 @@ def fit_exponent(states: list[int], values: list[float | None]) -> float | None:
         return None
     x, y = np.array(pts).T
     return float(np.polyfit(x, y, 1)[0])
-
-
-def figure(rows: dict[str, list[dict[str, Any]]], path: Path, title: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), dpi=110)
-    for i, (method, pts) in enumerate(rows.items()):
-        colour = plt.get_cmap("tab10").colors[i % 10]
-        for ax, key in zip(axes, ("episodes", "wall"), strict=True):
-            xs = [p["states"] for p in pts if p[key]["median"] is not None]
-            med = [p[key]["median"] for p in pts if p[key]["median"] is not None]
-            lo = [p[key]["q25"] or p[key]["median"] for p in pts if p[key]["median"] is not None]
-            hi = [p[key]["q75"] or p[key]["median"] for p in pts if p[key]["median"] is not None]
-            if xs:
-                ax.errorbar(xs, med, yerr=[np.subtract(med, lo), np.subtract(hi, med)],
-                            marker="o", color=colour, capsize=3,
-                            label=f"{method} (exponent {pts[0]['fit'][key]})")
-    for ax, label in zip(axes, ("episodes to a stable optimal route", "wall time per run [s]"),
-                         strict=True):
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("states (cells)")
-        ax.set_ylabel(label)
-        ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=7)
-    fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
-    save_figure(fig, path)
-    plt.close(fig)
 
 
 @dataclass(frozen=True)

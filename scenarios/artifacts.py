@@ -101,8 +101,13 @@ def machine_load() -> dict[str, Any]:
     return {"cores": os.cpu_count(), "load_1min": load}
 
 
+TIMED_KINDS = {"scaling", "scaling-maps", "physics-batch", "paper-claims", "optimum", "memory"}
+
+
 def busy_note(doc: dict[str, Any]) -> str:
     """`` (machine busy: ...)`` when the study ended with more runnable work than cores."""
+    if doc["name"].split(".")[0] not in TIMED_KINDS:
+        return ""
     m = doc.get("machine") or {}
     load, cores = m.get("load_1min"), m.get("cores")
     if load is None or not cores or load <= cores:

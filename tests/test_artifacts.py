@@ -93,9 +93,11 @@ def test_editing_the_study_script_marks_its_artifact_stale(tmp_path):
 def test_an_artifact_records_the_machine_load_and_a_busy_machine_is_named():
     from scenarios.artifacts import busy_note
 
-    quiet = {"machine": {"cores": 2, "load_1min": 1.5}}
-    busy = {"machine": {"cores": 2, "load_1min": 3.9}}
-    assert busy_note(quiet) == "" and busy_note({}) == ""
+    quiet = {"name": "scaling.x", "machine": {"cores": 2, "load_1min": 1.5}}
+    busy = {"name": "scaling.x", "machine": {"cores": 2, "load_1min": 3.9}}
+    untimed = {"name": "reward-design.x", "machine": {"cores": 2, "load_1min": 3.9}}
+    assert busy_note(quiet) == "" and busy_note({"name": "scaling.x"}) == ""
+    assert busy_note(untimed) == "", "a table without timings needs no busy note"
     assert "load 3.9 on 2 cores" in busy_note(busy)
 
 

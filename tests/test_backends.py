@@ -73,3 +73,32 @@ def test_progress_off_a_terminal_prints_a_line_every_interval_and_at_the_end():
     time.sleep(0.05)
     q.close()
     assert quiet.getvalue() == ""
+
+
+def test_progress_counts_episodes_across_workers_and_estimates_from_the_rate(tmp_path):
+    """Progress is measured in episodes finished in every worker process; the first time
+    left it gives, plus the time already elapsed, is within 2x of the sweep's wall time
+    (it waits out the compilation instead of extrapolating from it)."""
+    import io
+    import re
+    import time
+
+    from scenarios.experiments.compare import make_specs, run_sweep
+    from scenarios.runs.backends import Progress, run_local
+
+    specs = make_specs("paper-40", ["st-ql", "q-lambda", "rnh-ql"], [0, 1, 2, 3], 4000,
+                       ["grid"])
+    out = io.StringIO()
+    progress = Progress(len(specs), interval_s=0.5, stream=out, window_s=5.0)
+    t0 = time.perf_counter()
+    run_sweep(specs, tmp_path / "s", run_local, figures=False, jobs=2, progress=progress)
+    wall = time.perf_counter() - t0
+    lines = out.getvalue().splitlines()
+    assert lines[-1].startswith(f"progress: {12 * 4000:,}/{12 * 4000:,} episodes (100 %)")
+    first = next((ln for ln in lines if "s left" in ln), None)
+    if wall < 8:  # a machine this fast finishes before an estimate is due
+        return
+    assert first is not None, lines
+    elapsed, left = (float(x) for x in re.search(r"(\d+) s elapsed, ~(\d+) s left",
+                                                 first).groups())
+    assert 0.5 * wall <= elapsed + left <= 2.0 * wall, (first, wall)

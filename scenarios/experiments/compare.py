@@ -427,6 +427,12 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     if not resume:
         (out_dir / PARTIAL).unlink(missing_ok=True)
     todo = [s for s in specs if s.key not in done]
+    if resume:
+        print(f"resuming: {len(specs) - len(todo)} of {len(specs)} runs already finished in "
+              f"{out_dir / PARTIAL}; running the other {len(todo)}", file=sys.stderr)
+    progress = execute_kwargs.get("progress")
+    if progress is not None and hasattr(progress, "expect"):
+        progress.expect(len(todo), sum(s.episodes for s in todo))
     with open(out_dir / PARTIAL, "a", encoding="utf-8") as partial:
         def save(rec: dict[str, Any]) -> None:
             at = partial.tell()
@@ -440,7 +446,6 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
 
         keep = {} if files.keep is None else {"keep": files.keep}
         new = execute(todo, on_result=save, **keep, **execute_kwargs) if todo else []
-    progress = execute_kwargs.get("progress")
     if progress is not None:  # nothing left to run: its heartbeat must not outlive the sweep
         progress.close()
     results = files.write(specs, [*done.values(), *new], out_dir)

@@ -46,17 +46,27 @@ class BackendError(InputError):
 
 
 class Progress:
-    """Progress of a sweep on stderr (no dependency).
+    """Progress of a sweep on stderr (no dependency), measured in work: the episodes its
+    runs have finished, in every worker process (:mod:`scenarios.runs.work`).
 
-    On a terminal: a one-line bar, redrawn as runs finish. Off a terminal (logs, CI,
-    a notebook): a plain line every ``interval_s`` seconds while the sweep runs, even
-    when no run finishes in between (a long batch, or the first run's compilation),
-    and one when it ends. ``enabled=False`` silences both.
+    On a terminal: a one-line bar, redrawn as work is done. Off a terminal (logs, CI,
+    a notebook): a plain line every ``interval_s`` seconds while the sweep runs, and one
+    when it ends. ``enabled=False`` silences both. The estimate of the time left is the
+    episodes left over the rate of the last ``window_s`` seconds, and is given only once
+    episodes have been finishing for a few seconds: the first seconds of a sweep are
+    compilation and loading, which no rate of runs finished can tell apart from work.
     """
 
     def __init__(self, total: int, enabled: bool | None = None, interval_s: float = 5.0,
-                 stream: Any = None) -> None:
+                 stream: Any = None, window_s: float = 20.0) -> None:
+        from scenarios.runs import work
+
         self.total, self.done, self.t0 = total, 0, time.perf_counter()
+        self.episodes_total = 0
+        self.counter = work.new_counter()
+        work.share(self.counter)  # runs in this process (--jobs 1) count here too
+        self.window_s = window_s
+        self._samples: list[tuple[float, int]] = []
         self.stream = sys.stderr if stream is None else stream
         tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self.enabled = True if enabled is None else enabled
@@ -65,22 +75,56 @@ class Progress:
         self._stop = threading.Event()
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
-        if self.enabled and not tty and total > 0:
+        if self.enabled and total > 0:
             self._thread = threading.Thread(target=self._heartbeat, daemon=True,
                                             name="rnhql-progress")
             self._thread.start()
 
+    def expect(self, runs: int, episodes: int) -> None:
+        """The work this sweep will do (after ``--resume`` dropped what was finished)."""
+        with self._lock:
+            self.total, self.episodes_total = runs, episodes
+
+    @property
+    def episodes_done(self) -> int:
+        return int(self.counter.value)
+
+    def eta_s(self, now: float | None = None) -> float | None:
+        """Seconds left at the recent rate of episodes, or None while too early to say."""
+        now = time.perf_counter() if now is None else now
+        done = self.episodes_done
+        self._samples.append((now, done))
+        while len(self._samples) > 2 and now - self._samples[1][0] >= self.window_s:
+            self._samples.pop(0)
+        flowing = [(t, d) for t, d in self._samples if d > 0]
+        if not self.episodes_total or len(flowing) < 2:
+            return None
+        (t_a, d_a), (t_b, d_b) = flowing[0], flowing[-1]
+        if t_b - t_a < min(3.0, self.window_s) or d_b <= d_a:
+            return None
+        return (self.episodes_total - done) / ((d_b - d_a) / (t_b - t_a))
+
     def _line(self) -> str:
         elapsed = time.perf_counter() - self.t0
-        eta = (f", ~{elapsed / self.done * (self.total - self.done):.0f} s left"
-               if 0 < self.done < self.total else "")
-        return f"progress: {self.done}/{self.total} runs done, {elapsed:.0f} s elapsed{eta}"
+        eta = self.eta_s()
+        left = "" if eta is None or self.done >= self.total else f", ~{eta:.0f} s left"
+        work = ""
+        done = min(self.episodes_done, self.episodes_total)
+        if self.episodes_total and (done or not self.done):  # runs elsewhere (Ray) count none
+            work = (f"{done:,}/{self.episodes_total:,} episodes "
+                    f"({100 * done / self.episodes_total:.0f} %), ")
+        return (f"progress: {work}{self.done}/{self.total} runs done, {elapsed:.0f} s "
+                f"elapsed{left}")
 
     def _heartbeat(self) -> None:
-        while not self._stop.wait(self.interval_s):
+        every = min(self.interval_s, 1.0) if self.bar else self.interval_s
+        while not self._stop.wait(every):
             with self._lock:
                 try:
-                    self.stream.write(self._line() + "\n")
+                    if self.bar:
+                        self.stream.write("\r" + self._line().ljust(100))
+                    else:
+                        self.stream.write(self._line() + "\n")
                     self.stream.flush()
                 except (OSError, ValueError):  # the stream was closed under us: stop
                     return
@@ -88,25 +132,19 @@ class Progress:
     def update(self, label: str) -> None:
         with self._lock:
             self.done += 1
-            if self.bar:
-                elapsed = time.perf_counter() - self.t0
-                eta = elapsed / self.done * (self.total - self.done)
-                bar = "#" * int(30 * self.done / self.total)
-                self.stream.write(f"\r[{bar:<30}] {self.done}/{self.total} {label:<30} "
-                                  f"{elapsed:6.1f}s, ~{eta:5.1f}s left")
-                if self.done == self.total:
-                    self.stream.write("\n")
-                self.stream.flush()
         if self.done >= self.total:
             self.close()
 
     def close(self) -> None:
         """Stop the heartbeat (its last line says where the sweep ended)."""
-        if self._thread is not None and not self._stop.is_set():
-            self._stop.set()
+        if self._stop.is_set():
+            return
+        self._stop.set()
+        if self._thread is not None:
             with self._lock:
                 try:
-                    self.stream.write(self._line() + "\n")
+                    end = "\r" + self._line().ljust(100) + "\n" if self.bar else self._line() + "\n"
+                    self.stream.write(end)
                     self.stream.flush()
                 except (OSError, ValueError):
                     pass
@@ -142,6 +180,15 @@ class _Collector:
         if self.failures:
             raise SweepError(self.failures, len(done))
         return done
+
+
+def _init_worker(counter: Any = None) -> None:
+    """Pool worker initializer: the signals (:func:`_ignore_sigint`) and the sweep's shared
+    episode counter (:mod:`scenarios.runs.work`)."""
+    from scenarios.runs import work
+
+    _ignore_sigint()
+    work.share(counter)
 
 
 def _ignore_sigint() -> None:
@@ -204,7 +251,8 @@ def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector) -> list[dic
                 for i, rec in zip(task, recs, strict=True):
                     col.ok(i, rec)
         return col.result()
-    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_ignore_sigint)
+    counter = getattr(col.progress, "counter", None)
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(counter,))
     try:
         futures = {pool.submit(run_task, [specs[i] for i in task]): task for task in tasks}
         for fut in as_completed(futures):

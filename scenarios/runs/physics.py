@@ -38,6 +38,7 @@ from learning.generator_handle import handles
 from learning.geometry import geometry_of
 from learning.metrics import episodes_to_first_optimal
 from scenarios.runs.physics_grading import Grader
+from scenarios.runs.work import add_episodes
 from scenarios.signals import sigint_handled_by
 from sim.grid import TabularModel
 from sim.physics.vector import PhysicsRouteVectorEnv
@@ -234,6 +235,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                     if not sub.any():
                         continue
                     ag.end_episode(sub)
+                    add_episodes(int(np.count_nonzero(sub)))
                     fmean, fstd = ag.last_shaping()
                     for k in np.flatnonzero(sub):
                         i = b0 + int(k)

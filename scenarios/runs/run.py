@@ -76,8 +76,10 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
         from scenarios.recording.hooks import GridRecorder
 
         observer = GridRecorder(recorder, plan)
+    from scenarios.runs.work import CountingObserver
+
     result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every,
-                           observer=observer, start_rng=rs.starts)
+                           observer=CountingObserver(observer), start_rng=rs.starts)
     # the paper's test, on its own stream so it never changes the training run
     eps_routes = epsilon_route_lengths(result.state, model, cfg.eps, rs.evaluation)
     extras = None

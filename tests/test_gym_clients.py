@@ -200,7 +200,7 @@ def test_rewards_argument_and_default():
         gym.make("rnhql/DiffDrive-v0", fidelity="perfect")
     with pytest.raises(ScenarioError, match="steps_per_episode"):
         gym.make("rnhql/GridRoute-v0", steps_per_episode=0)
-    with pytest.raises(ScenarioError, match="scenario.robot.wheels"):
+    with pytest.raises(ScenarioError, match=r"scenario\.robot\.wheels"):
         gym.make("rnhql/GridRoute-v0", scenario={**_asdict(SMALL), "robot": {"wheels": 3}})
 
 

@@ -84,7 +84,7 @@ def rollout(env_id, seed, n=120):
     env.action_space.seed(seed)
     out = [np.asarray(obs).tolist()]
     for _ in range(n):
-        obs, r, term, trunc, info = env.step(env.action_space.sample())
+        obs, r, term, trunc, _info = env.step(env.action_space.sample())
         out.append((np.asarray(obs).tolist(), r, term, trunc,
                     env.unwrapped.trajectory().tolist()))
         if term or trunc:

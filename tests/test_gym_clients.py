@@ -42,7 +42,7 @@ def _policy(env_id: str, obs: np.ndarray, rng: np.random.Generator, n: int) -> n
 
 
 def _kwargs(env_id: str) -> dict:
-    kw = {"scenario": SMALL}
+    kw = {"scenario": SMALL, "start": "random"}  # autoresets start anywhere too
     if env_id == "rnhql/DiffDrive-v0":
         kw["steps_per_episode"] = 25  # 2.5 s: some episodes reach G, others time out
     return kw
@@ -264,6 +264,17 @@ def test_diffdrive_accepts_float64_and_clips():
         env.step(np.array([np.inf, 0.0]))
     with pytest.raises(InvalidAction, match="shape"):
         env.step(np.zeros(3))
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_start_argument_sets_where_bare_resets_begin(env_id):
+    env = gym.make(env_id, scenario="paper-40", start="random")
+    m = env.unwrapped.model
+    starts = {int(env.reset(seed=k)[1]["state"]) for k in range(8)}
+    assert len(starts) > 4 and starts <= set(m.start_states.tolist())
+    assert env.reset(options={"start": "S"})[1]["state"] == m.start  # the option wins
+    with pytest.raises(ValueError, match="start"):
+        gym.make(env_id, scenario="paper-40", start="anywhere")
 
 
 def test_grid_step_before_reset_raises():

@@ -14,14 +14,32 @@ from sim.render import AGENT, PATH, MapCanvas
 from sim.scenario import Rewards, Scenario
 
 
+def check_start(start: Any, model: Any) -> str | int:
+    """An env's ``start=`` argument (where a ``reset()`` without a ``start`` option begins):
+    ``"S"``, ``"random"`` or a free state that reaches the goal."""
+    if isinstance(start, str):
+        if start not in ("S", "random"):
+            raise ValueError(f"start must be 'S', 'random' or a state index, got {start!r}")
+        return start
+    if not isinstance(start, int | np.integer) or isinstance(start, bool):
+        raise ValueError(f"start must be 'S', 'random' or a state index, got {start!r}")
+    s = int(start)
+    if not (0 <= s < model.n_states) or model.distance_to_goal[s] < 0:
+        raise ValueError(f"start = {s} is not a free state that reaches the goal")
+    return s
+
+
 def start_state_from_options(options: dict[str, Any] | None, model: Any,
-                             np_random: np.random.Generator) -> int:
-    """Resolve ``reset(options={"start": ...})``: ``"S"`` (default), ``"random"`` or a state.
+                             np_random: np.random.Generator, default: str | int = "S") -> int:
+    """Resolve ``reset(options={"start": ...})``: ``"S"``, ``"random"`` or a state; without
+    the option, ``default`` (the env's ``start=`` argument, ``"S"`` unless given).
 
     ``"random"`` draws uniformly from the free cells that reach the goal, with
-    the env's own generator (seeded by ``reset(seed=...)``).
+    the env's own generator (seeded by ``reset(seed=...)``). Training from random starts
+    is the paper's protocol; ``start="random"`` gives it to clients (Stable-Baselines3's
+    autoresets) that call ``reset()`` without options.
     """
-    start = (options or {}).get("start", "S")
+    start = (options or {}).get("start", default)
     if isinstance(start, str):
         if start == "S":
             return int(model.start)
@@ -60,7 +78,9 @@ class GridRouteEnv(gym.Env):
 
     ## Starting State
     S, or with ``reset(options={"start": "random"})`` a uniformly drawn free
-    cell that reaches G; ``{"start": s}`` starts at state ``s``.
+    cell that reaches G; ``{"start": s}`` starts at state ``s``. ``start=`` at
+    construction sets what a ``reset()`` without the option does (``"random"``: the
+    paper's training protocol, for clients that reset without options).
 
     ## Episode End
     Terminated on entering G. Truncated after the scenario's ``steps_per_episode`` moves
@@ -77,6 +97,7 @@ class GridRouteEnv(gym.Env):
     ``rewards``: ``"scenario"``, ``"paper"``, ``"goal-only"``, ``"step-cost"``,
     ``"goal=100,bump=-1,step=0"`` or a :class:`Rewards`.
     ``steps_per_episode``: moves per episode (default: the scenario's).
+    ``start``: ``"S"``, ``"random"`` or a state, for resets without a ``start`` option.
     ``render_mode``: ``None`` or ``"rgb_array"`` (map, agent and its path).
     ``env.unwrapped.model`` is the :class:`sim.grid.TabularModel` of the scheme it pays.
 
@@ -87,12 +108,13 @@ class GridRouteEnv(gym.Env):
 
     def __init__(self, scenario: str | Scenario = "paper-50",
                  render_mode: str | None = None, rewards: str | Rewards = SCENARIO_REWARDS,
-                 steps_per_episode: int | None = None) -> None:
+                 steps_per_episode: int | None = None, start: str | int = "S") -> None:
         self.scenario = env_scenario(scenario, rewards)
         self.rewards = self.scenario.rewards
         self.steps_per_episode = episode_limit(steps_per_episode,
                                                self.scenario.steps_per_episode)
         self.model = build_model(self.scenario)
+        self.start = check_start(start, self.model)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}")
         self.render_mode = render_mode
@@ -111,7 +133,7 @@ class GridRouteEnv(gym.Env):
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
         super().reset(seed=seed)
-        self._s = start_state_from_options(options, self.model, self.np_random)
+        self._s = start_state_from_options(options, self.model, self.np_random, self.start)
         self._path = [self._s]
         self._elapsed = 0
         self._started = True

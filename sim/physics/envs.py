@@ -29,7 +29,7 @@ from sim.env_args import (
 )
 from sim.grid import build_model
 from sim.grid.discretiser import Discretiser
-from sim.grid.env import start_state_from_options
+from sim.grid.env import check_start, start_state_from_options
 from sim.physics.batch import RobotView, RouteBatch
 from sim.physics.controller import DriveLimits, rate_limit, wheels_to_twist, wrap_angle
 from sim.physics.fidelity import Fidelity
@@ -127,6 +127,7 @@ class PhysicsRouteEnv(gym.Env):
     ## Starting State
     The centre of S heading +x, or with ``reset(options={"start": "random"})`` a
     uniformly drawn free cell that reaches G; ``{"start": s}`` starts at state s.
+    ``start=`` at construction: what a ``reset()`` without the option does.
 
     ## Episode End
     Terminated on entering G. Truncated after the scenario's ``steps_per_episode``
@@ -149,6 +150,7 @@ class PhysicsRouteEnv(gym.Env):
     ``[physics]`` table, else ``exact``). ``steps_per_episode``: primitives per episode.
     ``render_mode``: ``None`` or ``"rgb_array"`` (map, trail, robot, contacts).
     ``config``: a :class:`sim.physics.PhysicsConfig` (time step, tolerances).
+    ``start``: ``"S"``, ``"random"`` or a state, for resets without a ``start`` option.
     ``env.unwrapped.model`` is the grid's :class:`sim.grid.TabularModel`.
 
     ``gymnasium.make("rnhql/PhysicsRoute-v0", scenario="rooms-102", fidelity="noisy")``
@@ -160,7 +162,7 @@ class PhysicsRouteEnv(gym.Env):
                  config: PhysicsConfig | None = None,
                  fidelity: Fidelity | str | None = None,
                  rewards: str | Rewards = SCENARIO_REWARDS,
-                 steps_per_episode: int | None = None) -> None:
+                 steps_per_episode: int | None = None, start: str | int = "S") -> None:
         self.scenario = env_scenario(scenario, rewards)
         self.rewards = self.scenario.rewards
         self.steps_per_episode = episode_limit(steps_per_episode,
@@ -168,6 +170,7 @@ class PhysicsRouteEnv(gym.Env):
         self.fidelity = fidelity_arg(fidelity, self.scenario)
         self._noise_rng: np.random.Generator | None = None
         self.model = build_model(self.scenario)
+        self.start = check_start(start, self.model)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}")
         self.render_mode = render_mode
@@ -186,7 +189,7 @@ class PhysicsRouteEnv(gym.Env):
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
         super().reset(seed=seed)
-        s = start_state_from_options(options, self.model, self.np_random)
+        s = start_state_from_options(options, self.model, self.np_random, self.start)
         x, y = self.disc.state_centre(s)
         if self._batch is None:  # a batch of one robot: the same world as the vector env's
             self._batch = RouteBatch(self.scenario, 1, self.config, trajectories=True,
@@ -312,7 +315,7 @@ class DiffDriveEnv(gym.Env):
     period's pose after each physics step; :meth:`contact_records` the records.
 
     ## Arguments
-    ``scenario``, ``rewards``, ``fidelity`` as ``PhysicsRoute-v0``.
+    ``scenario``, ``rewards``, ``fidelity``, ``start`` as ``PhysicsRoute-v0``.
     ``steps_per_episode``: control periods per episode. ``render_mode``: ``None`` or
     ``"rgb_array"``. ``config``: a :class:`sim.physics.PhysicsConfig` (``substeps``
     physics steps per action).
@@ -326,12 +329,13 @@ class DiffDriveEnv(gym.Env):
                  config: PhysicsConfig | None = None, shared: SharedSpace | None = None,
                  fidelity: Fidelity | str | None = None,
                  rewards: str | Rewards = SCENARIO_REWARDS,
-                 steps_per_episode: int | None = None) -> None:
+                 steps_per_episode: int | None = None, start: str | int = "S") -> None:
         self.scenario = sc = env_scenario(scenario, rewards)
         self.rewards = sc.rewards
         self.fidelity = fidelity_arg(fidelity, sc)
         self._shared = shared  # the vector env's Space (None: a Space of its own)
         self.model = build_model(sc)
+        self.start = check_start(start, self.model)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}")
         self.render_mode = render_mode
@@ -370,7 +374,7 @@ class DiffDriveEnv(gym.Env):
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
-        s = start_state_from_options(options, self.model, self.np_random)
+        s = start_state_from_options(options, self.model, self.np_random, self.start)
         heading = float((options or {}).get("heading", 0.0))
         if not math.isfinite(heading):
             raise ValueError(f"options['heading'] must be finite, got {heading!r}")

@@ -134,7 +134,8 @@ class PhysicsRouteVectorEnv(VectorEnv):
     ``trajectories=True`` keeps every physics step's pose of the last primitive
     (:meth:`trajectory`) for recordings. ``rewards``, ``fidelity``: as the single env
     (``make_vec`` passes the id's ``goal-only``; built directly, the scenario's scheme).
-    ``max_episode_steps`` (or ``steps_per_episode``): default the scenario's.
+    ``max_episode_steps`` (or ``steps_per_episode``): default the scenario's. ``start``:
+    where a reset without a ``start`` option (an autoreset too) begins, as the single env.
 
     ``gymnasium.make_vec("rnhql/PhysicsRoute-v0", 8, vectorization_mode="vector_entry_point",
     scenario="rooms-102", autoreset_mode="SameStep")``
@@ -149,7 +150,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
                  fidelity: Fidelity | str | None = None,
                  autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
                  trajectories: bool = False, rewards: str | Rewards = SCENARIO_REWARDS,
-                 steps_per_episode: int | None = None) -> None:
+                 steps_per_episode: int | None = None, start: str | int = "S") -> None:
         if render_mode is not None:
             raise ValueError("PhysicsRouteVectorEnv does not render; use the single env")
         if not (isinstance(num_envs, int) and num_envs >= 1):
@@ -160,7 +161,8 @@ class PhysicsRouteVectorEnv(VectorEnv):
         # the single env's arguments, resolved as it resolves them (it builds no world
         # until reset): sub-env i is PhysicsRouteEnv with the same kwargs
         proto = PhysicsRouteEnv(scenario, config=config, fidelity=fidelity, rewards=rewards,
-                                steps_per_episode=steps_per_episode)
+                                steps_per_episode=steps_per_episode, start=start)
+        self.start = proto.start
         self.scenario = proto.scenario
         self.model = proto.model
         self.config = proto.config
@@ -205,7 +207,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
             if not (0 <= s < self.model.n_states):
                 raise ValueError(f"options['starts'][{i}] = {s} is not a state")
         else:
-            s = start_state_from_options(options, self.model, self._rngs[i])
+            s = start_state_from_options(options, self.model, self._rngs[i], self.start)
         x, y = self.batch.disc.state_centre(s)
         self.batch.place(i, x, y, 0.0)
         self._obs[i] = s
@@ -328,7 +330,7 @@ class DiffDriveVectorEnv(VectorEnv):
                  autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
                  fidelity: Fidelity | str | None = None,
                  rewards: str | Rewards = SCENARIO_REWARDS,
-                 steps_per_episode: int | None = None) -> None:
+                 steps_per_episode: int | None = None, start: str | int = "S") -> None:
         if render_mode is not None:
             raise ValueError("DiffDriveVectorEnv does not render; use the single env")
         if not (isinstance(num_envs, int) and num_envs >= 1):
@@ -340,7 +342,8 @@ class DiffDriveVectorEnv(VectorEnv):
         self.config = config_arg(config, DIFFDRIVE_CONFIG)
         self.shared = SharedSpace(sc, self.config)
         self.envs = [DiffDriveEnv(sc, config=self.config, shared=self.shared,
-                                  fidelity=fidelity) for _ in range(num_envs)]
+                                  fidelity=fidelity, start=start) for _ in range(num_envs)]
+        self.start = self.envs[0].start
         self.scenario = sc
         self.fidelity = self.envs[0].fidelity
         default = episode_limit(steps_per_episode, diffdrive_periods(sc, self.config))

@@ -6,9 +6,8 @@ to the goal. What makes it work (measured, see docs/python-api.md):
 
 - reward ``goal-only`` (+100 in G, -1 per 0.1 s in contact, 0 otherwise), the ids'
   default: ``paper``'s +1 per cell change teaches driving in circles;
-- random starts while training (``autoreset_options={"start": "random"}``): episodes that
-  begin near G pay early, and "drive towards the goal vector, round the pillar" carries
-  over to S;
+- random starts while training (``start="random"``): episodes that begin near G pay
+  early, and "drive towards the goal vector, round the pillar" carries over to S;
 - 8 robots in one Pymunk Space through the native vector env and ``sim.sb3_vec``;
 - episodes of 300 periods (30 s), gamma 0.99, ``TIMESTEPS`` below, seeds 0, 1, 2.
 
@@ -37,8 +36,7 @@ def train(seed: int) -> PPO:
     venv = SB3VecEnv(gym.make_vec("rnhql/DiffDrive-v0", 8,
                                   vectorization_mode="vector_entry_point", scenario=ARENA,
                                   steps_per_episode=PERIODS, autoreset_mode="SameStep",
-                                  autoreset_options={"start": "random"}))
-    venv.set_options({"start": "random"})
+                                  start="random"))
     model = PPO("MlpPolicy", venv, n_steps=256, batch_size=256, gamma=0.99, seed=seed,
                 device="cpu", verbose=0)
     return model.learn(TIMESTEPS)

@@ -12,12 +12,14 @@ Run as pasted: ``python examples/sb3_dqn_route.py`` (``pip install rnhql[sb3]``)
 import os
 
 import gymnasium as gym
+import torch
 from stable_baselines3 import DQN
 
 import sim  # noqa: F401  (registers the rnhql/ ids)
 
 TIMESTEPS = int(60_000 * float(os.environ.get("RNHQL_EXAMPLE_SCALE", "1")))
 SCENARIO = "rooms-102"
+torch.set_num_threads(1)  # a 64-unit MLP: more threads only contend
 
 
 def greedy_route(model: DQN, env_id: str) -> int | None:

@@ -14,6 +14,7 @@ import time
 
 import gymnasium as gym
 import numpy as np
+import torch
 from stable_baselines3 import DQN
 from stable_baselines3.common.vec_env import DummyVecEnv
 
@@ -21,6 +22,7 @@ import sim  # noqa: F401  (registers the rnhql/ ids)
 from sim.sb3_vec import SB3VecEnv
 
 SCALE = float(os.environ.get("RNHQL_EXAMPLE_SCALE", "1"))
+torch.set_num_threads(1)  # a 64-unit MLP: more threads only contend
 N, SCENARIO = 16, "rooms-102"
 KW = {"scenario": SCENARIO, "start": "random", "fidelity": "exact"}
 

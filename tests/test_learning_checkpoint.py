@@ -181,7 +181,7 @@ def test_env_agent_checkpoint_resumes_in_the_kernel(tmp_path, paper50_model):
     from learning import RNHQL, run_env_episodes
 
     cfg = RNHQL(warmup_episodes=10)
-    env = gym.make("rnhql/GridRoute-v0")
+    env = gym.make("rnhql/GridRoute-v0", rewards="scenario")  # paper50_model's scheme
     agent = make_agent(cfg, geometry_of(env.unwrapped.model), np.random.default_rng(5))
     run_env_episodes(agent, env, 20)
     ck = load_checkpoint(save_checkpoint(tmp_path / "env.npz", Checkpoint.of_agent(agent)),

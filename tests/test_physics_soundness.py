@@ -72,7 +72,7 @@ def explore(sc: Scenario, n: int, seed: int, episode: int = 200):
             s, _ = env.reset(options={"start": "random"})
         a = int(rng.integers(4))
         s2, _, term, _, info = env.step(a)
-        trajs.append(info["trajectory"][:, :2])
+        trajs.append(env.trajectory()[:, :2])
         rows.append((s, a, s2, info["bumped"]))
         s = s2
         if term:
@@ -119,7 +119,7 @@ def test_bfs_route_drives_without_contact(name):
         a = next(a for a in range(4) if m.next_state[s, a] == nxt)
         s, _r, term, _, info = env.step(a)
         assert s == nxt and not info["contacts"]
-        assert signed_clearance(sc, info["trajectory"][:, :2]).min() > 0
+        assert signed_clearance(sc, env.trajectory()[:, :2]).min() > 0
     assert term and env.world.contacts == [] and env.world.steps > 0
 
 
@@ -146,8 +146,8 @@ def test_diffdrive_random_driving_is_sound(paper50):
             action = (np.ones(2, dtype=np.float32) if rng.random() < 0.5
                       else env.action_space.sample())
         _, _, term, _, info = env.step(action)
-        trajs.append(info["trajectory"][:, :2])
-        contacts += len(info["contacts"])
+        trajs.append(env.trajectory()[:, :2])
+        contacts += info["contacts"]
         if term or i % 300 == 299:
             env.reset(options={"start": "random"})
     gap = signed_clearance(paper50, np.concatenate(trajs))

@@ -55,7 +55,7 @@ def test_sub_env_equals_the_single_env_with_its_seed_through_autoresets():
             o, r, te, tr, inf = e.step(int(acts[i]))
             assert (obs[i], rew[i], term[i], trunc[i]) == (o, r, te, tr)
             assert info["bumped"][i] == inf["bumped"] and info["steps"][i] == inf["steps"]
-            assert info["contacts"][i] == len(inf["contacts"])
+            assert info["contacts"][i] == inf["contacts"]
             np.testing.assert_allclose(info["pose"][i], inf["pose"], atol=1e-12)
         ended = term | trunc
         episodes_ended += int(ended.sum())
@@ -102,8 +102,8 @@ def test_diffdrive_vector_env_sub_env_equals_single_env():
             o, r, te, tr, inf = e.step(acts[i])
             np.testing.assert_allclose(obs[i], o, atol=1e-6)
             assert (rew[i], term[i], trunc[i]) == (r, te, tr)
-            assert info["contacts"][i] == len(inf["contacts"])
+            assert info["contacts"][i] == inf["contacts"]
             np.testing.assert_allclose(info["pose"][i], inf["pose"], atol=1e-9)
-            contacts += len(inf["contacts"])
+            contacts += inf["contacts"]
         ended = term | trunc
     assert contacts > 0  # the robots did touch walls or obstacles

@@ -76,7 +76,7 @@ def bench_primitives(sc: Scenario, cfg: PhysicsConfig, n: int, seed: int) -> dic
         steps += info["steps"]
         if info["bumped"]:
             bumps += 1
-            deepest = max(deepest, info["contacts"][0].depth_m)
+            deepest = max(deepest, bare.contact_records()[-info["contacts"]].depth_m)
         if term or i % 200 == 199:
             s, _ = bare.reset(options={"start": "random"})
     t_env = time.perf_counter() - t

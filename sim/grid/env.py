@@ -8,20 +8,38 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from sim.env_args import SCENARIO_REWARDS, discrete_action, env_scenario, episode_limit
 from sim.grid.model import build_model
 from sim.render import AGENT, PATH, MapCanvas
-from sim.scenario import Scenario
-from sim.scenario_io import resolve_scenario
+from sim.scenario import Rewards, Scenario
+
+
+def check_start(start: Any, model: Any) -> str | int:
+    """An env's ``start=`` argument (where a ``reset()`` without a ``start`` option begins):
+    ``"S"``, ``"random"`` or a free state that reaches the goal."""
+    if isinstance(start, str):
+        if start not in ("S", "random"):
+            raise ValueError(f"start must be 'S', 'random' or a state index, got {start!r}")
+        return start
+    if not isinstance(start, int | np.integer) or isinstance(start, bool):
+        raise ValueError(f"start must be 'S', 'random' or a state index, got {start!r}")
+    s = int(start)
+    if not (0 <= s < model.n_states) or model.distance_to_goal[s] < 0:
+        raise ValueError(f"start = {s} is not a free state that reaches the goal")
+    return s
 
 
 def start_state_from_options(options: dict[str, Any] | None, model: Any,
-                             np_random: np.random.Generator) -> int:
-    """Resolve ``reset(options={"start": ...})``: ``"S"`` (default), ``"random"`` or a state.
+                             np_random: np.random.Generator, default: str | int = "S") -> int:
+    """Resolve ``reset(options={"start": ...})``: ``"S"``, ``"random"`` or a state; without
+    the option, ``default`` (the env's ``start=`` argument, ``"S"`` unless given).
 
     ``"random"`` draws uniformly from the free cells that reach the goal, with
-    the env's own generator (seeded by ``reset(seed=...)``).
+    the env's own generator (seeded by ``reset(seed=...)``). Training from random starts
+    is the paper's protocol; ``start="random"`` gives it to clients (Stable-Baselines3's
+    autoresets) that call ``reset()`` without options.
     """
-    start = (options or {}).get("start", "S")
+    start = (options or {}).get("start", default)
     if isinstance(start, str):
         if start == "S":
             return int(model.start)
@@ -50,30 +68,53 @@ class GridRouteEnv(gym.Env):
     state; blocked ones are never reached).
 
     ## Reward
-    The scenario's scheme (paper default): +100 for entering G, -1 for a bump
-    (a move into an obstacle, a blocked cell or a wall; the agent stays),
-    +1 for any other move.
+    ``goal`` for entering G, ``bump`` for a move into an obstacle, a blocked cell or a
+    wall (the agent stays), ``step`` for any other move, from the scheme ``rewards``
+    names. Made by id (``gymnasium.make``, ``make_vec``) the scheme is ``goal-only``
+    (+100, -1, 0): with the paper's +1 per free step a deep-RL learner at gamma = 0.99
+    learns to wander (600 free steps pay more than G). ``rewards="paper"`` is the paper's
+    scheme; ``rewards="scenario"`` the scenario's own ``[rewards]`` table (the default
+    when the class is built directly, as the CLI's runs do).
 
     ## Starting State
     S, or with ``reset(options={"start": "random"})`` a uniformly drawn free
-    cell that reaches G; ``{"start": s}`` starts at state ``s``.
+    cell that reaches G; ``{"start": s}`` starts at state ``s``. ``start=`` at
+    construction sets what a ``reset()`` without the option does (``"random"``: the
+    paper's training protocol, for clients that reset without options).
 
     ## Episode End
-    Terminated on entering G. Truncated by ``TimeLimit`` after
-    ``max_episode_steps`` (600 as registered, the paper's episode length).
+    Terminated on entering G. Truncated after the scenario's ``steps_per_episode`` moves
+    (600 for the paper's maps, 1704 for ``ost003d``), or ``steps_per_episode`` if given.
+    ``gymnasium.make(..., max_episode_steps=n)`` adds a ``TimeLimit`` on top.
+
+    ## Info
+    ``state`` (int, the cell, as the observation) and ``bumped`` (bool, the move hit
+    something and the agent stayed); the same keys after ``reset`` and in vector envs.
 
     ## Arguments
-    ``scenario``: a built-in name, a ``.toml`` path or a :class:`Scenario`.
+    ``scenario``: a built-in name, a ``.toml`` path, a :class:`Scenario` (or its fields
+    as a dict, what a spec's JSON round trip leaves).
+    ``rewards``: ``"scenario"``, ``"paper"``, ``"goal-only"``, ``"step-cost"``,
+    ``"goal=100,bump=-1,step=0"`` or a :class:`Rewards`.
+    ``steps_per_episode``: moves per episode (default: the scenario's).
+    ``start``: ``"S"``, ``"random"`` or a state, for resets without a ``start`` option.
     ``render_mode``: ``None`` or ``"rgb_array"`` (map, agent and its path).
-    ``env.unwrapped.model`` is the :class:`sim.grid.TabularModel`.
+    ``env.unwrapped.model`` is the :class:`sim.grid.TabularModel` of the scheme it pays.
+
+    ``gymnasium.make("rnhql/GridRoute-v0", scenario="rooms-102", rewards="paper")``
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}  # noqa: RUF012
 
     def __init__(self, scenario: str | Scenario = "paper-50",
-                 render_mode: str | None = None) -> None:
-        self.scenario = scenario if isinstance(scenario, Scenario) else resolve_scenario(scenario)
+                 render_mode: str | None = None, rewards: str | Rewards = SCENARIO_REWARDS,
+                 steps_per_episode: int | None = None, start: str | int = "S") -> None:
+        self.scenario = env_scenario(scenario, rewards)
+        self.rewards = self.scenario.rewards
+        self.steps_per_episode = episode_limit(steps_per_episode,
+                                               self.scenario.steps_per_episode)
         self.model = build_model(self.scenario)
+        self.start = check_start(start, self.model)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}")
         self.render_mode = render_mode
@@ -84,25 +125,33 @@ class GridRouteEnv(gym.Env):
         self._reward = self.model.reward.tolist()
         self._goal = self.model.goal
         self._s = self.model.start
+        self._elapsed = 0
+        self._started = False
         self._path: list[int] = []
         self._canvas: MapCanvas | None = None
 
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
         super().reset(seed=seed)
-        self._s = start_state_from_options(options, self.model, self.np_random)
+        self._s = start_state_from_options(options, self.model, self.np_random, self.start)
         self._path = [self._s]
-        return self._s, {}
+        self._elapsed = 0
+        self._started = True
+        return self._s, {"state": self._s, "bumped": False}
 
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
-        if not (action.__class__ is int or isinstance(action, np.integer)) or not 0 <= action < 4:
-            raise AssertionError(f"{action!r} ({type(action)}) invalid")
+        if action.__class__ is not int or not 0 <= action < 4:  # the fast path takes ints
+            action = discrete_action(action, 4)
+        if not self._started:
+            raise gym.error.ResetNeeded("call reset() before step()")
         s = self._s
         ns = self._next[s][action]
         self._s = ns
+        self._elapsed += 1
         if self.render_mode is not None:
             self._path.append(ns)
-        return ns, self._reward[s][action], ns == self._goal, False, {}
+        return (ns, self._reward[s][action], ns == self._goal,
+                self._elapsed >= self.steps_per_episode, {"state": ns, "bumped": ns == s})
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array":

@@ -141,6 +141,17 @@ class RouteBatch:
         self.bodies.append(body)
         self.shapes.append(shape)
 
+    # ------------------------------------------------------------------ pickling
+    # ``r`` holds views into ``robots``; pickle (and copy.deepcopy) would turn them into
+    # arrays of their own, and the kernel's writes to ``robots`` would no longer show in
+    # ``r`` (a copied env would diverge from its original). The copy rebuilds them.
+    def __getstate__(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k != "r"}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self.r = by_name(self.robots)
+
     # ------------------------------------------------------------------ episodes
     def place(self, i: int, x_m: float, y_m: float, heading_rad: float = 0.0, *,
               resting: bool = False) -> None:

@@ -148,6 +148,20 @@ class PhysicsWorld:
             self._shared.owners.pop(self.robot_shape, None)
         self._add_robot(*pose)
 
+    # ------------------------------------------------------------- pickling
+    # The fast path's cffi pointers and functions (see _bind_fast) cannot be pickled;
+    # pymunk pickles the Space, bodies, shapes, joints and collision handlers, so a copy
+    # (pickle, copy.deepcopy, a worker process) drops them and binds its own. By the time
+    # __setstate__ runs the Space in the state is complete (it only refers to this world).
+    _UNPICKLABLE = ("_S", "_B", "_C", "_fn")
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {k: v for k, v in self.__dict__.items() if k not in self._UNPICKLABLE}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._bind_fast()
+
     # ------------------------------------------------------------- internals
     def _bind_fast(self) -> None:
         if _cp is not None and hasattr(self.space, "_space") and hasattr(self.robot, "_body"):

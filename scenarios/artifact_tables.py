@@ -314,7 +314,7 @@ def physics_batch(d: dict[str, Any]) -> str:
     lines += ["", f"A learning run as `compare --world physics` trains it ({le['runs']} runs × "
               f"{le['episodes']} episodes at `{le['fidelity']}`, one batch, one core): "
               f"**{le['primitives_per_s_training'] / 1000:.0f}k primitives/s** "
-              f"({le['primitives']:,} primitives); time split: {split}."]
+              f"({int(le['primitives']):,} primitives); time split: {split}."]
     return "\n".join(lines) + "\n"
 
 

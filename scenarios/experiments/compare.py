@@ -29,10 +29,16 @@ from typing import Any
 
 from scenarios.runs.outdir import check_out_dir, sweep_lock
 from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
+from scenarios.runs.resume_state import (
+    PARTIAL,
+    check_out_files,
+    finished_compare,
+    read_partial,
+)
 from scenarios.runs.spec import RecordOptions, RunSpec, load
 from scenarios.signals import sigint_handled_by
 
-PARTIAL = "runs.partial.jsonl"
+__all__ = ["PARTIAL", "finished_compare", "make_specs", "read_partial", "run_sweep"]
 
 
 def version() -> str:
@@ -288,36 +294,6 @@ def ctrl_c_held() -> Iterator[None]:
         raise KeyboardInterrupt
 
 
-def finished_compare(out_dir: Path) -> dict[str, dict[str, Any]]:
-    """The runs of a finished comparison in ``out_dir`` (its ``results.json``), by key."""
-    done: dict[str, dict[str, Any]] = {}
-    finished = out_dir / "results.json"
-    if finished.exists():
-        try:
-            for rec in json.loads(finished.read_text(encoding="utf-8")).get("runs", []):
-                done[rec["key"]] = rec
-        except (json.JSONDecodeError, AttributeError, KeyError, TypeError):
-            pass  # not a results file of this tool: only the partial runs count
-    return done
-
-
-def read_partial(out_dir: Path, finished: Finished | None = None) -> dict[str, dict[str, Any]]:
-    """Finished runs, by key: those of a finished sweep (``finished``; by default its
-    ``results.json``), then those of an interrupted one (a torn last line is ignored). So
-    ``--resume`` after a sweep that finished re-runs nothing of it (an extended sweep runs
-    only what is new)."""
-    path = out_dir / PARTIAL
-    done = (finished or finished_compare)(out_dir)
-    if path.exists():
-        for line in path.read_text(encoding="utf-8").splitlines():
-            try:
-                rec = json.loads(line)
-            except json.JSONDecodeError:
-                continue
-            done[rec["key"]] = rec
-    return done
-
-
 def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
               execute: Callable[..., list[dict[str, Any]]], resume: bool = False,
               figures: bool = True, recording: SweepRecording | None = None,
@@ -332,6 +308,7 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     writes the same ``results.json`` as an uninterrupted sweep.
     """
     check_out_dir(out_dir)
+    check_out_files(out_dir)  # a folder named results.json fails now, not after every run
     files = files or compare_files(figures)
     if recording is not None:
         specs = with_recording(specs, recording)

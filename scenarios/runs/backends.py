@@ -145,11 +145,12 @@ class _Collector:
 
 
 def _ignore_sigint() -> None:
-    """Pool worker initializer: Ctrl-C reaches the whole process group, but only the parent
-    decides what happens (it keeps the finished runs and ends the workers itself). On
+    """Pool worker initializer: Ctrl-C (and SIGHUP) reaches the whole process group, but only
+    the parent decides what happens (it keeps the finished runs and ends the workers itself). On
     Linux a worker is also killed when its parent dies (``PR_SET_PDEATHSIG``): a parent
     killed with SIGKILL would otherwise leave its workers blocked on a pipe."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGHUP, signal.SIG_IGN)  # a closed terminal: the parent's to handle
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     if sys.platform.startswith("linux"):
         import ctypes

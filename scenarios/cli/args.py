@@ -284,9 +284,12 @@ def positive(value: int, flag: str, limit: int | None = None) -> int:
 
 def seed_value(value: int, flag: str, count: int = 1) -> int:
     """A seed (or the first of ``count``): numpy seeds are non-negative integers."""
-    if value < 0 or value + count - 1 > MAX_SEED:
-        raise ExperimentError("command line", flag, f"must be in 0..{MAX_SEED}, got {value}",
+    if value < 0:
+        raise ExperimentError("command line", flag, f"must be >= 0, got {value}",
                               f"pass e.g. {flag} 0")
+    if value + count - 1 > MAX_SEED:
+        raise ExperimentError("command line", flag, f"is {value}, beyond the largest seed "
+                              f"{MAX_SEED}", f"pass e.g. {flag} 0")
     return value
 
 
@@ -401,7 +404,8 @@ def record_path(args: argparse.Namespace, scenario: str, rest: str) -> str | Non
     # keep the file name within what a file system takes (255 bytes)
     safe = re.sub(r"[^A-Za-z0-9._-]+", "_", scenario).lstrip("._")[:MAX_NAME_CHARS] or "run"
     rest = re.sub(r"[^A-Za-z0-9._-]+", "_", rest)
-    path = Path(f"recordings/{safe}-{rest}.rrd" if args.record == RECORD_DEFAULT
+    # (an explicit --record '' never reaches here: check_empty_paths refuses it)
+    path = Path(f"recordings/{safe}-{rest}.rrd" if args.record in (RECORD_DEFAULT, "")
                 else args.record)
     if path.suffix != ".rrd":
         raise ExperimentError("command line", "--record", f"{path} does not end in .rrd",
@@ -410,7 +414,11 @@ def record_path(args: argparse.Namespace, scenario: str, rest: str) -> str | Non
         raise ExperimentError("command line", "--record", f"the file name is "
                               f"{len(path.name.encode())} bytes, more than a file system takes",
                               "name the recording e.g. run.rrd")
-    check_output_file(path, "--record")
+    from sim.files import check_output
+
+    check_output(path, "--record")  # a folder under the name: refused before any work
+    if node_kind(path) in ("device", "fifo"):
+        return str(path)  # written through when the recording is finished (sim.files)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

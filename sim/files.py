@@ -42,6 +42,25 @@ class OutputError(InputError):
     """An output path that cannot take a file: a folder, a socket, a block device."""
 
 
+# a file system with less free space than this is full for rnhql's purposes: a part file,
+# a results.json or a figure does not fit, and a writer that just died died of it
+FULL_BELOW_BYTES = 256 * 1024
+
+
+def no_space_left(path: str | Path) -> bool:
+    """Whether the file system holding ``path`` (or its nearest existing parent) is full:
+    how a writer that failed without saying why (Rerun's file writer, a pool worker that
+    died) is told apart from one that failed for another reason."""
+    p = Path(path)
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    try:
+        st = os.statvfs(p)
+    except OSError:
+        return False
+    return st.f_bavail * st.f_frsize < FULL_BELOW_BYTES
+
+
 def node_kind(path: str | Path) -> str:
     """What ``path`` is, following symlinks: "missing", "regular", "directory", "device"
     (a character device), "fifo" (a named or anonymous pipe) or "other"."""

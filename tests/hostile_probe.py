@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import contextlib
 import os
 import random
 import shutil
@@ -108,7 +109,7 @@ def toml_case(rng: random.Random) -> Case:
         target = rng.choice(["/dev/zero", "/dev/urandom", "fifo.map"])
         text = "\n".join(ln for ln in lines if not ln.startswith(("width_m", "height_m"))
                          and "obstacles" not in ln and not ln.startswith(
-                             ("count", "radius_m", "seed"))) + f'\n'
+                             ("count", "radius_m", "seed"))) + '\n'
         text = text.replace("[arena]", f'[arena]\nmap = "{target}"')
         expect = "error2"
     elif kind == "seed":
@@ -303,7 +304,7 @@ def checkpoint_case(rng: random.Random) -> Case:
         data = _rewrite_npz(base, lambda a: a.__setitem__(
             "config", np.array("[" * 5000 + "]" * 5000)))
     if cmd == "resume":
-        argv = ["train", scenario, "--method", method, "--episodes", "5", "--resume", "a.npz"]
+        argv = ["train", scenario, "--method", method, "--episodes", "40", "--resume", "a.npz"]
     else:
         argv = ["route", scenario, "--agent", "a.npz"]
 
@@ -392,7 +393,8 @@ def path_case(rng: random.Random) -> Case:
     else:
         base = ["train", "paper-50", *TRAIN]
     suffix = {"--record": ".rrd", "--png": ".png"}.get(flag, "")
-    check: Callable[[Path], str | None] = lambda d: None
+    def check(d: Path) -> (str | None):
+        return None
     expect = "ok"
 
     def setup(d: Path) -> None:
@@ -625,6 +627,10 @@ def run_case(case: Case, work: Path, timeout: float) -> tuple[str, str]:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.communicate()
             return "hang", f"no exit within {timeout:.0f} s"
+        except BaseException:  # the probe itself stopped: never leave its case running
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(proc.pid, signal.SIGKILL)
+            raise
         rc = proc.returncode
         return _classify(case, rc, out, err, d)
     finally:
@@ -656,7 +662,7 @@ def _classify(case: Case, rc: int, out: str, err: str, d: Path) -> tuple[str, st
         return "silent", "exit 0 on input that should be refused"
     if rc not in allowed:
         return "wrong exit", f"status {rc} (expected {case.expect}): {tail[0][:160]}"
-    if rc != 0 and (len(errors) != 1 or "Fix" not in errors[0]):
+    if rc != 0 and (len(errors) != 1 or not ("Fix" in errors[0] or "; " in errors[0])):
         return "wrong exit", f"not one clear line: {tail[0][:160]}"
     if rc == 1 and "no space left" not in err.lower() and case.note == "tmpfs":
         return "wrong exit", f"full disk not named: {tail[0][:160]}"

@@ -15,6 +15,7 @@ when the sweep is complete; after Ctrl-C the recording holds the runs finished s
 from __future__ import annotations
 
 import contextlib
+import errno
 import functools
 import json
 import os
@@ -325,10 +326,34 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
             # drawn) surfaces as "ImportError: initialization failed": it is the same Ctrl-C
             _keep_finished(specs, out_dir, recording, files.finished)
             raise KeyboardInterrupt from err
+        except OSError as err:
+            if err.errno != errno.ENOSPC:
+                raise
+            raise _disk_full(err, out_dir, specs, recording, files) from None
         if recording is not None:
-            with _finishing(recording.path):  # every run is done: the recording holds them all
-                gather_parts(specs, recording.path, records=results["runs"])
+            try:
+                with _finishing(recording.path):  # every run is done: the recording holds all
+                    gather_parts(specs, recording.path, records=results["runs"])
+            except OSError as err:
+                if err.errno != errno.ENOSPC:
+                    raise
+                raise _disk_full(err, out_dir, specs, recording, files, True) from None
     return results
+
+
+def _disk_full(err: OSError, out_dir: Path, specs: Sequence[RunSpec],
+               recording: SweepRecording | None, files: SweepFiles,
+               all_done: bool = False) -> OSError:
+    """A full disk (:mod:`scenarios.runs.disk_full`), counting the runs kept so far."""
+    from scenarios.runs.disk_full import disk_full_error
+
+    try:
+        done = read_partial(out_dir, files.finished)
+    except Exception:  # a torn resume file must not hide the full disk
+        done = {}
+    finished = sum(s.key in done for s in specs)
+    return disk_full_error(err, out_dir, specs, None if recording is None else recording.path,
+                           len(specs) if all_done else finished, all_done)
 
 
 def interrupted(err: BaseException) -> bool:

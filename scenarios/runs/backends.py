@@ -14,6 +14,8 @@ parameters.
 
 from __future__ import annotations
 
+import errno
+import os
 import signal
 import sys
 import threading
@@ -129,6 +131,9 @@ class _Collector:
         self._tick(i)
 
     def failed(self, i: int, exc: BaseException) -> None:
+        full = disk_full_cause(exc, self.specs[i])
+        if full is not None:  # every later run would fail the same way: stop the sweep now
+            raise full
         self.failures.append((self.specs[i], f"{type(exc).__name__}: {exc}"))
         self._tick(i, " FAILED")
 
@@ -142,6 +147,24 @@ class _Collector:
         if self.failures:
             raise SweepError(self.failures, len(done))
         return done
+
+
+def disk_full_cause(exc: BaseException, spec: RunSpec) -> OSError | None:
+    """The full disk behind a failed run, as an OSError naming the file (ENOSPC), or None.
+
+    A run's own write error says so (errno ENOSPC). A pool worker that died (a
+    ``BrokenProcessPool``: the real cause never reaches the parent) is put down to a full
+    disk when the file system of the run's recording is full."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    from sim.files import no_space_left
+
+    if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
+        return exc
+    if isinstance(exc, BrokenProcessPool) and spec.recording is not None and \
+            no_space_left(spec.recording.path):
+        return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), spec.recording.path)
+    return None
 
 
 def _ignore_sigint() -> None:

@@ -10,7 +10,8 @@ Only a regular file is ever replaced. A rename over a device node (``/dev/null``
 terminal), a FIFO, or a ``/dev/stdout``-style symlink would swap the user's node for a
 regular file (as root, the system's own), so those are *written through*: the bytes are
 written into the node as into a pipe (``/dev/full`` then reports a full disk like any
-other). A symlink to a regular file is followed: its target is replaced, the link kept.
+other), and a ``/dev/stdout``-style path into the open descriptor it names. A symlink
+to a regular file is followed: its target is replaced, the link kept.
 Anything else that is not a regular file (a folder, a socket, a block device) is refused
 with one line. Inputs are read only from regular files (a FIFO would block until someone
 writes to it, ``/dev/zero`` never ends) and only up to :data:`MAX_INPUT_BYTES`.
@@ -21,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import re
 import shutil
 import stat
 import tempfile
@@ -96,9 +98,53 @@ def check_output(path: str | Path, flag: str = "output") -> None:
                           "name a regular file")
 
 
+_FD_LINK = re.compile(r"^/(?:proc/(?:self|thread-self|\d+)/fd|dev/fd)/(\d+)$")
+
+
+def fd_link(path: str | Path) -> int | None:
+    """The file descriptor a ``/dev/stdout``-style path stands for (``/dev/stdout``,
+    ``/dev/fd/N``, ``/proc/self/fd/N``, or a symlink to one), else None. Such a path is
+    this process's own open file: replacing what it resolves to (a shell's ``> out.txt``)
+    would swap the file under the shell's redirection, and opening it anew would write
+    from offset 0 over what was printed; so it is written to the descriptor itself."""
+    p = str(path)
+    for _ in range(40):  # the kernel's own limit on a chain of links
+        m = _FD_LINK.match(p)
+        if m is not None:
+            fd = int(m.group(1))
+            return fd if m.group(0).startswith(("/dev/fd", "/proc/self", "/proc/thread")) \
+                or m.group(0).startswith(f"/proc/{os.getpid()}/") else None
+        try:
+            target = os.readlink(p)
+        except OSError:
+            return None
+        p = os.path.join(os.path.dirname(p), target)
+        p = os.path.normpath(p)
+    return None
+
+
+def _write_to_fd(src: Path, fd: int, path: Path) -> None:
+    """Append the temp file ``src`` to the open descriptor ``fd`` (after what Python has
+    printed to it so far)."""
+    import sys
+
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    try:
+        with open(src, "rb") as f, open(os.dup(fd), "wb") as out:
+            shutil.copyfileobj(f, out)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror, str(path)) from None
+
+
 def _write_through(src: Path, path: Path) -> None:
     """Copy the finished temp file ``src`` into the device or pipe ``path``. A FIFO nobody
     reads is refused at once rather than blocking (a non-blocking open: ENXIO)."""
+    fd = fd_link(path)
+    if fd is not None:
+        _write_to_fd(src, fd, path)
+        return
     try:
         fd = os.open(path, os.O_WRONLY | os.O_NONBLOCK)
     except OSError as exc:
@@ -131,7 +177,7 @@ def move_into_place(tmp: str | Path, path: str | Path) -> None:
     try:
         kind = node_kind(path)
         check_output(path)
-        if kind in ("device", "fifo"):
+        if kind in ("device", "fifo") or fd_link(path) is not None:
             _write_through(Path(tmp), Path(path))
             Path(tmp).unlink(missing_ok=True)
             return
@@ -155,7 +201,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     """
     path = Path(path)
     check_output(path)
-    through = node_kind(path) in ("device", "fifo")
+    through = node_kind(path) in ("device", "fifo") or fd_link(path) is not None
     target = _real_target(path)
     try:
         if through:

@@ -145,7 +145,7 @@ def _load(path: Path, key: str, nx: int, ny: int) -> np.ndarray | None:
     try:
         if not path.is_file() or path.stat().st_size > 64 + 64 * n + 4096:
             return None  # a folder, a device, or far larger than n x 4 int32 can be
-        with np.load(path, allow_pickle=False) as data:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
             if set(data.files) != {"format", "key", "sha256", "next_state"}:
                 return None
             if str(data["format"]) != FORMAT or str(data["key"]) != key:

@@ -306,6 +306,22 @@ def _stored(data, path: Path, name: str, want: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(arr).copy()
 
 
+BIT_GENERATORS = ("PCG64", "PCG64DXSM", "MT19937", "Philox", "SFC64")  # numpy's own
+
+
+def _check_rng_state(state: object, fld: str, path: Path) -> None:
+    """A generator state numpy accepts (checked now: a resumed run restores it only after
+    the checks that name the file)."""
+    name = state.get("bit_generator") if isinstance(state, dict) else None
+    try:
+        if name not in BIT_GENERATORS:
+            raise ValueError(f"names no numpy bit generator ({name!r})")
+        getattr(np.random, name)().state = state
+    except (ValueError, TypeError, KeyError, OverflowError) as exc:
+        raise CheckpointError(f"{path}: field {fld!r} is not a generator state ({exc}); the "
+                              "file is corrupt, delete it and train again") from None
+
+
 def _metrics(data, path: Path, episodes: int) -> dict[str, np.ndarray]:
     """The metrics so far: every one of :data:`METRIC_FIELDS` or none (an agent saved from
     a physics run keeps none). A file with some missing would report figures computed
@@ -370,6 +386,9 @@ def _read(data, path: Path, method: str | None, geometry: Geometry | None,
     except (ValueError, TypeError) as exc:
         raise CheckpointError(f"{path}: field 'config' or 'rng_state' is invalid ({exc}); "
                               "the file is corrupt, delete it and train again") from None
+    for fld, st in (("rng_state", rng_state), ("start_rng_state", start_rng_state)):
+        if st is not None or fld == "rng_state":
+            _check_rng_state(st, fld, path)
     problem_text = config_problem(cfg.fields())
     if problem_text is not None:
         raise CheckpointError(f"{path}: field 'config': {problem_text}; the file is corrupt "

@@ -555,7 +555,7 @@ def signal_case(rng: random.Random) -> Case:
     sig = rng.choice([signal.SIGHUP, signal.SIGHUP, signal.SIGTERM])
     jobs = rng.choice(["1", "2"])
     argv = ["compare", "paper-50", "--methods", "st-ql,q-lambda", "--seeds", "4", "--episodes",
-            "3000", "--jobs", jobs, "--out", "out", "--record", "out/c.rrd"]
+            "30000", "--jobs", jobs, "--out", "out", "--record", "out/c.rrd"]
 
     def check(d: Path) -> str | None:
         if (d / "out" / ".rnhql-sweep.lock").exists():

@@ -128,6 +128,47 @@ def test_a_fifo_with_a_reader_gets_the_bytes_and_one_without_is_one_line(tmp_pat
 
 
 # ------------------------------------------------------------------ 2: full disk in a sweep
+@pytest.fixture
+def nearly_full(tmp_path):
+    """A 2 MB tmpfs with 60 kB free (needs root and mount; skipped otherwise)."""
+    mnt = tmp_path / "mnt"
+    mnt.mkdir()
+    if not ROOT or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs",
+                                   str(mnt)], capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a small tmpfs here (needs root)")
+    try:
+        (mnt / "filler").write_bytes(b"\0" * (2048 - 60) * 1024)
+        yield mnt
+    finally:
+        subprocess.run(["umount", "-l", str(mnt)], capture_output=True)
+
+
+@pytest.mark.parametrize("jobs", ["1", "2"])
+@pytest.mark.parametrize("record", [False, True])
+def test_a_full_disk_in_a_sweep_is_one_line_and_keeps_what_finished(nearly_full, tmp_path,
+                                                                   jobs, record):
+    out = nearly_full / "out"
+    argv = ["compare", "paper-40", "--methods", "st-ql,q-lambda", "--seeds", "2",
+            "--episodes", "300", "--jobs", jobs, "--out", str(out)]
+    if record:
+        argv += ["--record", str(nearly_full / "c.rrd")]
+    got = subprocess.run([sys.executable, "-m", "scenarios.cli", *argv], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=120,
+                         env={**os.environ, "PYTHONPATH": str(REPO)})
+    assert got.returncode == 1, got.stderr
+    errors = [ln for ln in got.stderr.splitlines() if ln.startswith("rnhql")]
+    assert len(errors) == 1 and "no space left" in errors[0], got.stderr
+    assert "BrokenProcessPool" not in got.stderr and "Traceback" not in got.stderr
+    assert str(nearly_full) in errors[0]  # names the file that did not fit
+    leftovers = [p.name for p in nearly_full.rglob("*") if p.name.endswith((".tmp", ".part"))]
+    assert leftovers == []
+    parts = nearly_full / "c.rrd.parts"
+    assert not parts.exists() or ("--resume" in errors[0] and str(parts) in errors[0])
+    finished = (out / "runs.partial.jsonl").read_text().count("\n")
+    assert f"{finished} of 4 runs finished" in errors[0] or (
+        finished == 0 and "no run had finished" in errors[0])
+
+
 def test_a_dead_worker_on_a_full_disk_is_reported_as_the_full_disk(monkeypatch):
     from concurrent.futures.process import BrokenProcessPool
 

@@ -408,6 +408,11 @@ def load_checkpoint(path: str | os.PathLike, method: str | None = None,
     """Read a checkpoint; check its method and state count when given, and with
     ``geometry`` the shape and finiteness of every state array."""
     path = Path(path)
+    if str(path) in ("", "."):
+        raise CheckpointError("command line: the checkpoint path is empty; name a .npz file")
+    if path.exists() and not path.is_file():  # a FIFO would block the open until a writer
+        raise CheckpointError(f"{path}: is not a regular file (a folder, FIFO or device); "
+                              "pass a checkpoint saved with rnhql train --save")
     try:
         fh = open(path, "rb")  # closed below, also when np.load fails
     except FileNotFoundError:

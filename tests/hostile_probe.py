@@ -616,8 +616,9 @@ def run_case(case: Case, work: Path, timeout: float) -> tuple[str, str]:
                     for k, v in case.env.items()})
         env["HOME"] = str(d)
         proc = subprocess.Popen([PY, "-m", "scenarios.cli", *case.argv], cwd=d,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                env=env, start_new_session=True)
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                encoding="utf-8", errors="replace", env=env,
+                                start_new_session=True)  # (a PNG may go to stdout)
         try:
             if case.send is not None:
                 time.sleep(case.send[1])

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from scenarios.runs.spec import WORLDS, ExperimentError, load
 from sim.errors import InputError
-from sim.files import node_kind
+from sim.files import check_output, node_kind
 
 if TYPE_CHECKING:
     from sim.grid import TabularModel
@@ -414,8 +414,6 @@ def record_path(args: argparse.Namespace, scenario: str, rest: str) -> str | Non
         raise ExperimentError("command line", "--record", f"the file name is "
                               f"{len(path.name.encode())} bytes, more than a file system takes",
                               "name the recording e.g. run.rrd")
-    from sim.files import check_output
-
     check_output(path, "--record")  # a folder under the name: refused before any work
     if node_kind(path) in ("device", "fifo"):
         return str(path)  # written through when the recording is finished (sim.files)
@@ -433,13 +431,9 @@ def check_output_file(path: Path, flag: str, suffix: str | None = None) -> Path:
     if suffix is not None and path.suffix != suffix:
         raise ExperimentError("command line", flag, f"{path} does not end in {suffix}",
                               f"name the file e.g. out{suffix}")
-    if str(path) == "":
-        raise ExperimentError("command line", flag, "is an empty path", "name a file")
     if path.is_dir():
         raise ExperimentError("command line", flag, f"{path} is a directory",
                               f"name a file, e.g. {path / ('out' + (suffix or '.json'))}")
-    from sim.files import check_output
-
     check_output(path, flag)
     if node_kind(path) in ("device", "fifo"):
         return path  # written through at the end (sim.files); its folder is not written

@@ -392,6 +392,13 @@ def _finishing(record: str) -> Iterator[None]:
         signal.signal(signal.SIGINT, old)
 
 
+def _tell(line: str) -> None:
+    """A line on stderr that may be gone (SIGHUP: the terminal closed, writes fail with
+    EIO): what is kept must be kept all the same."""
+    with contextlib.suppress(OSError, ValueError):
+        print(line, file=sys.stderr, flush=True)
+
+
 def _keep_finished(specs: Sequence[RunSpec], out_dir: Path,
                    recording: SweepRecording | None, finished: Finished | None) -> None:
     """After Ctrl-C: say what was kept, and write the recording of the runs done so far.
@@ -401,13 +408,12 @@ def _keep_finished(specs: Sequence[RunSpec], out_dir: Path,
     try:
         done = read_partial(out_dir, finished)
         over = [s for s in specs if s.key in done]
-        print(f"\ninterrupted: {len(over)} of {len(specs)} runs finished, kept in "
-              f"{out_dir / PARTIAL}; finish with the same command and --resume",
-              file=sys.stderr)
+        _tell(f"\ninterrupted: {len(over)} of {len(specs)} runs finished, kept in "
+              f"{out_dir / PARTIAL}; finish with the same command and --resume")
         if recording is not None and over:
             gather_parts(over, recording.path, keep_parts=True,
                          records=list(done.values()))
-            print(f"recording of the finished runs: {recording.path}", file=sys.stderr)
+            _tell(f"recording of the finished runs: {recording.path}")
     finally:
         if main:
             signal.signal(signal.SIGINT, old)

@@ -689,6 +689,8 @@ def main() -> int:
                        capture_output=True, env=_env({"NUMBA_CACHE_DIR":
                                                       "/tmp/rnhql-probe-numba"}))
     work = Path(tempfile.mkdtemp(prefix="rnhql-probe-"))
+    # SIGTERM to the probe: end the case running (its own session) and unmount, then exit
+    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
     tally: collections.Counter[str] = collections.Counter()
     t0 = time.time()
     for i, case in enumerate(cases):

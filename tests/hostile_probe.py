@@ -597,6 +597,13 @@ def _env(extra: dict[str, str]) -> dict[str, str]:
     return env
 
 
+def _terminal_signals() -> None:
+    """In the case's process: SIGINT and SIGHUP as a terminal session has them, whatever
+    the probe inherited (started with nohup, or in the background, they are ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
 def run_case(case: Case, work: Path, timeout: float) -> tuple[str, str]:
     """(category, detail) of one case run in its own folder."""
     d = Path(tempfile.mkdtemp(prefix="case-", dir=work))
@@ -618,7 +625,8 @@ def run_case(case: Case, work: Path, timeout: float) -> tuple[str, str]:
         proc = subprocess.Popen([PY, "-m", "scenarios.cli", *case.argv], cwd=d,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                 encoding="utf-8", errors="replace", env=env,
-                                start_new_session=True)  # (a PNG may go to stdout)
+                                start_new_session=True,  # (a PNG may go to stdout)
+                                preexec_fn=_terminal_signals)
         try:
             if case.send is not None:
                 time.sleep(case.send[1])

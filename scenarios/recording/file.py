@@ -21,6 +21,7 @@ from typing import Protocol
 import rerun as rr
 
 from scenarios.signals import sigint_handled_by
+from sim.errors import InputError
 from sim.files import move_into_place, no_space_left
 
 
@@ -141,6 +142,8 @@ class RecordingFile:
                     self.stream.disconnect()
                 self.part.unlink(missing_ok=True)
                 atexit.unregister(self.close)
+                if isinstance(exc, InputError):  # the path itself (a FIFO nobody reads): one
+                    raise  # line naming it, exit 2, like any other bad output path
                 raise RecordingWriteError(self.path, exc) from None
         atexit.unregister(self.close)
 

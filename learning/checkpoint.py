@@ -40,6 +40,23 @@ METRIC_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "
 # magnitude, or every later update is inf or NaN. Others may hold inf by design (a move
 # reading's "not seen yet") and are only checked for NaN.
 VALUE_ARRAYS = frozenset({"q", "w", "v"})
+# integer state arrays that compiled code indexes with, unchecked: each value's range, as
+# (lowest, the size it indexes: "states", "pairs" (s * nA + a), "actions", or "slots"
+# (the length of the array named after the colon) and "+1" for a count up to it). A
+# value outside it would read or write outside an array: a segfault, or silent damage.
+INDEX_RANGES: dict[str, tuple[int, str]] = {
+    "model.successor": (-1, "states"), "model.seen": (-1, "pairs"),
+    "model.n_seen": (0, "pairs+1"), "model.works": (0, ""), "model.fails": (0, ""),
+    "free.neighbour": (-1, "states"), "free.distance": (-1, "states"),
+    "free.queue": (-1, "states"), "free.goal": (0, "states"),
+    "known.distance": (-1, "states"), "known.queue": (-1, "states"),
+    "traces.pairs": (-1, "pairs"), "traces.n": (0, "pairs+1"),
+    "pi_h": (-1, "actions"), "pending": (-1, "actions"), "z": (0, "states"),
+    "sweep.pair": (-1, "pairs"), "sweep.where": (-1, "slots:sweep.pair"),
+    "sweep.size": (0, "slots+1:sweep.pair"), "tally.episode": (0, ""),
+    "tally.n_shaped": (0, ""),
+}
+
 # the largest array a checkpoint may hold, read from its .npy header before it is read: a
 # 4096 x 4096 arena's Q-table is 0.5 GiB, RNH-QL's dense features on it 13 GiB at k = 10
 MAX_ARRAY_BYTES = 16 * 1024**3
@@ -148,12 +165,38 @@ class Checkpoint:
                 raise CheckpointError(
                     f"{self.path}: field 'state_{name}' holds NaN values; the file is "
                     "corrupt: train again with --save")
+            if name in INDEX_RANGES and got.size:
+                self._check_index_range(name, got, geometry, dict(arrays(self.state)))
             if got.dtype.kind == "f" and name in VALUE_ARRAYS and got.size and (
                     not np.isfinite(got).all() or np.abs(got).max() > MAX_MAGNITUDE):
                 raise CheckpointError(
                     f"{self.path}: field 'state_{name}' holds infinite values or values "
                     f"beyond {MAX_MAGNITUDE:g} in magnitude, which no training produces; the "
                     "file is corrupt: train again with --save")
+
+    def _check_index_range(self, name: str, got: np.ndarray, geometry: Geometry,
+                           state: dict[str, np.ndarray]) -> None:
+        lo, kind = INDEX_RANGES[name]
+        hi = _index_limit(kind, geometry, state) if kind else None
+        if got.dtype.kind == "b":
+            return
+        bad = got < lo if hi is None else (got < lo) | (got >= hi)
+        if bad.any():
+            where = f"{lo}..{hi - 1}" if hi is not None else f">= {lo}"
+            raise CheckpointError(
+                f"{self.path}: field 'state_{name}' holds {got[bad].flat[0]}, outside "
+                f"{where} on this scenario; the file is corrupt: train again with --save")
+
+
+def _index_limit(kind: str, geometry: Geometry, state: dict[str, np.ndarray]) -> int | None:
+    """The exclusive upper end of an :data:`INDEX_RANGES` kind on ``geometry``."""
+    base, _, other = kind.partition(":")
+    plus = base.endswith("+1")
+    base = base.removesuffix("+1")
+    size = {"states": geometry.n_states, "pairs": geometry.n_states * geometry.n_actions,
+            "actions": geometry.n_actions,
+            "slots": int(state[other].shape[0]) if other in state else 0}.get(base)
+    return None if size is None else size + int(plus)
 
 
 def checkpoint_bytes(ckpt: Checkpoint) -> bytes:
@@ -347,9 +390,11 @@ def _metrics(data, path: Path, episodes: int) -> dict[str, np.ndarray]:
                               "'metric_test_route_length' differ in length; the file is "
                               "corrupt: train again with --save")
     for k, arr in metrics.items():
-        if arr.dtype.kind == "f" and not np.isfinite(arr).all():
-            raise CheckpointError(f"{path}: field 'metric_{k}' holds non-finite values; the "
-                                  "file is corrupt: train again with --save")
+        if arr.dtype.kind == "f" and arr.size and (not np.isfinite(arr).all()
+                                                   or np.abs(arr).max() > MAX_MAGNITUDE):
+            raise CheckpointError(f"{path}: field 'metric_{k}' holds non-finite values or "
+                                  f"values beyond {MAX_MAGNITUDE:g}; the file is corrupt: "
+                                  "train again with --save")
     return metrics
 
 

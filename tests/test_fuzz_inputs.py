@@ -279,8 +279,11 @@ def checkpoint(draw) -> tuple[bytes, str, str]:
             value = draw(st.sampled_from(ODD_VALUES))
             flat = arr.reshape(-1)
             i = draw(st.integers(0, flat.size - 1))
-            flat[i] = value if arr.dtype.kind == "f" else int(min(abs(value), 2**62)
-                                                             if np.isfinite(value) else -1)
+            if arr.dtype.kind == "f":
+                flat[i] = value
+            else:  # the odd value as near as the integer dtype holds
+                top = int(np.iinfo(arr.dtype).max)
+                flat[i] = min(int(abs(value)), top) if np.isfinite(value) else -1
             arrays[name] = arr
         elif kind == "json" and name in ("config", "rng_state", "problem"):
             arrays[name] = np.array(draw(st.sampled_from(

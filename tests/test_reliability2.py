@@ -506,6 +506,33 @@ def test_a_checkpoint_missing_a_metric_is_refused(agent, tmp_path, capsys):
     one_line(capsys, "metric_success", "missing")
 
 
+def test_an_index_array_out_of_range_is_refused_not_indexed_with(tmp_path, capsys):
+    """Compiled code indexes with these without bounds checks: dyna-q's count of seen pairs
+    at 2**62 crashed the process (found by the fuzz test)."""
+    saved = tmp_path / "d.npz"
+    assert main(["train", "paper-40", "--method", "dyna-q", "--episodes", "12", "--save",
+                 str(saved)]) == 0
+    capsys.readouterr()
+    for name, value in (("state_model.n_seen", 2**62), ("state_model.successor", -7)):
+        def edit(a, name=name, value=value):
+            a[name] = a[name].copy()
+            a[name].reshape(-1)[-1] = value
+        bad = _edit(saved, tmp_path, edit)
+        assert main(["train", "paper-40", "--method", "dyna-q", "--episodes", "14",
+                     "--resume", str(bad)]) == 2
+        one_line(capsys, name, "outside")
+
+
+def test_a_metric_beyond_any_return_is_refused(agent, tmp_path, capsys):
+    def edit(a):
+        a["metric_returns"] = a["metric_returns"].copy()
+        a["metric_returns"][0] = 1e308
+    bad = _edit(agent, tmp_path, edit)
+    assert main(["train", "paper-50", "--method", "st-ql", "--episodes", "40", "--resume",
+                 str(bad)]) == 2
+    one_line(capsys, "metric_returns")
+
+
 def test_route_checks_the_scenario_the_agent_was_trained_on(agent, capsys):
     assert main(["route", "zigzag-50", "--agent", str(agent)]) == 2  # same size, other map
     one_line(capsys, "problem.layout")

@@ -27,6 +27,7 @@ import numpy as np
 
 from learning.config import FieldMovedError, MethodConfig
 from learning.geometry import Geometry
+from learning.limits import MAX_MAGNITUDE, config_problem
 from learning.named_state import arrays, episodes_done, rebuild
 from learning.registry import METHODS, config_from_fields, family_of, n_states_of
 from learning.state import init_state
@@ -34,6 +35,35 @@ from learning.state import init_state
 FORMAT = "rnhql-checkpoint-2"
 METRIC_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std",
                  "test_episodes", "test_route_length")
+
+# float state arrays that hold learned values (Q, network weights, V): finite and sane in
+# magnitude, or every later update is inf or NaN. Others may hold inf by design (a move
+# reading's "not seen yet") and are only checked for NaN.
+VALUE_ARRAYS = frozenset({"q", "w", "v"})
+# integer state arrays that compiled code indexes with, unchecked: each value's range, as
+# (lowest, the size it indexes: "states", "pairs" (s * nA + a), "actions", or "slots"
+# (the length of the array named after the colon) and "+1" for a count up to it). A
+# value outside it would read or write outside an array: a segfault, or silent damage.
+INDEX_RANGES: dict[str, tuple[int, str]] = {
+    "model.successor": (-1, "states"), "model.seen": (-1, "pairs"),
+    "model.n_seen": (0, "pairs+1"), "model.works": (0, ""), "model.fails": (0, ""),
+    "free.neighbour": (-1, "states"), "free.distance": (-1, "states"),
+    "free.queue": (-1, "states"), "free.goal": (0, "states"),
+    "known.distance": (-1, "states"), "known.queue": (-1, "states"),
+    "traces.pairs": (-1, "pairs"), "traces.n": (0, "pairs+1"),
+    "pi_h": (-1, "actions"), "pending": (-1, "actions"), "z": (0, "states"),
+    "sweep.pair": (-1, "pairs"), "sweep.where": (-1, "slots:sweep.pair"),
+    "sweep.size": (0, "slots+1:sweep.pair"), "tally.episode": (0, ""),
+    "tally.n_shaped": (0, ""),
+}
+
+# the largest array a checkpoint may hold, read from its .npy header before it is read: a
+# 4096 x 4096 arena's Q-table is 0.5 GiB, RNH-QL's dense features on it 13 GiB at k = 10
+MAX_ARRAY_BYTES = 16 * 1024**3
+# per-episode metrics (one value per episode trained) and per-test ones (one per test)
+EPISODE_METRICS = ("steps", "success", "returns", "wall_time_s", "shaping_mean",
+                   "shaping_std")
+TEST_METRICS = ("test_episodes", "test_route_length")
 
 _UMASK = os.umask(0)
 os.umask(_UMASK)
@@ -62,13 +92,17 @@ class Checkpoint:
         scheme than ``problem`` (older checkpoints without the record are not checked)."""
         if self.problem is None:
             return
-        for key, what, fix in (("rewards", "reward scheme", "the same --rewards"),
-                               ("scenario", "scenario (content digest)", "the same scenario")):
-            if key in problem and self.problem.get(key) != problem[key]:
+        for key, what, fix in (("rewards", "reward scheme", "resume with the same --rewards "
+                                "or start without --resume"),
+                               ("scenario", "scenario (content digest)",
+                                "resume with the same scenario or start without --resume"),
+                               ("layout", "scenario layout (content digest)",
+                                "use it on the scenario it was trained on")):
+            if key in problem and (key in self.problem or key != "layout") and \
+                    self.problem.get(key) != problem[key]:
                 raise CheckpointError(
                     f"{self.path}: field 'problem.{key}': trained with {what} "
-                    f"{self.problem.get(key)!r}, this run has {problem[key]!r}; resume with "
-                    f"{fix} or start without --resume")
+                    f"{self.problem.get(key)!r}, this run has {problem[key]!r}; {fix}")
 
     @property
     def method(self) -> str:
@@ -131,11 +165,45 @@ class Checkpoint:
                 raise CheckpointError(
                     f"{self.path}: field 'state_{name}' holds NaN values; the file is "
                     "corrupt: train again with --save")
+            if name in INDEX_RANGES and got.size:
+                self._check_index_range(name, got, geometry, dict(arrays(self.state)))
+            if got.dtype.kind == "f" and name in VALUE_ARRAYS and got.size and (
+                    not np.isfinite(got).all() or np.abs(got).max() > MAX_MAGNITUDE):
+                raise CheckpointError(
+                    f"{self.path}: field 'state_{name}' holds infinite values or values "
+                    f"beyond {MAX_MAGNITUDE:g} in magnitude, which no training produces; the "
+                    "file is corrupt: train again with --save")
+
+    def _check_index_range(self, name: str, got: np.ndarray, geometry: Geometry,
+                           state: dict[str, np.ndarray]) -> None:
+        lo, kind = INDEX_RANGES[name]
+        hi = _index_limit(kind, geometry, state) if kind else None
+        if got.dtype.kind == "b":
+            return
+        bad = got < lo if hi is None else (got < lo) | (got >= hi)
+        if bad.any():
+            where = f"{lo}..{hi - 1}" if hi is not None else f">= {lo}"
+            raise CheckpointError(
+                f"{self.path}: field 'state_{name}' holds {got[bad].flat[0]}, outside "
+                f"{where} on this scenario; the file is corrupt: train again with --save")
 
 
-def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
-    """Write ``ckpt`` to ``path`` atomically; returns the path."""
-    path = Path(path)
+def _index_limit(kind: str, geometry: Geometry, state: dict[str, np.ndarray]) -> int | None:
+    """The exclusive upper end of an :data:`INDEX_RANGES` kind on ``geometry``."""
+    base, _, other = kind.partition(":")
+    plus = base.endswith("+1")
+    base = base.removesuffix("+1")
+    size = {"states": geometry.n_states, "pairs": geometry.n_states * geometry.n_actions,
+            "actions": geometry.n_actions,
+            "slots": int(state[other].shape[0]) if other in state else 0}.get(base)
+    return None if size is None else size + int(plus)
+
+
+def checkpoint_bytes(ckpt: Checkpoint) -> bytes:
+    """The ``.npz`` of ``ckpt`` in memory: what :func:`save_checkpoint` writes, for a caller
+    that writes files its own way (the CLI writes through devices and pipes)."""
+    import io
+
     derived = set(getattr(family_of(ckpt.config), "DERIVED", ()))
     payload = {f"state_{k}": v for k, v in arrays(ckpt.state) if k not in derived}
     payload.update({f"metric_{k}": np.asarray(v) for k, v in ckpt.metrics.items()})
@@ -149,14 +217,29 @@ def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
         payload["problem"] = np.array(json.dumps(ckpt.problem))
     payload["env_steps"] = np.array(ckpt.env_steps, dtype=np.int64)
     payload["n_states"] = np.array(n_states_of(ckpt.state), dtype=np.int64)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+    buf = io.BytesIO()
+    np.savez(buf, **payload)
+    return buf.getvalue()
+
+
+def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
+    """Write ``ckpt`` to ``path`` atomically; returns the path. Only a regular file (or
+    nothing) is replaced: a folder, device or pipe at ``path`` raises CheckpointError."""
+    path = Path(path)
+    if path.exists() and not path.is_file():
+        raise CheckpointError(f"{path}: is not a regular file (a folder, device or pipe); "
+                              "save the checkpoint to a file")
+    data = checkpoint_bytes(ckpt)
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp",
+                               dir=target.parent or ".")
     try:
         with os.fdopen(fd, "wb") as f:
-            np.savez(f, **payload)
+            f.write(data)
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, _FILE_MODE)  # mkstemp makes 0600; give the usual mode
-        os.replace(tmp, path)
+        os.replace(tmp, target)
     except OSError as exc:  # e.g. a full disk: name the checkpoint, not the temp file
         Path(tmp).unlink(missing_ok=True)
         raise OSError(exc.errno, exc.strerror, str(path)) from None
@@ -166,10 +249,41 @@ def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
     return path
 
 
+def _header(data, name: str, path: Path) -> tuple[tuple[int, ...], np.dtype]:
+    """The shape and dtype ``name``'s .npy header claims, read without reading the array:
+    a claim beyond :data:`MAX_ARRAY_BYTES` or beyond the bytes the file holds is refused
+    before anything is allocated."""
+    from numpy.lib import format as npy
+
+    try:
+        info = data.zip.getinfo(f"{name}.npy")
+        with data.zip.open(info) as f:
+            version = npy.read_magic(f)
+            shape, _fortran, dtype = (npy.read_array_header_1_0(f) if version == (1, 0)
+                                      else npy.read_array_header_2_0(f))
+    except (KeyError, ValueError, OSError, EOFError, zipfile.BadZipFile, AttributeError,
+            TypeError, SyntaxError):
+        raise CheckpointError(f"{path}: field {name!r} is unreadable: not an rnhql checkpoint "
+                              "(corrupt, or an .npz from elsewhere); train again with "
+                              "--save") from None
+    size = int(np.prod(shape, dtype=object)) * dtype.itemsize
+    if size > MAX_ARRAY_BYTES:
+        raise CheckpointError(f"{path}: field {name!r} claims shape {shape} ({size:,} bytes), "
+                              f"more than the limit of {MAX_ARRAY_BYTES:,} bytes; the file is "
+                              "corrupt: train again with --save")
+    if size > info.file_size:
+        raise CheckpointError(f"{path}: field {name!r} claims shape {shape} ({size:,} bytes) "
+                              f"but the file holds {info.file_size:,}; the file is corrupt: "
+                              "train again with --save")
+    return tuple(shape), dtype
+
+
 def _field(data, name: str, path: Path) -> np.ndarray:
     if name not in data.files:
         raise CheckpointError(f"{path}: field {name!r} is missing; the file is not a complete "
                               "rnhql checkpoint, delete it and train again")
+    if getattr(data, "zip", None) is not None:
+        _header(data, name, path)
     try:
         return data[name]
     except (ValueError, OSError, EOFError, zipfile.BadZipFile):  # numpy's text would suggest
@@ -199,7 +313,8 @@ def _state(data, cfg: MethodConfig, path: Path, geometry: Geometry | None,
         rebuild(template, lambda name, want: want if name in derived
                 else _stored(data, path, name, want))
         if n_states is not None and "state_q" in data.files:
-            got = int(data["state_q"].shape[0])
+            shape = _header(data, "state_q", path)[0]
+            got = int(shape[0]) if shape else -1
             if got != n_states:
                 raise CheckpointError(f"{path}: field 'n_states' is {got} but the scenario "
                                       f"has {n_states}; resume on the scenario the checkpoint "
@@ -234,6 +349,55 @@ def _stored(data, path: Path, name: str, want: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(arr).copy()
 
 
+BIT_GENERATORS = ("PCG64", "PCG64DXSM", "MT19937", "Philox", "SFC64")  # numpy's own
+
+
+def _check_rng_state(state: object, fld: str, path: Path) -> None:
+    """A generator state numpy accepts (checked now: a resumed run restores it only after
+    the checks that name the file)."""
+    name = state.get("bit_generator") if isinstance(state, dict) else None
+    try:
+        if name not in BIT_GENERATORS:
+            raise ValueError(f"names no numpy bit generator ({name!r})")
+        getattr(np.random, name)().state = state
+    except (ValueError, TypeError, KeyError, OverflowError) as exc:
+        raise CheckpointError(f"{path}: field {fld!r} is not a generator state ({exc}); the "
+                              "file is corrupt, delete it and train again") from None
+
+
+def _metrics(data, path: Path, episodes: int) -> dict[str, np.ndarray]:
+    """The metrics so far: every one of :data:`METRIC_FIELDS` or none (an agent saved from
+    a physics run keeps none). A file with some missing would report figures computed
+    from part of the record (a missing ``success`` read as "never"), so it is refused, as
+    is one whose per-episode metrics do not cover the episodes its state has trained."""
+    present = [k for k in METRIC_FIELDS if f"metric_{k}" in data.files]
+    if not present:
+        return {}
+    missing = [k for k in METRIC_FIELDS if k not in present]
+    if missing:
+        raise CheckpointError(f"{path}: field 'metric_{missing[0]}' is missing while other "
+                              "metrics are there; the file is incomplete: train again with "
+                              "--save")
+    metrics = {k: _field(data, f"metric_{k}", path).copy() for k in METRIC_FIELDS}
+    for k in EPISODE_METRICS:
+        if metrics[k].shape != (episodes,):
+            raise CheckpointError(f"{path}: field 'metric_{k}' has shape {metrics[k].shape} "
+                                  f"but the agent has trained {episodes} episodes; the file "
+                                  "is corrupt: train again with --save")
+    if metrics["test_episodes"].shape != metrics["test_route_length"].shape or \
+            metrics["test_episodes"].ndim != 1:
+        raise CheckpointError(f"{path}: fields 'metric_test_episodes' and "
+                              "'metric_test_route_length' differ in length; the file is "
+                              "corrupt: train again with --save")
+    for k, arr in metrics.items():
+        if arr.dtype.kind == "f" and arr.size and (not np.isfinite(arr).all()
+                                                   or np.abs(arr).max() > MAX_MAGNITUDE):
+            raise CheckpointError(f"{path}: field 'metric_{k}' holds non-finite values or "
+                                  f"values beyond {MAX_MAGNITUDE:g}; the file is corrupt: "
+                                  "train again with --save")
+    return metrics
+
+
 def _read(data, path: Path, method: str | None, geometry: Geometry | None,
           n_states: int | None = None):
     """Every field of an open npz, checked; raises CheckpointError naming the field."""
@@ -258,16 +422,29 @@ def _read(data, path: Path, method: str | None, geometry: Geometry | None,
                    if "problem" in data.files else None)
         if problem is not None and not isinstance(problem, dict):
             raise ValueError("problem is not a table")
+    except RecursionError:
+        raise CheckpointError(f"{path}: field 'config' or 'rng_state' is nested too deeply; "
+                              "the file is corrupt, delete it and train again") from None
     except FieldMovedError as exc:  # a setting that has moved to another method since
         raise CheckpointError(f"{path}: field 'config': {exc}; this checkpoint cannot be "
                               "resumed: train that variant again with that method") from None
     except (ValueError, TypeError) as exc:
         raise CheckpointError(f"{path}: field 'config' or 'rng_state' is invalid ({exc}); "
                               "the file is corrupt, delete it and train again") from None
+    for fld, st in (("rng_state", rng_state), ("start_rng_state", start_rng_state)):
+        if st is not None or fld == "rng_state":
+            _check_rng_state(st, fld, path)
+    problem_text = config_problem(cfg.fields())
+    if problem_text is not None:
+        raise CheckpointError(f"{path}: field 'config': {problem_text}; the file is corrupt "
+                              "or edited: train again with --save")
     state = _state(data, cfg, path, geometry, n_states)
-    metrics = {k: _field(data, f"metric_{k}", path).copy() for k in METRIC_FIELDS
-               if f"metric_{k}" in data.files}
-    env_steps = int(_field(data, "env_steps", path))
+    metrics = _metrics(data, path, episodes_done(state))
+    try:
+        env_steps = int(_field(data, "env_steps", path))
+    except (TypeError, ValueError):
+        raise CheckpointError(f"{path}: field 'env_steps' is not a number; the file is "
+                              "corrupt, delete it and train again") from None
     return cfg, state, rng_state, env_steps, metrics, start_rng_state, problem
 
 
@@ -276,6 +453,11 @@ def load_checkpoint(path: str | os.PathLike, method: str | None = None,
     """Read a checkpoint; check its method and state count when given, and with
     ``geometry`` the shape and finiteness of every state array."""
     path = Path(path)
+    if str(path) in ("", "."):
+        raise CheckpointError("command line: the checkpoint path is empty; name a .npz file")
+    if path.exists() and not path.is_file():  # a FIFO would block the open until a writer
+        raise CheckpointError(f"{path}: is not a regular file (a folder, FIFO or device); "
+                              "pass a checkpoint saved with rnhql train --save")
     try:
         fh = open(path, "rb")  # closed below, also when np.load fails
     except FileNotFoundError:

@@ -61,12 +61,32 @@ def drop_stale_cache(package: Path = PACKAGE) -> bool:
     return True
 
 
+def kernel_cache_dirs(package: Path = PACKAGE) -> list[Path]:
+    """Where numba keeps the compiled kernels of ``package``, as it decides: the folder it
+    names under ``NUMBA_CACHE_DIR`` (``<package>_<sha1 of the package's path>``, numba's
+    own naming), or, when that cannot be created or written (or is unset), the package's
+    ``__pycache__``."""
+    from numba.core.caching import _CacheLocator
+
+    root = os.environ.get("NUMBA_CACHE_DIR")
+    if root:
+        user = Path(root) / _CacheLocator.get_suitable_cache_subpath(str(package / "kernels.py"))
+        if _writable(user):
+            return [user]
+    return [package / "__pycache__"]
+
+
+def _writable(path: Path) -> bool:
+    """Whether ``path`` is, or could be created as, a folder this process writes to."""
+    p = path
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    return p.is_dir() and os.access(p, os.W_OK | os.X_OK)
+
+
 def kernels_cached(package: Path = PACKAGE) -> bool:
     """Whether numba has compiled kernels of this package on disk (False on a first run,
-    or after the sources changed): the CLI then says compilation is under way."""
-    root = os.environ.get("NUMBA_CACHE_DIR")
-    if root:  # numba names the folder <package>_<hash of its path> (older: the path itself)
-        return any(f for pattern in (f"{package.name}_*/kernels.*.nbi",
-                                     f"**/{package.name}/kernels.*.nbi")
-                   for f in Path(root).glob(pattern))
-    return any((package / "__pycache__").glob("kernels.*.nbi"))
+    or after the sources changed): the CLI then says compilation is under way. Every place
+    numba may have put them counts (a glob over ``NUMBA_CACHE_DIR`` alone missed the
+    fallback, and the notice then printed on every run)."""
+    return any(any(d.glob("kernels.*.nbi")) for d in kernel_cache_dirs(package))

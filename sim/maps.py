@@ -8,6 +8,7 @@ place that conversion happens.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,6 +16,7 @@ import numpy as np
 
 from sim.errors import MapError
 from sim.files import read_input
+from sim.scenario import MAX_CELLS_PER_SIDE
 
 PASSABLE = frozenset(".GS")
 BLOCKED = frozenset("@OTW")
@@ -77,6 +79,9 @@ def _header_value(lines: list[str], index: int, key: str, source: str) -> int:
     if value <= 0:
         raise MapError(source, field, f"{key} must be positive, got {value}",
                        f"write the {key} as a positive integer")
+    if value > MAX_CELLS_PER_SIDE:
+        raise MapError(source, field, f"{key} {value:,} is more than the limit of "
+                       f"{MAX_CELLS_PER_SIDE} cells a side", "use a smaller map")
     return value
 
 
@@ -150,10 +155,11 @@ def write_free_grid(free: np.ndarray, path: str | Path) -> None:
 def load_scen(path: str | Path) -> list[ScenProblem]:
     """Read a ``.scen`` file (``version 1`` then tab-separated problems)."""
     path = Path(path)
+    raw = read_input(path, MapError, "a .scen file", "pass a Moving AI .scen text file")
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (FileNotFoundError, IsADirectoryError, UnicodeDecodeError) as exc:
-        raise MapError(str(path), "file", f"cannot be read as a .scen file ({type(exc).__name__})",
+        lines = raw.decode("utf-8").splitlines()
+    except UnicodeDecodeError:
+        raise MapError(str(path), "file", "is not a text file",
                        "pass a Moving AI .scen text file") from None
     if not lines or not lines[0].startswith("version"):
         raise MapError(str(path), "line 1", "expected 'version 1'",
@@ -177,4 +183,15 @@ def load_scen(path: str | Path) -> list[ScenProblem]:
         except ValueError as exc:
             raise MapError(str(path), f"line {i}", f"bad number ({exc})",
                            "write integers for sizes and coordinates") from None
+        q = problems[-1]
+        if not (0 < q.width <= MAX_CELLS_PER_SIDE and 0 < q.height <= MAX_CELLS_PER_SIDE):
+            raise MapError(str(path), f"line {i}", f"map size {q.width}x{q.height} is outside "
+                           f"1..{MAX_CELLS_PER_SIDE} a side", "use the .scen of this map")
+        if not all(0 <= v < lim for v, lim in ((q.start_xy[0], q.width), (q.start_xy[1], q.height),
+                                               (q.goal_xy[0], q.width), (q.goal_xy[1], q.height))):
+            raise MapError(str(path), f"line {i}", f"start {q.start_xy} or goal {q.goal_xy} is "
+                           f"outside the {q.width}x{q.height} map", "use the .scen of this map")
+        if not math.isfinite(q.optimal_length) or q.optimal_length < 0:
+            raise MapError(str(path), f"line {i}", f"optimal length {q.optimal_length} is not "
+                           "a finite length", "use the .scen of this map")
     return problems

@@ -175,6 +175,9 @@ def finite_positive(value: float, source: str, fld: str, fix: str) -> None:
 MAX_CELLS_PER_SIDE = 4096
 MAX_STEPS_PER_EPISODE = 10_000_000
 MAX_OBSTACLES = 100_000
+# the largest coordinate or radius of an obstacle: 1e6 m is 250 arenas of the largest size
+# (4096 cells of any sane size); beyond it squares and sums of coordinates overflow
+MAX_COORDINATE_M = 1e6
 
 
 def validate_shape(sc: Scenario) -> None:
@@ -210,9 +213,10 @@ def validate_shape(sc: Scenario) -> None:
                             "shrink the robot or enlarge arena.cell_size_m")
     for i, c in enumerate(sc.obstacles):
         fld = f"obstacles.circles[{i}]"
-        for v, part in ((c.x_m, "x"), (c.y_m, "y")):
-            if not math.isfinite(v):
-                raise ScenarioError(src, fld, f"{part} is {v}", "give finite coordinates in m")
+        for v, part in ((c.x_m, "x"), (c.y_m, "y"), (c.radius_m, "radius")):
+            if not math.isfinite(v) or abs(v) > MAX_COORDINATE_M:
+                raise ScenarioError(src, fld, f"{part} is {v:g}, beyond the limit of "
+                                    f"{MAX_COORDINATE_M:g} m", "give coordinates in the arena")
         if not (math.isfinite(c.radius_m) and c.radius_m > 0):
             raise ScenarioError(src, fld, f"radius must be a finite positive number, got "
                                 f"{c.radius_m}", "give the radius in metres, e.g. 1.5")

@@ -6,6 +6,7 @@ The built-in scenarios are ``sim``'s own package data, in ``sim/builtin``.
 
 from __future__ import annotations
 
+import math
 import os
 import tomllib
 from dataclasses import replace
@@ -20,6 +21,7 @@ from sim.files import read_input
 from sim.layouts import chain, random_circles
 from sim.maps import GridMap, load_map, movingai_to_cell
 from sim.scenario import (
+    MAX_COORDINATE_M,
     MAX_OBSTACLES,
     Cell,
     Circle,
@@ -172,6 +174,15 @@ def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenari
         ch.finish()
         finite_positive(radius, source, ch._fld("radius_m"), "use e.g. 0.6")
         finite_positive(spacing, source, ch._fld("spacing_m"), "use e.g. 1.0")
+        for point, end in ((p0, "from"), (p1, "to")):
+            if not all(math.isfinite(v) and abs(v) <= MAX_COORDINATE_M for v in point):
+                raise ScenarioError(source, ch._fld(end), f"{list(point)} is beyond "
+                                    f"{MAX_COORDINATE_M:g} m", "give the point in the arena")
+        posts = math.hypot(p1[0] - p0[0], p1[1] - p0[1]) / spacing
+        if posts > MAX_OBSTACLES - len(circles):
+            raise ScenarioError(source, ch._fld("spacing_m"), f"{spacing:g} m makes "
+                                f"{posts:,.0f} circles, more than the limit {MAX_OBSTACLES:,}",
+                                "use a larger spacing (e.g. 1.0)")
         circles.extend(chain(p0, p1, radius, spacing))
     rnd = obs.get("random", dict, None)
     obs.finish()
@@ -189,6 +200,9 @@ def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenari
         rmax = rt.get("radius_max_m", float, required=True)
         seed = rt.get("seed", int, required=True)
         rt.finish()
+        if not 0 <= seed < 2**64:
+            raise ScenarioError(source, "obstacles.random.seed", f"must be in 0..2^64-1, got "
+                                f"{seed}", "use e.g. 50")
         if count < 0:
             raise ScenarioError(source, "obstacles.random.count", "must be >= 0", "use e.g. 20")
         if count > MAX_OBSTACLES:
@@ -225,6 +239,10 @@ def load_scenario(path: str | Path) -> Scenario:
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ScenarioError(str(path), "TOML", f"cannot be parsed ({exc})",
                             "fix the TOML syntax") from None
+    except RecursionError:  # tables or arrays nested thousands deep
+        raise ScenarioError(str(path), "TOML", "is nested too deeply to parse",
+                            "a scenario nests tables two levels deep: see "
+                            "sim/builtin/paper-50.toml") from None
     return parse_scenario(data, str(path), path.parent)
 
 

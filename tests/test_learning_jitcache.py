@@ -54,7 +54,10 @@ def test_kernels_cached_finds_numbas_folder_under_numba_cache_dir(tmp_path, monk
     root = tmp_path / "cache"
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(root))
     assert not kernels_cached(pkg)
-    folder = root / "learning_90062a5e"  # numba's: <package>_<hash of its path>
+    from numba.core.caching import _CacheLocator
+
+    # numba's: <package>_<sha1 of the package's path> (this checkout's, not any learning_*)
+    folder = root / _CacheLocator.get_suitable_cache_subpath(str(pkg / "kernels.py"))
     folder.mkdir(parents=True)
     (folder / "kernels._episodes-22.py311.nbi").write_bytes(b"")
     assert kernels_cached(pkg)

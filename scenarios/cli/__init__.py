@@ -4,7 +4,8 @@ The top of the stack: may import every other part of ``scenarios``, nothing impo
 :func:`main` imports the parser lazily so that a Ctrl-C while the heavy modules load
 (numpy, numba, pymunk: about half a second) is one line and exit 130 like any other,
 and a Ctrl-C after the command has finished (interpreter shutdown) is ignored: the
-work is done and its exit status stands.
+work is done and its exit status stands. SIGTERM and SIGHUP while the modules load end
+the command with one line and 143 or 129, as they do later.
 """
 
 from __future__ import annotations
@@ -15,10 +16,25 @@ import sys
 from collections.abc import Sequence
 
 
+class _StoppedWhileStarting(Exception):
+    """SIGTERM or SIGHUP while the heavy modules loaded: nothing had started."""
+
+    def __init__(self, sig: int) -> None:
+        super().__init__(sig)
+        self.sig = sig
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     try:
         run = _import_app()
         code = run(argv)
+    except _StoppedWhileStarting as stop:
+        hup = stop.sig == signal.SIGHUP
+        try:
+            print(f"rnhql: {'hung up (SIGHUP)' if hup else 'terminated'}", file=sys.stderr)
+        except OSError:  # the terminal is gone
+            pass
+        code = 129 if hup else 143
     except KeyboardInterrupt:
         print("rnhql: interrupted", file=sys.stderr)
         code = 130
@@ -54,14 +70,20 @@ def _import_app():
         from scenarios.cli.app import main as run
 
         return run
-    pressed = []
-    old = signal.signal(signal.SIGINT, lambda *_: pressed.append(True))
+    pressed: list[int] = []
+    held = {signal.SIGINT: signal.signal(signal.SIGINT, lambda s, _f: pressed.append(s))}
+    for sig in (signal.SIGTERM, signal.SIGHUP):  # likewise (unless ignored: nohup)
+        if signal.getsignal(sig) is signal.SIG_DFL:
+            held[sig] = signal.signal(sig, lambda s, _f: pressed.append(s))
     try:
         from scenarios.cli.app import main as run
     finally:
-        signal.signal(signal.SIGINT, old)
-    if pressed:
+        for sig, old in held.items():
+            signal.signal(sig, old)
+    if signal.SIGINT in pressed:
         raise KeyboardInterrupt
+    if pressed:
+        raise _StoppedWhileStarting(pressed[0])
     return run
 
 

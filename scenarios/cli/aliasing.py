@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from scenarios.cli.args import check_output_file, scenario_key
+from scenarios.cli.args import check_output_file, positive, scenario_key, seed_value
+
+MAX_REPEATS = 100_000  # drives per (cell, action)
 
 
 def cmd_aliasing(args: argparse.Namespace) -> int:
@@ -19,6 +21,8 @@ def cmd_aliasing(args: argparse.Namespace) -> int:
             raise InputError("command line", "--artifact", f"{args.artifact!r} is not a name",
                              "use lower-case letters, digits and '-', e.g. paper-50-noisy")
     name, start, goal = scenario_key(args)
+    seed_value(args.seed, "--seed")
+    positive(args.repeats, "--repeats", MAX_REPEATS)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         check_output_file(out / "aliasing.json", "--out")

@@ -28,11 +28,13 @@ from scenarios.cli import (
     view,
 )
 from scenarios.cli.args import (
+    RECORD_DEFAULT,
     add_fidelity_arg,
     add_record_args,
     add_scenario_args,
     add_training_args,
     add_world_args,
+    check_empty_paths,
 )
 from scenarios.runs.backends import SweepError
 from sim.errors import InputError
@@ -102,7 +104,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="an agent saved with rnhql train --save")
     add_world_args(p, "grid (default) or physics (drive it)")
     p.add_argument("--png", metavar="FILE", help="also draw the routes to a PNG")
-    p.add_argument("--record", nargs="?", const="", default=None, metavar="PATH.rrd",
+    p.add_argument("--record", nargs="?", const=RECORD_DEFAULT, default=None,
+                   metavar="PATH.rrd",
                    help="record the route to Rerun (default recordings/<scenario>-route-...)")
     p.set_defaults(func=route.cmd_route)
 
@@ -181,6 +184,14 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _say(line: str) -> None:
+    """A last line on stderr, which may be gone (a closed terminal: EIO)."""
+    try:
+        print(line, file=sys.stderr)
+    except OSError:
+        pass
+
+
 WRITE_ERRNOS = {errno.ENOSPC, errno.EROFS, errno.EACCES, errno.EDQUOT, errno.EIO, errno.EFBIG}
 
 
@@ -188,17 +199,24 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM (a batch scheduler, ``timeout``): the same clean-up as Ctrl-C, exit 143."""
 
 
-def _terminate(_sig: int, _frame: object) -> None:
-    raise Terminated
+class HungUp(Terminated):
+    """SIGHUP (the terminal closed, an ssh connection dropped): the same clean-up as
+    SIGTERM (finished runs kept, the recording written, the lock released), exit 129."""
+
+
+def _terminate(sig: int, _frame: object) -> None:
+    raise HungUp if sig == signal.SIGHUP else Terminated
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    if threading.current_thread() is threading.main_thread() and \
-            signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
-        signal.signal(signal.SIGTERM, _terminate)
+    if threading.current_thread() is threading.main_thread():
+        for sig in (signal.SIGTERM, signal.SIGHUP):
+            if signal.getsignal(sig) is signal.SIG_DFL:  # SIG_IGN (nohup) stays ignored
+                signal.signal(sig, _terminate)
     try:
+        check_empty_paths(args)
         return int(args.func(args) or 0)
     except InputError as err:
         print(f"rnhql: error: {err}", file=sys.stderr)
@@ -226,8 +244,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"rnhql: {err}", file=sys.stderr)
             return 1
         raise
+    except HungUp:
+        _say("rnhql: hung up (SIGHUP)")
+        return 129
     except Terminated:
-        print("rnhql: terminated", file=sys.stderr)
+        _say("rnhql: terminated")
         return 143
     except KeyboardInterrupt:
         print("rnhql: interrupted", file=sys.stderr)

@@ -14,6 +14,7 @@ from scenarios.cli.args import (
     compile_notice,
     parse_list,
     parse_overrides,
+    physics_budget,
     positive,
     problem_arg,
     record_path,
@@ -35,6 +36,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     methods = (unique(parse_list(args.methods, "--methods"), "--methods") if args.methods
                else list(comparison_methods()))
     worlds = [check_world(w) for w in unique(parse_list(args.world, "--world"), "--world")]
+    physics_budget(sc, worlds)
     overrides = parse_overrides(args.set)
     per_method = overrides_per_method(methods, overrides)
     n_seeds = positive(args.seeds, "--seeds", MAX_SEEDS)

@@ -8,7 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.cli.args import check_output_file, check_world, problem_arg, record_path
+from scenarios.cli.args import (
+    check_output_file,
+    check_world,
+    physics_budget,
+    problem_arg,
+    record_path,
+)
 
 
 def cmd_route(args: argparse.Namespace) -> int:
@@ -16,14 +22,19 @@ def cmd_route(args: argparse.Namespace) -> int:
     from learning.geometry import geometry_of
     from learning.train import greedy_test
     from scenarios.figures.routes import ascii_routes, route_png
+    from scenarios.runs.spec import layout_digest
     from sim.grid.planning import bfs_route
 
     pb = problem_arg(args)
     sc, model = pb.sc, pb.model
     check_world(args.world)
+    physics_budget(sc, [args.world])
     if args.png:
         check_output_file(Path(args.png), "--png", ".png")
     ckpt = load_checkpoint(args.agent, None, model.n_states, geometry_of(model))
+    # an agent trained on another scenario of the same size loads; its route here would
+    # mean nothing. The layout is checked, not the rewards or starts: a route ignores them
+    ckpt.check_problem({"layout": layout_digest(pb.scenario, pb.start, pb.goal)})
     optimum = bfs_route(model.next_state, model.distance_to_goal, model.start)
     length, route = greedy_test(ckpt.state, model)
     trajectory = driven = None

@@ -12,8 +12,8 @@ from scenarios.cli.args import (
     MAX_EPISODES,
     check_output_file,
     check_world,
-    check_writable,
     parse_overrides,
+    physics_budget,
     positive,
     print_run,
     problem_arg,
@@ -23,30 +23,42 @@ from scenarios.cli.args import (
     starts_note,
 )
 from scenarios.runs.spec import ExperimentError, make_config
+from sim.files import atomic_write_bytes, atomic_write_text
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from learning.checkpoint import Checkpoint, load_checkpoint, save_checkpoint
+    from learning.checkpoint import Checkpoint, checkpoint_bytes, load_checkpoint
     from learning.geometry import geometry_of
     from learning.train import train_tabular
-    from scenarios.runs.spec import RunOutcome, RunSpec, run_record, scenario_digest
+    from scenarios.runs.spec import (
+        RunOutcome,
+        RunSpec,
+        layout_digest,
+        run_record,
+        scenario_digest,
+    )
 
     pb = problem_arg(args)
     sc, model = pb.sc, pb.model
     check_world(args.world)
+    physics_budget(sc, [args.world])
     positive(args.episodes, "--episodes", MAX_EPISODES)
     seed_value(args.seed, "--seed")
     if args.json:
         check_output_file(Path(args.json), "--json")
+    if args.save:  # a folder at --save fails now, not after training (the agent lost)
+        check_output_file(Path(args.save), "--save")
+    if args.resume and args.world != "grid":
+        raise ExperimentError("command line", "--resume", "is only supported for grid runs",
+                              "drop --resume or use --world grid")
     cfg = make_config(args.method, parse_overrides(args.set))
     spec = RunSpec(pb.scenario, args.method, args.seed, args.episodes, args.world,
                    **pb.spec_fields())
     record = record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
-    problem = {"scenario": scenario_digest(*pb.key), "rewards": sc.rewards.label()}
+    problem = {"scenario": scenario_digest(*pb.key), "rewards": sc.rewards.label(),
+               "layout": layout_digest(pb.scenario, pb.start, pb.goal)}
     rs = streams(args.seed)  # the same streams as a run of `rnhql compare`
     rng = rs.learner
-    if args.save:
-        check_writable(Path(args.save), "--save")
     resume = None
     if args.resume and args.world == "grid":
         resume = load_checkpoint(args.resume, args.method, model.n_states, geometry_of(model))
@@ -75,11 +87,8 @@ def cmd_train(args: argparse.Namespace) -> int:
             if args.save:
                 ck = Checkpoint.of_result(result, rng, rs.starts)
                 ck.problem = problem
-                save_checkpoint(args.save, ck)
+                atomic_write_bytes(args.save, checkpoint_bytes(ck))
         else:
-            if args.resume:
-                raise ExperimentError("command line", "--resume", "is only supported for grid "
-                                      "runs", "drop --resume or use --world grid")
             from scenarios.runs.physics import train_physics
 
             result = train_physics(cfg, sc, model, args.episodes, rng, recorder=recorder,
@@ -89,7 +98,7 @@ def cmd_train(args: argparse.Namespace) -> int:
             if args.save:
                 ck = Checkpoint.of_agent(result.agent)
                 ck.problem = problem
-                save_checkpoint(args.save, ck)
+                atomic_write_bytes(args.save, checkpoint_bytes(ck))
         if recorder is not None:
             if args.world == "physics":
                 from scenarios.runs.physics import log_final
@@ -114,11 +123,5 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.save:
         print(f"  saved agent           {args.save}")
     if args.json:
-        from sim.files import atomic_write_text
-
-        try:
-            atomic_write_text(args.json, json.dumps(rec, indent=1))
-        except OSError as exc:
-            raise ExperimentError(args.json, "--json", f"cannot be written ({exc.strerror})",
-                                  "free some space or pick another path") from None
+        atomic_write_text(args.json, json.dumps(rec, indent=1))  # OSError: one line, exit 1
     return 0

@@ -15,6 +15,7 @@ when the sweep is complete; after Ctrl-C the recording holds the runs finished s
 from __future__ import annotations
 
 import contextlib
+import errno
 import functools
 import json
 import os
@@ -29,10 +30,16 @@ from typing import Any
 
 from scenarios.runs.outdir import check_out_dir, sweep_lock
 from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
+from scenarios.runs.resume_state import (
+    PARTIAL,
+    check_out_files,
+    finished_compare,
+    read_partial,
+)
 from scenarios.runs.spec import RecordOptions, RunSpec, load
 from scenarios.signals import sigint_handled_by
 
-PARTIAL = "runs.partial.jsonl"
+__all__ = ["PARTIAL", "finished_compare", "make_specs", "read_partial", "run_sweep"]
 
 
 def version() -> str:
@@ -288,36 +295,6 @@ def ctrl_c_held() -> Iterator[None]:
         raise KeyboardInterrupt
 
 
-def finished_compare(out_dir: Path) -> dict[str, dict[str, Any]]:
-    """The runs of a finished comparison in ``out_dir`` (its ``results.json``), by key."""
-    done: dict[str, dict[str, Any]] = {}
-    finished = out_dir / "results.json"
-    if finished.exists():
-        try:
-            for rec in json.loads(finished.read_text(encoding="utf-8")).get("runs", []):
-                done[rec["key"]] = rec
-        except (json.JSONDecodeError, AttributeError, KeyError, TypeError):
-            pass  # not a results file of this tool: only the partial runs count
-    return done
-
-
-def read_partial(out_dir: Path, finished: Finished | None = None) -> dict[str, dict[str, Any]]:
-    """Finished runs, by key: those of a finished sweep (``finished``; by default its
-    ``results.json``), then those of an interrupted one (a torn last line is ignored). So
-    ``--resume`` after a sweep that finished re-runs nothing of it (an extended sweep runs
-    only what is new)."""
-    path = out_dir / PARTIAL
-    done = (finished or finished_compare)(out_dir)
-    if path.exists():
-        for line in path.read_text(encoding="utf-8").splitlines():
-            try:
-                rec = json.loads(line)
-            except json.JSONDecodeError:
-                continue
-            done[rec["key"]] = rec
-    return done
-
-
 def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
               execute: Callable[..., list[dict[str, Any]]], resume: bool = False,
               figures: bool = True, recording: SweepRecording | None = None,
@@ -332,6 +309,7 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     writes the same ``results.json`` as an uninterrupted sweep.
     """
     check_out_dir(out_dir)
+    check_out_files(out_dir)  # a folder named results.json fails now, not after every run
     files = files or compare_files(figures)
     if recording is not None:
         specs = with_recording(specs, recording)
@@ -348,10 +326,34 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
             # drawn) surfaces as "ImportError: initialization failed": it is the same Ctrl-C
             _keep_finished(specs, out_dir, recording, files.finished)
             raise KeyboardInterrupt from err
+        except OSError as err:
+            if err.errno != errno.ENOSPC:
+                raise
+            raise _disk_full(err, out_dir, specs, recording, files) from None
         if recording is not None:
-            with _finishing(recording.path):  # every run is done: the recording holds them all
-                gather_parts(specs, recording.path, records=results["runs"])
+            try:
+                with _finishing(recording.path):  # every run is done: the recording holds all
+                    gather_parts(specs, recording.path, records=results["runs"])
+            except OSError as err:
+                if err.errno != errno.ENOSPC:
+                    raise
+                raise _disk_full(err, out_dir, specs, recording, files, True) from None
     return results
+
+
+def _disk_full(err: OSError, out_dir: Path, specs: Sequence[RunSpec],
+               recording: SweepRecording | None, files: SweepFiles,
+               all_done: bool = False) -> OSError:
+    """A full disk (:mod:`scenarios.runs.disk_full`), counting the runs kept so far."""
+    from scenarios.runs.disk_full import disk_full_error
+
+    try:
+        done = read_partial(out_dir, files.finished)
+    except Exception:  # a torn resume file must not hide the full disk
+        done = {}
+    finished = sum(s.key in done for s in specs)
+    return disk_full_error(err, out_dir, specs, None if recording is None else recording.path,
+                           len(specs) if all_done else finished, all_done)
 
 
 def interrupted(err: BaseException) -> bool:
@@ -390,6 +392,13 @@ def _finishing(record: str) -> Iterator[None]:
         signal.signal(signal.SIGINT, old)
 
 
+def _tell(line: str) -> None:
+    """A line on stderr that may be gone (SIGHUP: the terminal closed, writes fail with
+    EIO): what is kept must be kept all the same."""
+    with contextlib.suppress(OSError, ValueError):
+        print(line, file=sys.stderr, flush=True)
+
+
 def _keep_finished(specs: Sequence[RunSpec], out_dir: Path,
                    recording: SweepRecording | None, finished: Finished | None) -> None:
     """After Ctrl-C: say what was kept, and write the recording of the runs done so far.
@@ -399,13 +408,12 @@ def _keep_finished(specs: Sequence[RunSpec], out_dir: Path,
     try:
         done = read_partial(out_dir, finished)
         over = [s for s in specs if s.key in done]
-        print(f"\ninterrupted: {len(over)} of {len(specs)} runs finished, kept in "
-              f"{out_dir / PARTIAL}; finish with the same command and --resume",
-              file=sys.stderr)
+        _tell(f"\ninterrupted: {len(over)} of {len(specs)} runs finished, kept in "
+              f"{out_dir / PARTIAL}; finish with the same command and --resume")
         if recording is not None and over:
             gather_parts(over, recording.path, keep_parts=True,
                          records=list(done.values()))
-            print(f"recording of the finished runs: {recording.path}", file=sys.stderr)
+            _tell(f"recording of the finished runs: {recording.path}")
     finally:
         if main:
             signal.signal(signal.SIGINT, old)

@@ -21,7 +21,8 @@ from typing import Protocol
 import rerun as rr
 
 from scenarios.signals import sigint_handled_by
-from sim.files import move_into_place
+from sim.errors import InputError
+from sim.files import move_into_place, no_space_left
 
 
 class _Flushable(Protocol):
@@ -52,15 +53,50 @@ def _no_sigint() -> contextlib.AbstractContextManager[None]:
 FLUSH_TIMEOUT_S = 600.0  # a flush that takes longer has hung (Rerun's writer on a full disk)
 
 
-class RecordingWriteError(OSError):
-    """The recording could not be written (full disk, file removed); its partial file is gone."""
+FLUSH_STEP_S = 2.0  # the flush is waited for in steps, the disk checked between them
 
-    def __init__(self, path: Path, cause: BaseException) -> None:
-        reason = getattr(cause, "strerror", None) or str(cause)
-        super().__init__(errno.EIO, f"{path}: the recording could not be written ({reason}); "
-                         "its partial file was removed. Fix: free some space or record "
-                         "elsewhere", str(path))
+
+class RecordingWriteError(OSError):
+    """The recording could not be written (full disk, file removed); its partial file is gone.
+    A full disk is said as such (``errno.ENOSPC``), whatever Rerun's writer reported."""
+
+    def __init__(self, path: Path, cause: BaseException | str) -> None:
+        reason = cause if isinstance(cause, str) else (getattr(cause, "strerror", None)
+                                                        or str(cause))
+        full = no_space_left(path)
+        if full:
+            reason = os.strerror(errno.ENOSPC)
+        super().__init__(errno.ENOSPC if full else errno.EIO,
+                         f"{path}: the recording could not be written ({reason}); its partial "
+                         "file was removed. Fix: free some space or record elsewhere",
+                         str(path))
         self.path = path
+        self.reason = reason
+
+    def __reduce__(self):  # a pool worker's error must unpickle in the parent, or the pool
+        return _rebuild_write_error, (str(self.path), self.errno, self.strerror)  # breaks
+
+
+def _rebuild_write_error(path: str, code: int, text: str) -> OSError:
+    err = OSError(code, text, path)
+    return err
+
+
+def _flush(stream: rr.RecordingStream, part: Path) -> None:
+    """Flush ``stream`` to its file, waiting at most :data:`FLUSH_TIMEOUT_S`; a writer that
+    stops because the disk is full raises ENOSPC at once instead of waiting out the limit
+    (with Ctrl-C held meanwhile: that was a hang)."""
+    waited = 0.0
+    while True:
+        try:
+            stream.flush(timeout_sec=FLUSH_STEP_S)
+            return
+        except Exception as exc:  # Rerun raises on a timeout or a dead writer
+            if no_space_left(part):
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(part)) from None
+            waited += FLUSH_STEP_S
+            if waited >= FLUSH_TIMEOUT_S or "time" not in str(exc).lower():
+                raise
 
 
 class RecordingFile:
@@ -96,16 +132,18 @@ class RecordingFile:
                     warnings.warn(f"recording: could not flush {r.prefix or 'run'}: {exc}",
                                   stacklevel=2)
             try:
-                self.stream.flush(timeout_sec=FLUSH_TIMEOUT_S)
+                _flush(self.stream, self.part)
                 self.stream.disconnect()
                 if not self.part.exists():
                     raise OSError(errno.EIO, "the recording's file is gone", str(self.part))
                 move_into_place(self.part, self.path)
-            except (OSError, RuntimeError) as exc:  # e.g. a full disk: Rerun's writer stops
+            except Exception as exc:  # e.g. a full disk: Rerun's writer stops
                 with contextlib.suppress(Exception):
                     self.stream.disconnect()
                 self.part.unlink(missing_ok=True)
                 atexit.unregister(self.close)
+                if isinstance(exc, InputError):  # the path itself (a FIFO nobody reads): one
+                    raise  # line naming it, exit 2, like any other bad output path
                 raise RecordingWriteError(self.path, exc) from None
         atexit.unregister(self.close)
 

@@ -14,6 +14,8 @@ parameters.
 
 from __future__ import annotations
 
+import errno
+import os
 import signal
 import sys
 import threading
@@ -167,6 +169,9 @@ class _Collector:
         self._tick(i)
 
     def failed(self, i: int, exc: BaseException) -> None:
+        full = disk_full_cause(exc, self.specs[i])
+        if full is not None:  # every later run would fail the same way: stop the sweep now
+            raise full
         self.failures.append((self.specs[i], f"{type(exc).__name__}: {exc}"))
         self._tick(i, " FAILED")
 
@@ -191,12 +196,31 @@ def _init_worker(counter: Any = None) -> None:
     work.share(counter)
 
 
+def disk_full_cause(exc: BaseException, spec: RunSpec) -> OSError | None:
+    """The full disk behind a failed run, as an OSError naming the file (ENOSPC), or None.
+
+    A run's own write error says so (errno ENOSPC). A pool worker that died (a
+    ``BrokenProcessPool``: the real cause never reaches the parent) is put down to a full
+    disk when the file system of the run's recording is full."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    from sim.files import no_space_left
+
+    if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
+        return exc
+    if isinstance(exc, BrokenProcessPool) and spec.recording is not None and \
+            no_space_left(spec.recording.path):
+        return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), spec.recording.path)
+    return None
+
+
 def _ignore_sigint() -> None:
-    """Pool worker initializer: Ctrl-C reaches the whole process group, but only the parent
-    decides what happens (it keeps the finished runs and ends the workers itself). On
+    """Pool worker initializer: Ctrl-C (and SIGHUP) reaches the whole process group, but only
+    the parent decides what happens (it keeps the finished runs and ends the workers itself). On
     Linux a worker is also killed when its parent dies (``PR_SET_PDEATHSIG``): a parent
     killed with SIGKILL would otherwise leave its workers blocked on a pipe."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGHUP, signal.SIG_IGN)  # a closed terminal: the parent's to handle
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     if sys.platform.startswith("linux"):
         import ctypes

@@ -38,7 +38,14 @@ def check_out_dir(out_dir: Path, flag: str = "--out") -> Path:
     return out_dir
 
 
+PID_MAX = 4_194_304  # Linux's largest pid (pid_max's ceiling); other systems are lower
+
+
 def _alive(pid: int) -> bool:
+    """Whether ``pid`` is a live process. Not a pid at all (0, negative: a process *group*
+    to ``kill``; beyond any pid) counts as gone: a lock holding it is junk, not an owner."""
+    if not 0 < pid <= PID_MAX:
+        return False
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -59,9 +66,13 @@ def sweep_lock(out_dir: Path, flag: str = "--out") -> Iterator[None]:
             try:  # a hard link appears atomically *with* its content: never an empty lock
                 os.link(mine, lock)
             except FileExistsError:
+                if lock.is_dir() or (lock.exists() and not lock.is_file()):
+                    raise OutDirError(str(lock), flag, "is not a lock file (a folder or device "
+                                      "under the lock's name)",
+                                      f"remove it if no sweep is running: rm -r {lock}") from None
                 try:
-                    owner = int(lock.read_text().strip() or "0")
-                except (OSError, ValueError):
+                    owner = int(lock.read_bytes().decode("ascii").strip() or "0")
+                except (OSError, ValueError):  # junk (UnicodeDecodeError is a ValueError)
                     owner = 0
                 if owner and owner != os.getpid() and _alive(owner):
                     raise OutDirError(str(out_dir), flag,

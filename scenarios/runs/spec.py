@@ -126,8 +126,25 @@ def scenario_digest(scenario: str, start: Cell | None = None, goal: Cell | None 
     return hashlib.sha256(blob).hexdigest()[:12]
 
 
+@lru_cache(maxsize=64)
+def layout_digest(scenario: str, start: Cell | None = None, goal: Cell | None = None) -> str:
+    """12 hex digits of a hash of the route problem's layout alone: arena, obstacles, robot,
+    S, G and episode length; not the rewards or the share of starts at S. What a saved
+    agent's greedy route depends on, so what ``rnhql route`` checks a checkpoint against."""
+    import hashlib
+    import json
+
+    sc, _ = load(scenario, start, goal)
+    fields = {k: v for k, v in dataclasses.asdict(sc).items()
+              if k not in ("name", "source", "description", "rewards", "s_start_share",
+                           "physics")}
+    blob = json.dumps(fields, sort_keys=True, default=repr).encode()
+    return hashlib.sha256(blob).hexdigest()[:12]
+
+
 def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
     """The method's frozen config with paper defaults, fields overridden by name."""
+    from learning.limits import LIMITS, limit_problem
     from learning.registry import METHODS
 
     if method not in METHODS:
@@ -144,6 +161,12 @@ def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
                                   f"use one of: {', '.join(names)}"
                                   + (f"; or --method {wider[0]}, which has {k}" if wider
                                      else ""))
+        problem = limit_problem(k, float(v))
+        if problem is not None:
+            limit = LIMITS.get(k, (None,))[0]
+            raise ExperimentError("command line", f"--set {k}={v:g}", problem,
+                                  f"pass at most --set {k}={limit:g}" if limit is not None
+                                  else "pass a finite number")
         if names[k].type in (int, "int", bool, "bool"):
             if not float(v).is_integer():
                 raise ExperimentError("command line", f"--set {k}={v:g}",

@@ -14,9 +14,14 @@ on it unchanged. Cells never reached from S keep "stay" for every action.
 
 Building it drives 4 primitives per reachable cell (paper-50: ~10k primitives,
 a few seconds), so it is cached in-process and on disk
-(``$XDG_CACHE_HOME/rnhql/physics-graph/<digest>.npz``, written atomically; a
-file that does not load is rebuilt, never trusted). ``RNHQL_NO_DISK_CACHE=1``
-turns the disk cache off.
+(``$XDG_CACHE_HOME/rnhql/physics-graph/<digest>.npz``, written atomically). A cache
+file is an input like any other and is checked before it is used (:func:`_load`): its
+format, the key it was built for, the SHA-256 of its array, the array's shape and dtype,
+and that every move either stays or reaches the neighbour in its direction (a primitive
+moves one cell at most). A file that fails any check, or does not load at all (truncated,
+a folder, not a zip), is rebuilt and rewritten, never trusted: a tampered model would
+grade a policy on moves the robot cannot make. ``RNHQL_NO_DISK_CACHE=1`` turns the disk
+cache off.
 """
 
 from __future__ import annotations
@@ -32,13 +37,13 @@ import numpy as np
 import pymunk
 
 from sim.files import atomic_path
-from sim.grid.actions import N_ACTIONS
+from sim.grid.actions import ACTION_DELTAS, N_ACTIONS
 from sim.grid.model import TabularModel, build_model, episode_starts
 from sim.grid.planning import breadth_first, distances_to
 from sim.physics.static import PhysicsConfig
 from sim.scenario import Scenario
 
-FORMAT = "rnhql-physics-graph-1"
+FORMAT = "rnhql-physics-graph-2"  # 2: with its key and the SHA-256 of its content
 
 
 def cache_dir() -> Path:
@@ -111,37 +116,74 @@ def model_from_transitions(sc: Scenario, nxt: np.ndarray) -> TabularModel:
                                start_states=start_states)
 
 
-def _load(path: Path, n: int) -> np.ndarray | None:
+def content_digest(nxt: np.ndarray) -> str:
+    """SHA-256 of the transition array as stored (dtype, shape and bytes)."""
+    h = hashlib.sha256(f"{nxt.dtype.str}{nxt.shape}".encode())
+    h.update(np.ascontiguousarray(nxt).tobytes())
+    return h.hexdigest()
+
+
+def moves_are_local(nxt: np.ndarray, nx: int, ny: int) -> bool:
+    """Whether every transition stays put or reaches the neighbouring cell in the action's
+    direction, inside the arena: what a primitive from rest at a cell centre can do."""
+    n = nx * ny
+    s = np.arange(n)
+    ix, iy = s % nx, s // nx
+    for a, (dx, dy) in enumerate(ACTION_DELTAS):
+        tx, ty = ix + dx, iy + dy
+        inside = (tx >= 0) & (tx < nx) & (ty >= 0) & (ty < ny)
+        ok = (nxt[:, a] == s) | (inside & (nxt[:, a] == tx + ty * nx))
+        if not ok.all():
+            return False
+    return True
+
+
+def _load(path: Path, key: str, nx: int, ny: int) -> np.ndarray | None:
+    """The cached transitions of ``key`` in ``path``, or None when the file does not hold
+    exactly what this build would write (see the module's doc)."""
+    n = nx * ny
     try:
-        with np.load(path, allow_pickle=False) as data:
-            if str(data["format"]) != FORMAT:
+        if not path.is_file() or path.stat().st_size > 64 + 64 * n + 4096:
+            return None  # a folder, a device, or far larger than n x 4 int32 can be
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
+            if set(data.files) != {"format", "key", "sha256", "next_state"}:
+                return None
+            if str(data["format"]) != FORMAT or str(data["key"]) != key:
                 return None
             nxt = data["next_state"]
-    except (OSError, ValueError, KeyError, EOFError):
+            stored = str(data["sha256"])
+    except Exception:  # BadZipFile, a torn header, a folder ...: any failure rebuilds
         return None
-    if nxt.shape != (n, 4) or nxt.dtype != np.int32 or nxt.min() < 0 or nxt.max() >= n:
+    if nxt.shape != (n, 4) or nxt.dtype != np.int32 or stored != content_digest(nxt):
+        return None
+    if nxt.min() < 0 or nxt.max() >= n or not moves_are_local(nxt, nx, ny):
         return None
     return nxt
 
 
-def _save(path: Path, nxt: np.ndarray) -> None:
+def _save(path: Path, key: str, nxt: np.ndarray) -> None:
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
-        np.savez(f, format=np.array(FORMAT), next_state=nxt)
+        np.savez(f, format=np.array(FORMAT), key=np.array(key),
+                 sha256=np.array(content_digest(nxt)), next_state=nxt)
 
 
 @lru_cache(maxsize=8)
 def physics_model(sc: Scenario, config: PhysicsConfig | None = None) -> TabularModel:
     """The physics world's tabular model of ``sc`` (cached in-process and on disk)."""
     config = config or PhysicsConfig()
-    n = sc.nx * sc.ny
     use_disk = os.environ.get("RNHQL_NO_DISK_CACHE", "") in ("", "0")
-    path = cache_dir() / f"{digest(sc, config)}.npz"
-    nxt = _load(path, n) if use_disk and path.exists() else None
+    key = digest(sc, config)
+    path = cache_dir() / f"{key}.npz"
+    nxt = _load(path, key, sc.nx, sc.ny) if use_disk else None
     if nxt is None:
         nxt = drive_transitions(sc, config)
         if use_disk:
             try:
-                _save(path, nxt)
-            except OSError:  # a read-only home: the in-process cache still works
-                pass
+                if path.is_dir() and not path.is_symlink():
+                    import shutil
+
+                    shutil.rmtree(path)  # a folder under the cache file's own name
+                _save(path, key, nxt)
+            except (OSError, ValueError):  # a read-only home, a device under the name: the
+                pass  # in-process cache still works
     return model_from_transitions(sc, nxt)

@@ -352,12 +352,12 @@ def _load(path: Path, fid: Fidelity, sampling: Sampling, sc: Scenario
           ) -> StochasticModel | None:
     """The model in ``path``, or None when it is not one this scenario can use."""
     try:
-        with np.load(path, allow_pickle=False) as data:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
             if str(data["format"]) != FORMAT:
                 return None
             arrays = {a: data[a] for a in _ARRAYS}
             scalars = {s: data[s].item() for s in _SCALARS}
-    except (OSError, ValueError, KeyError, EOFError):
+    except Exception:  # BadZipFile, a torn header, a folder ...: any failure rebuilds
         return None
     n = arrays["state_cell"].size
     ptr, dst, prob = arrays["sa_ptr"], arrays["dst"], arrays["prob"]

@@ -274,6 +274,12 @@ def scenario_dirs() -> list[Path]:
     (separated by ``os.pathsep``; a user's own ``NAME.toml`` files), then the built-ins."""
     extra = [Path(p).expanduser() for p in os.environ.get(SCENARIO_PATH_ENV, "").split(os.pathsep)
              if p.strip()]
+    for folder in extra:
+        if not folder.is_dir():
+            raise ScenarioError(f"${SCENARIO_PATH_ENV}", str(folder),
+                                "is not a folder" if folder.exists() else "no such folder",
+                                f"point {SCENARIO_PATH_ENV} at folders of NAME.toml files "
+                                f"(separated by '{os.pathsep}'), or unset it")
     return [*extra, builtin_dir()]
 
 

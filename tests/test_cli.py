@@ -293,3 +293,35 @@ def test_ablation_target_scales_with_the_seeds():
     from scenarios.experiments.ablation import target_seeds
 
     assert [target_seeds(n) for n in (1, 3, 5, 10, 20)] == [1, 3, 5, 9, 18]
+
+
+def test_fidelity_on_a_grid_only_run_is_an_error_not_ignored(capsys):
+    assert main(["train", "paper-40", "--fidelity", "noisy", "--episodes", "2"]) == 2
+    assert "applies to the physics world only" in capsys.readouterr().err
+
+
+def test_physics_train_names_its_fidelity(capsys):
+    assert main(["train", "paper-40", "--world", "physics", "--fidelity", "noisy",
+                 "--episodes", "2"]) == 0
+    assert "(physics at fidelity noisy)" in capsys.readouterr().out
+
+
+def test_a_missing_scenario_path_folder_is_an_error(capsys, monkeypatch, tmp_path):
+    monkeypatch.setenv("RNHQL_SCENARIO_PATH", str(tmp_path / "nope"))
+    assert main(["scenarios"]) == 2
+    assert "no such folder" in capsys.readouterr().err
+
+
+def test_scenario_list_keeps_circles_and_blocked_cells_apart(capsys):
+    assert main(["scenarios"]) == 0
+    head = capsys.readouterr().out.splitlines()[0]
+    assert "circles" in head and "blocked map cells" in head
+
+
+def test_subcommand_help_lists_the_methods_and_examples(capsys):
+    from learning.registry import comparison_methods
+
+    with pytest.raises(SystemExit):
+        main(["compare", "--help"])
+    out = capsys.readouterr().out
+    assert all(m in out for m in comparison_methods()) and "examples:" in out

@@ -50,6 +50,11 @@ class _Parser(argparse.ArgumentParser):
 class _Help(argparse.HelpFormatter):
     """Every flag's line ends with its default, unless the help already names it."""
 
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        if "\n" in text:  # an epilog laid out by hand (methods, examples): keep its lines
+            return "\n".join(indent + line for line in text.splitlines())
+        return super()._fill_text(text, width, indent)
+
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
         d = action.default
@@ -57,6 +62,14 @@ class _Help(argparse.HelpFormatter):
                 or (action.option_strings == [] and action.nargs is None)):
             return text
         return f"{text} (default: {d})"
+
+
+def _methods_epilog(examples: str) -> str:
+    """A subcommand's help ends with the methods it can run and examples."""
+    from learning.registry import comparison_methods
+
+    return (f"methods: {', '.join(comparison_methods())} (docs/methods.md)\n\n"
+            f"examples:\n  {examples}")
 
 
 def _version() -> str:
@@ -84,7 +97,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_scenario_args(p, positional=False)
     p.set_defaults(func=catalog.cmd_scenarios)
 
-    p = sub.add_parser("train", help="train one method on one scenario")
+    p = sub.add_parser("train", help="train one method on one scenario",
+                       epilog=_methods_epilog("rnhql train paper-50\n  rnhql train maze-1 --method "
+                                              "haql --world physics --fidelity noisy"))
     add_scenario_args(p, learning=True)
     p.add_argument("--method", default="rnh-ql+",
                    help="method (default rnh-ql+: it learns the route on every built-in map, so "
@@ -109,7 +124,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="record the route to Rerun (default recordings/<scenario>-route-...)")
     p.set_defaults(func=route.cmd_route)
 
-    p = sub.add_parser("compare", help="methods x seeds (x worlds): results, summary, figures")
+    p = sub.add_parser("compare", help="methods x seeds (x worlds): results, summary, figures",
+                       epilog=_methods_epilog("rnhql compare paper-50 --rewards goal-only --out "
+                                              "results/paper-50 --record\n  rnhql compare maze-1 "
+                                              "--methods rnh-ql+,haql --world grid,physics --out "
+                                              "out/"))
     add_scenario_args(p, learning=True)
     p.add_argument("--methods", help="comma-separated (default: "
                    f"{','.join(comparison_methods())})")

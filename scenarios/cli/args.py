@@ -148,6 +148,11 @@ def fidelity_arg(args: argparse.Namespace) -> str | None:
     text = getattr(args, "fidelity", None)
     if text is None:
         return None
+    worlds = str(getattr(args, "world", None) or "")
+    if worlds and "physics" not in worlds.split(","):
+        raise CliError("command line", "--fidelity", f"{text!r} applies to the physics world "
+                       f"only, and this run is in {worlds!r}",
+                       "add --world physics (or grid,physics), or drop --fidelity")
     fid = parse_fidelity(text)
     return None if fid.is_exact and fid.name == "exact" else text
 

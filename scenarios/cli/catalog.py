@@ -28,13 +28,13 @@ class ScenarioFacts:
     def row(self) -> list[str]:
         return [self.name, f"{self.size_cells[0]}x{self.size_cells[1]}",
                 f"{self.size_m[0]:g}x{self.size_m[1]:g} m",
-                str(self.obstacles + self.blocked_map_cells), str(self.free_cells),
+                str(self.obstacles), str(self.blocked_map_cells), str(self.free_cells),
                 f"{self.start}", f"{self.goal}", str(self.optimal_route_length),
                 str(self.manhattan)]
 
 
-HEADER = ["scenario", "cells", "size", "obstacles", "free", "start", "goal", "optimal",
-          "manhattan"]
+HEADER = ["scenario", "cells", "size", "circles", "blocked map cells", "free", "start", "goal",
+          "optimal", "manhattan"]
 
 
 def facts(sc: Scenario) -> ScenarioFacts:

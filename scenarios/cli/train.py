@@ -63,7 +63,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.resume and args.world == "grid":
         resume = load_checkpoint(args.resume, args.method, model.n_states, geometry_of(model))
         resume.check_problem(problem)
-    print(f"{cfg.name} on {sc.name} ({args.world}), seed {args.seed}, {args.episodes} episodes, "
+    world = (args.world if args.world == "grid" else
+             f"physics at fidelity {spec.fidelity_spec.label}")
+    print(f"{cfg.name} on {sc.name} ({world}), seed {args.seed}, {args.episodes} episodes, "
           f"rewards {sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
     recorder = plan = observer = None
     if record is not None:

@@ -546,8 +546,10 @@ def test_sighup_cleans_up_like_sigterm_and_resume_completes(tmp_path, terminal):
     fails), and what finished must be kept all the same."""
     from scenarios.recording.file import verify_recording
 
+    # long enough that the signal lands mid-sweep on a fast, quiet machine too (at 1500
+    # episodes the whole sweep could end before the first finished run was seen)
     sweep = ["compare", "paper-40", "--methods", "rn-ql,st-ql", "--seeds", "4", "--episodes",
-             "1500", "--jobs", "2"]
+             "8000", "--jobs", "2"]
     out = tmp_path / "out"
     rec = tmp_path / "c.rrd"
     env = {**os.environ, "PYTHONPATH": str(REPO)}

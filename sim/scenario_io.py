@@ -313,4 +313,11 @@ def resolve_scenario(spec: str, start: Cell | None = None, goal: Cell | None = N
         raise ScenarioError(spec, "scenario", "is not a named scenario, .toml or .map",
                             f"use one of: {', '.join(builtin_names())} (`rnhql scenarios` "
                             f"lists them; ${SCENARIO_PATH_ENV} adds folders of your own)")
-    return load_scenario(path)
+    sc = load_scenario(path)
+    if sc.name != spec:  # a copy saved under a new file name: it would run, list and record
+        # as the scenario it was copied from
+        raise ScenarioError(str(path), "name", f"is {sc.name!r}, but the file is named "
+                            f"{spec!r}, so `{spec}` would run as {sc.name!r}",
+                            f'set name = "{spec}" in the file (or name the file '
+                            f'{sc.name}.toml)')
+    return sc

@@ -325,3 +325,13 @@ def test_subcommand_help_lists_the_methods_and_examples(capsys):
         main(["compare", "--help"])
     out = capsys.readouterr().out
     assert all(m in out for m in comparison_methods()) and "examples:" in out
+
+
+def test_a_copied_scenario_under_a_new_file_name_says_so(capsys, monkeypatch, tmp_path):
+    from sim.scenario_io import named_scenario_path
+
+    (tmp_path / "mine.toml").write_text(named_scenario_path("paper-50").read_text())
+    monkeypatch.setenv("RNHQL_SCENARIO_PATH", str(tmp_path))
+    assert main(["train", "mine", "--episodes", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "mine.toml: name: is 'paper-50'" in err and 'set name = "mine"' in err

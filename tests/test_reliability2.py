@@ -540,6 +540,14 @@ def test_route_checks_the_scenario_the_agent_was_trained_on(agent, capsys):
 
 
 # ------------------------------------------------------------------ 8: SIGHUP
+def _default_signals() -> None:
+    """The sweep starts with the default SIGINT and SIGHUP, whatever this test run inherited
+    (under ``nohup`` or as a background job they are ignored, and rnhql keeps an ignored
+    SIGHUP ignored, as it should)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("terminal", ["open", "closed"])
 def test_sighup_cleans_up_like_sigterm_and_resume_completes(tmp_path, terminal):
     """``closed``: stderr is gone by the time SIGHUP arrives (a closed terminal: every write
@@ -555,7 +563,8 @@ def test_sighup_cleans_up_like_sigterm_and_resume_completes(tmp_path, terminal):
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     proc = subprocess.Popen([sys.executable, "-m", "scenarios.cli", *sweep, "--out", str(out),
                              "--record", str(rec)], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True, env=env)
+                            stderr=subprocess.PIPE, text=True, start_new_session=True, env=env,
+                            preexec_fn=_default_signals)
     partial = out / "runs.partial.jsonl"
     t0 = time.monotonic()
     while not (partial.exists() and partial.read_text().count("\n") >= 1):

@@ -39,13 +39,21 @@ def rrd(tmp_path_factory, paper50, paper50_model):
     return path
 
 
+def default_signals() -> None:
+    """The child starts with the default SIGINT and SIGHUP, whatever this test run inherited
+    (a background job or ``nohup`` ignores them, and an ignored signal stays ignored)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
 @contextlib.contextmanager
 def viewing(rrd: Path, *extra: str) -> Iterator[tuple[subprocess.Popen, str]]:
     """``rnhql view RRD --web`` in a process group of its own: (process, what it printed up
     to its last line). Afterwards the group is SIGKILLed if it still runs."""
     proc = subprocess.Popen([sys.executable, "-m", "scenarios.cli", "view", str(rrd), "--web",
                              *extra], cwd=REPO, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, start_new_session=True)
+                            stderr=subprocess.STDOUT, text=True, start_new_session=True,
+                            preexec_fn=default_signals)
     try:
         out = []
         deadline = time.monotonic() + 90

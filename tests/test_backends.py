@@ -102,3 +102,34 @@ def test_progress_counts_episodes_across_workers_and_estimates_from_the_rate(tmp
     elapsed, left = (float(x) for x in re.search(r"(\d+) s elapsed, ~(\d+) s left",
                                                  first).groups())
     assert 0.5 * wall <= elapsed + left <= 2.0 * wall, (first, wall)
+
+
+def test_no_estimate_while_a_worker_compiles_and_the_rate_restarts_after():
+    """A worker in the first task of a method (on a cold cache: compiling) withholds the
+    estimate, and the rate window restarts once no worker warms up: a rate measured
+    across a compile once gave an estimate 8x too long."""
+    from scenarios.runs import work
+    from scenarios.runs.backends import Progress
+
+    p = Progress(4, enabled=False)
+    p.expect(4, 10_000)
+    with work.warm_up(["st-ql", "haql"]):
+        assert work.warming(p.counter) == 1
+        assert p.eta_s(now=0.0) is None
+        assert "compiling kernels (no estimate yet)" in p._line()
+        work.add_episodes(1000)  # the first episodes end this process's warm-up
+        assert work.warming(p.counter) == 0
+    with work.warm_up(["haql"]):  # warm in this process already
+        assert work.warming(p.counter) == 0
+    assert p.eta_s(now=10.0) is None  # one sample is no rate
+    work.add_episodes(1000)
+    assert p.eta_s(now=15.0) == pytest.approx(8000 / 200)
+    p.counter[work.WARMING] = 1  # another worker starts compiling: no estimate, window gone
+    assert p.eta_s(now=16.0) is None
+    p.counter[work.WARMING] = 0
+    work.add_episodes(4000)
+    assert p.eta_s(now=20.0) is None  # the window restarted: one sample again
+    work.add_episodes(1000)
+    assert p.eta_s(now=25.0) == pytest.approx(3000 / 200)
+    p.close()
+    work.share(None)

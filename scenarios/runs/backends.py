@@ -24,6 +24,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
 
+from scenarios.runs import work
 from scenarios.runs.physics_batch import plan_tasks
 from scenarios.runs.run import run_task
 from scenarios.runs.spec import RunSpec
@@ -61,8 +62,6 @@ class Progress:
 
     def __init__(self, total: int, enabled: bool | None = None, interval_s: float = 5.0,
                  stream: Any = None, window_s: float = 20.0) -> None:
-        from scenarios.runs import work
-
         self.total, self.done, self.t0 = total, 0, time.perf_counter()
         self.episodes_total = 0
         self.counter = work.new_counter()
@@ -89,12 +88,17 @@ class Progress:
 
     @property
     def episodes_done(self) -> int:
-        return int(self.counter.value)
+        return work.episodes(self.counter)
 
     def eta_s(self, now: float | None = None) -> float | None:
-        """Seconds left at the recent rate of episodes, or None while too early to say."""
+        """Seconds left at the recent rate of episodes, or None while too early to say: while
+        a worker warms up (compiles a method's kernels, :func:`scenarios.runs.work.warm_up`)
+        and until episodes have flowed for a few seconds after."""
         now = time.perf_counter() if now is None else now
         done = self.episodes_done
+        if work.warming(self.counter):  # a rate measured across a compile says nothing
+            self._samples.clear()
+            return None
         self._samples.append((now, done))
         while len(self._samples) > 2 and now - self._samples[1][0] >= self.window_s:
             self._samples.pop(0)
@@ -110,12 +114,14 @@ class Progress:
         elapsed = time.perf_counter() - self.t0
         eta = self.eta_s()
         left = "" if eta is None or self.done >= self.total else f", ~{eta:.0f} s left"
-        work = ""
+        if eta is None and self.done < self.total and work.warming(self.counter):
+            left = ", compiling kernels (no estimate yet)"
+        episodes = ""
         done = min(self.episodes_done, self.episodes_total)
         if self.episodes_total and (done or not self.done):  # runs elsewhere (Ray) count none
-            work = (f"{done:,}/{self.episodes_total:,} episodes "
-                    f"({100 * done / self.episodes_total:.0f} %), ")
-        return (f"progress: {work}{self.done}/{self.total} runs done, {elapsed:.0f} s "
+            episodes = (f"{done:,}/{self.episodes_total:,} episodes "
+                        f"({100 * done / self.episodes_total:.0f} %), ")
+        return (f"progress: {episodes}{self.done}/{self.total} runs done, {elapsed:.0f} s "
                 f"elapsed{left}")
 
     def _heartbeat(self) -> None:
@@ -190,8 +196,6 @@ class _Collector:
 def _init_worker(counter: Any = None) -> None:
     """Pool worker initializer: the signals (:func:`_ignore_sigint`) and the sweep's shared
     episode counter (:mod:`scenarios.runs.work`)."""
-    from scenarios.runs import work
-
     _ignore_sigint()
     work.share(counter)
 

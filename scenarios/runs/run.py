@@ -26,9 +26,12 @@ from sim.scenario import Scenario
 def run_task(specs: Sequence[Any]) -> list[dict[str, Any]]:
     """One task of :func:`scenarios.runs.physics_batch.plan_tasks`: a single run, or a
     physics batch."""
-    if len(specs) == 1 and not batchable(specs[0]):
-        return [run_one(specs[0])]
-    return run_physics_batch(specs)
+    from scenarios.runs.work import warm_up
+
+    with warm_up(sp.method for sp in specs):
+        if len(specs) == 1 and not batchable(specs[0]):
+            return [run_one(specs[0])]
+        return run_physics_batch(specs)
 
 
 def run_one(spec: RunSpec) -> dict[str, Any]:

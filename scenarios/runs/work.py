@@ -6,34 +6,89 @@ run's compilation as work. Each training loop adds the episodes it finishes to o
 counter shared by every worker process (:func:`share` in each worker, from the pool's
 initializer), so :class:`scenarios.runs.backends.Progress` can say how much of the
 sweep's episodes are done and estimate the rest from the recent rate.
+
+The same shared block counts the workers that are *warming up*: running the first task
+of a method in their process, which on a cold numba cache is mostly compiling (tens of
+seconds for some methods, during which the other worker's episodes flow at a rate no
+later minute will see). While any worker warms up, the estimate is withheld and its
+rate window restarts (:meth:`Progress.eta_s`): a time left extrapolated from a compile
+was 8x too long on the main command.
 """
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
+from collections.abc import Iterable, Iterator
 from typing import Any
 
-_counter: Any = None  # a multiprocessing.Value("q") while a sweep runs, else None
+EPISODES, WARMING = 0, 1  # slots of the shared block
+
+_shared: Any = None  # a multiprocessing.Array("q", 2) while a sweep runs, else None
+_warm: set[str] = set()  # methods whose first task ran in this process
+_warming_here = False  # this process counts in the WARMING slot right now
 
 
 def new_counter() -> Any:
-    """A counter of episodes that worker processes can share (passed to the pool's
-    initializer)."""
-    return multiprocessing.Value("q", 0)
+    """The block of counters worker processes share (passed to the pool's initializer):
+    episodes finished, workers warming up."""
+    return multiprocessing.Array("q", 2)
 
 
 def share(counter: Any) -> None:
-    """Make ``counter`` this process's episode counter (None: count nothing)."""
-    global _counter
-    _counter = counter
+    """Make ``counter`` this process's shared block (None: count nothing). A process that
+    joins a sweep warms every method up again: its kernels are not loaded yet."""
+    global _shared, _warming_here
+    _shared = counter
+    _warm.clear()
+    _warming_here = False
+
+
+def episodes(counter: Any) -> int:
+    return int(counter[EPISODES])
+
+
+def warming(counter: Any) -> int:
+    """How many processes are in the first task of a method right now."""
+    return int(counter[WARMING])
+
+
+def _add(slot: int, n: int) -> None:
+    c = _shared
+    if c is not None and n:
+        with c.get_lock():
+            c[slot] += n
 
 
 def add_episodes(n: int) -> None:
-    """``n`` more episodes finished in this process (a no-op outside a sweep)."""
-    c = _counter
-    if c is not None and n:
-        with c.get_lock():
-            c.value += n
+    """``n`` more episodes finished in this process (a no-op outside a sweep). The first
+    episodes of a warming task end its warm-up: its training kernel is compiled by then
+    (the greedy-test loops compile within its first chunk too)."""
+    _end_warming()
+    _add(EPISODES, n)
+
+
+def _end_warming() -> None:
+    global _warming_here
+    if _warming_here:
+        _warming_here = False
+        _add(WARMING, -1)
+
+
+@contextlib.contextmanager
+def warm_up(methods: Iterable[str]) -> Iterator[None]:
+    """Count this process as warming up while a task runs the first time any of
+    ``methods`` runs here, until its first episodes finish (or the task ends)."""
+    global _warming_here
+    new = set(methods) - _warm
+    if new and _shared is not None and not _warming_here:
+        _warm.update(new)
+        _warming_here = True
+        _add(WARMING, 1)
+    try:
+        yield
+    finally:
+        _end_warming()
 
 
 class CountingObserver:

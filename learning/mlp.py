@@ -55,12 +55,21 @@ def net(w, x, s, a, n_hidden):
 
 
 @njit(cache=True)
-def net_row(w, x, s, out):
-    """out[0, a] = net_a(x[s]) for every action (``out`` is float64[1, nA])."""
+def net_row(w, x, s, out, hid):
+    """out[0, a] = net_a(x[s]) for every action (``out`` is float64[1, nA]); ``hid[a, j]``
+    keeps each net's hidden activations there, which the gradient at s reuses."""
     n_actions = out.shape[1]
     n_hidden = n_hidden_of(w, n_actions)
+    h2 = 2 * n_hidden
+    x0, x1 = x[s, 0], x[s, 1]
     for a in range(n_actions):
-        out[0, a] = net(w, x, s, a, n_hidden)
+        o = a * (4 * n_hidden + 1)
+        v = w[o + 4 * n_hidden]
+        for j in range(n_hidden):
+            hj = _sigmoid(w[o + 2 * j] * x0 + w[o + 2 * j + 1] * x1 + w[o + h2 + j])
+            hid[a, j] = hj
+            v += w[o + 3 * n_hidden + j] * hj
+        out[0, a] = v
 
 
 @njit(cache=True)
@@ -81,33 +90,57 @@ def add_gradient(w, x, s, a, n_hidden, e):
 
 
 @njit(cache=True)
-def q_lambda_net(w, e, x, s, a, r, s2, terminated, alpha, gamma, lam, q_scale, scratch):
+def _add_gradient_at(w, x0, x1, a, n_hidden, hid, e):
+    """:func:`add_gradient` from the hidden activations ``hid[a]`` that :func:`net_row`
+    kept at the same input (the same numbers, without their 10 exponentials)."""
+    o = a * (4 * n_hidden + 1)
+    h2 = 2 * n_hidden
+    h3 = 3 * n_hidden
+    for j in range(n_hidden):
+        hj = hid[a, j]
+        e[o + h3 + j] += hj  # dW2_j
+        g = w[o + h3 + j] * hj * (1.0 - hj)
+        e[o + 2 * j] += g * x0  # dW1_j0
+        e[o + 2 * j + 1] += g * x1  # dW1_j1
+        e[o + h2 + j] += g  # db1_j
+    e[o + 4 * n_hidden] += 1.0  # db2
+
+
+@njit(cache=True)
+def q_lambda_net(w, e, x, s, a, r, s2, terminated, alpha, gamma, lam, q_scale, scratch, hid,
+                 row_of):
     """Watkins Q(lambda) with gradient traces over the nets, in net units (Q / q_scale).
 
     delta = r/q_scale + gamma * max_b net_b(x_s') [not terminated] - net_a(x_s);
     traces: e <- gamma*lambda*e if a was greedy else 0; then e += grad net_a(x_s);
-    w <- w + alpha * delta * e. ``scratch`` is a float64[1, nA] work row.
+    w <- w + alpha * delta * e. ``scratch`` (float64[1, nA]) and ``hid`` (float64[nA, H])
+    hold the nets' outputs and hidden activations at state ``row_of[0]`` for the current
+    weights: the behaviour policy has just evaluated them at s, so they are reused, not
+    recomputed (every number is the one the recomputation gives). The weights change
+    here, so ``row_of[0]`` is -1 on return.
     """
     n_actions = scratch.shape[1]
     n_hidden = n_hidden_of(w, n_actions)
-    net_row(w, x, s, scratch)
+    if row_of[0] != s:
+        net_row(w, x, s, scratch, hid)
     qa = scratch[0, a]
     greedy = True
     for b in range(n_actions):
         if scratch[0, b] > qa:
             greedy = False
+    gl = gamma * lam if greedy else 0.0
+    for i in range(e.shape[0]):
+        e[i] *= gl
+    _add_gradient_at(w, x[s, 0], x[s, 1], a, n_hidden, hid, e)  # before hid moves to s'
     target = r / q_scale
     if not terminated:
-        net_row(w, x, s2, scratch)
+        net_row(w, x, s2, scratch, hid)
         m = scratch[0, 0]
         for b in range(1, n_actions):
             m = max(m, scratch[0, b])
         target += gamma * m
     delta = target - qa
-    gl = gamma * lam if greedy else 0.0
-    for i in range(e.shape[0]):
-        e[i] *= gl
-    add_gradient(w, x, s, a, n_hidden, e)
     c = alpha * delta
     for i in range(w.shape[0]):
         w[i] += c * e[i]
+    row_of[0] = -1

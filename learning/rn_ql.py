@@ -48,9 +48,12 @@ class State(NamedTuple):
     e: np.ndarray  # float64[like w]; their gradient traces
     x: np.ndarray  # float64[nS, 2]; each state's input, the cell centre in [0, 1]^2 (derived)
     row: np.ndarray  # float64[1, nA]; scratch: the nets' outputs at one state
+    hidden: np.ndarray  # float64[nA, H]; scratch: their hidden activations there (derived)
+    row_of: np.ndarray  # int64[1]; the state whose outputs row and hidden hold for the
+    #                     current weights, -1 for none (derived)
 
 
-DERIVED = ("x",)
+DERIVED = ("x", "hidden", "row_of")
 
 
 def init_state(cfg: RNQL, geom: Geometry, rng: np.random.Generator) -> State:
@@ -58,13 +61,15 @@ def init_state(cfg: RNQL, geom: Geometry, rng: np.random.Generator) -> State:
     w = mlp.init_weights(geom.n_actions, HIDDEN, cfg.init_range, rng)
     return State(cfg.params(), new_tally(), w, np.zeros_like(w),
                  mlp.normalised_inputs(geom.coords, geom.bounds_m),
-                 np.zeros((1, geom.n_actions)))
+                 np.zeros((1, geom.n_actions)), np.zeros((geom.n_actions, HIDDEN)),
+                 np.full(1, -1, dtype=np.int64))
 
 
 @njit(**HOOK)
 def act(st, s, rng):
-    """Epsilon-greedy on the nets' Q(s, .)."""
-    mlp.net_row(st.w, st.x, s, st.row)
+    """Epsilon-greedy on the nets' Q(s, .) (kept for :func:`update` at s)."""
+    mlp.net_row(st.w, st.x, s, st.row, st.hidden)
+    st.row_of[0] = s
     return eps_greedy(st.row, 0, st.par.eps, rng)
 
 
@@ -72,7 +77,7 @@ def act(st, s, rng):
 def update(st, s, a, r, s2, terminated, rng):
     p = st.par
     mlp.q_lambda_net(st.w, st.e, st.x, s, a, r, s2, terminated, p.alpha, p.gamma, p.lam,
-                     p.q_scale, st.row)
+                     p.q_scale, st.row, st.hidden, st.row_of)
 
 
 @njit(**HOOK)
@@ -83,14 +88,15 @@ def begin(st, s0):
 
 @njit(**HOOK)
 def exploit(st, s):
-    mlp.net_row(st.w, st.x, s, st.row)
+    mlp.net_row(st.w, st.x, s, st.row, st.hidden)
+    st.row_of[0] = s
     return argmax_first(st.row, 0)
 
 
 @njit(cache=True)
-def _net_table(w, x, scratch, out):
+def _net_table(w, x, scratch, hid, out):
     for s in range(out.shape[0]):
-        mlp.net_row(w, x, s, scratch)
+        mlp.net_row(w, x, s, scratch, hid)
         out[s, :] = scratch[0, :]
 
 
@@ -101,5 +107,5 @@ def n_states(st: State) -> int:
 def q_table(st: State) -> np.ndarray:
     """float64[nS, nA]: the nets evaluated at every state, in reward units."""
     out = np.zeros((st.x.shape[0], st.row.shape[1]))
-    _net_table(st.w, st.x, np.zeros_like(st.row), out)
+    _net_table(st.w, st.x, np.zeros_like(st.row), np.zeros_like(st.hidden), out)
     return out * st.par.q_scale

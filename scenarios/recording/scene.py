@@ -10,6 +10,7 @@ not mirrored).
 
 from __future__ import annotations
 
+import functools
 import json
 import subprocess
 from collections.abc import Sequence
@@ -93,8 +94,10 @@ def kind_part(kind: str) -> str:
 # ------------------------------------------------------------------ metadata
 
 
+@functools.lru_cache(maxsize=8)
 def git_commit(cwd: Path | None = None) -> str | None:
-    """HEAD of the repository holding this file (``+dirty`` if modified), or None."""
+    """HEAD of the repository holding this file (``+dirty`` if modified), or None. Asked
+    once per process and folder: a comparison's recording opens one stream per run."""
     cwd = cwd or Path(__file__).resolve().parent
     try:
         head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=cwd, capture_output=True,

@@ -87,56 +87,45 @@ def run_episodes(st, model, n_episodes: int, rng: np.random.Generator,
                     rng if start_rng is None else start_rng, out, trace))
 
 
-@njit(cache=True)
-def greedy_route(st, next_state, terminal, start, max_steps, route):
-    """Follow the exploitation policy from ``start`` for at most ``max_steps`` steps.
+ROUTE, SHORTEST, ROLLOUTS = 0, 1, 2  # what :func:`_read_policy` reads
 
-    Writes the visited states to ``route`` (length >= max_steps + 1) and returns
-    (route length in steps or -1 if no terminal state was reached, states written).
-    A deterministic policy in a deterministic MDP that revisits a state (a bump
-    included) loops forever, so the test stops there with -1.
+
+@njit(cache=True)
+def _read_policy(st, what, next_state, terminal, distance, states, start, max_steps, eps, n,
+                 rng, route):
+    """The method's exploitation policy read one of three ways (``what``): the greedy route
+    from ``start`` (:func:`greedy_route`), the share of ``states`` whose action is a BFS step
+    toward G (:func:`on_shortest_fraction`), or ``n`` epsilon-greedy rollouts
+    (:func:`epsilon_rollouts`). One compiled entry point per method, not three: each entry
+    costs a method ~1-3 s of compilation on a cold cache whatever its size (the state's
+    unboxing, numba's passes), so the three loops share one. Returns (length, states
+    written, fraction, rollout lengths), the fields ``what`` does not read left 0 / empty.
     """
-    seen = np.zeros(next_state.shape[0], dtype=np.bool_)
-    s = start
-    route[0] = s
-    seen[s] = True
-    for t in range(max_steps):
-        s2 = next_state[s, exploit_call(st, s)]
-        route[t + 1] = s2
-        if terminal[s2]:
-            return t + 1, t + 2
-        if seen[s2]:
-            return -1, t + 2
-        seen[s2] = True
-        s = s2
-    return -1, max_steps + 1
-
-
-@njit(cache=True)
-def on_shortest_fraction(st, next_state, distance, states):
-    """Fraction of ``states`` whose exploitation action moves one BFS step closer to the goal."""
-    good = 0
-    for i in range(states.shape[0]):
-        s = states[i]
-        a = exploit_call(st, s)
-        if distance[next_state[s, a]] == distance[s] - 1:
-            good += 1
-    return good / max(states.shape[0], 1)
-
-
-@njit(cache=True)
-def epsilon_rollouts(st, next_state, terminal, start, max_steps, eps, n, rng):
-    """Route lengths of ``n`` rollouts from ``start`` with the epsilon-greedy learning policy.
-
-    The paper's own test ("put the agent at S and let it search with its learning
-    policy"), *without* learning: the agent is not updated, so the rollouts never
-    change the trained agent or the strict greedy test. Each step: with
-    probability ``eps`` a uniformly random action, else the exploitation action.
-    A rollout that does not reach a terminal state in ``max_steps`` gives -1.
-    Draws only from ``rng`` (the run's evaluation stream).
-    """
+    out = np.full(n if what == ROLLOUTS else 0, -1, dtype=np.int64)
+    if what == ROUTE:
+        seen = np.zeros(next_state.shape[0], dtype=np.bool_)
+        s = start
+        route[0] = s
+        seen[s] = True
+        for t in range(max_steps):
+            s2 = next_state[s, exploit_call(st, s)]
+            route[t + 1] = s2
+            if terminal[s2]:
+                return t + 1, t + 2, 0.0, out
+            if seen[s2]:
+                return -1, t + 2, 0.0, out
+            seen[s2] = True
+            s = s2
+        return -1, max_steps + 1, 0.0, out
+    if what == SHORTEST:
+        good = 0
+        for i in range(states.shape[0]):
+            s = states[i]
+            a = exploit_call(st, s)
+            if distance[next_state[s, a]] == distance[s] - 1:
+                good += 1
+        return 0, 0, good / max(states.shape[0], 1), out
     n_actions = next_state.shape[1]
-    out = np.full(n, -1, dtype=np.int64)
     for i in range(n):
         s = start
         for t in range(max_steps):
@@ -148,4 +137,50 @@ def epsilon_rollouts(st, next_state, terminal, start, max_steps, eps, n, rng):
             if terminal[s]:
                 out[i] = t + 1
                 break
-    return out
+    return 0, 0, 0.0, out
+
+
+def _unused(dtype: type, read_only: bool) -> np.ndarray:
+    """An empty array for an argument a read does not use, typed like the tabular model's own
+    (read-only) or the caller's route buffer, so every read shares one compiled signature."""
+    a = np.zeros(0, dtype=dtype)
+    a.setflags(write=not read_only)
+    return a
+
+
+_NO_STATES, _NO_TERMINAL = _unused(np.int32, True), _unused(np.bool_, True)
+_NO_ROUTE = _unused(np.int32, False)
+_IDLE_RNG = np.random.default_rng(0)  # never drawn from: the reads that draw take the caller's
+
+
+def greedy_route(st, next_state, terminal, start, max_steps, route):
+    """Follow the exploitation policy from ``start`` for at most ``max_steps`` steps.
+
+    Writes the visited states to ``route`` (length >= max_steps + 1) and returns
+    (route length in steps or -1 if no terminal state was reached, states written).
+    A deterministic policy in a deterministic MDP that revisits a state (a bump
+    included) loops forever, so the test stops there with -1.
+    """
+    length, written, _, _ = _read_policy(st, ROUTE, next_state, terminal, _NO_STATES,
+                                         _NO_STATES, start, max_steps, 0.0, 0, _IDLE_RNG, route)
+    return length, written
+
+
+def on_shortest_fraction(st, next_state, distance, states):
+    """Fraction of ``states`` whose exploitation action moves one BFS step closer to the goal."""
+    return _read_policy(st, SHORTEST, next_state, _NO_TERMINAL, distance, states, 0, 0, 0.0, 0,
+                        _IDLE_RNG, _NO_ROUTE)[2]
+
+
+def epsilon_rollouts(st, next_state, terminal, start, max_steps, eps, n, rng):
+    """Route lengths of ``n`` rollouts from ``start`` with the epsilon-greedy learning policy.
+
+    The paper's own test ("put the agent at S and let it search with its learning
+    policy"), *without* learning: the agent is not updated, so the rollouts never
+    change the trained agent or the strict greedy test. Each step: with
+    probability ``eps`` a uniformly random action, else the exploitation action.
+    A rollout that does not reach a terminal state in ``max_steps`` gives -1.
+    Draws only from ``rng`` (the run's evaluation stream).
+    """
+    return _read_policy(st, ROLLOUTS, next_state, terminal, _NO_STATES, _NO_STATES, start,
+                        max_steps, eps, n, rng, _NO_ROUTE)[3]

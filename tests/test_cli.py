@@ -169,7 +169,7 @@ def test_scen_errors_are_one_line(capsys, tmp_path):
 
 def test_a_scenario_name_never_sends_the_default_recording_out_of_recordings(tmp_path,
                                                                              monkeypatch):
-    from scenarios.cli.args import record_path
+    from scenarios.cli.paths import record_path
 
     monkeypatch.chdir(tmp_path)
     args = type("A", (), {"record": ""})()

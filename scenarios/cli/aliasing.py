@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from scenarios.cli.args import check_output_file, positive, scenario_key, seed_value
+from scenarios.cli.args import positive, scenario_key, seed_value
+from scenarios.cli.paths import check_output_file
 
 MAX_REPEATS = 100_000  # drives per (cell, action)
 

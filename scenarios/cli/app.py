@@ -28,14 +28,13 @@ from scenarios.cli import (
     view,
 )
 from scenarios.cli.args import (
-    RECORD_DEFAULT,
     add_fidelity_arg,
     add_record_args,
     add_scenario_args,
     add_training_args,
     add_world_args,
-    check_empty_paths,
 )
+from scenarios.cli.paths import RECORD_DEFAULT, check_empty_paths
 from scenarios.runs.backends import SweepError
 from sim.errors import InputError
 

@@ -17,12 +17,12 @@ from scenarios.cli.args import (
     physics_budget,
     positive,
     problem_arg,
-    record_path,
     rewards_note,
     seed_value,
     starts_note,
     unique,
 )
+from scenarios.cli.paths import record_path
 from scenarios.runs.spec import ExperimentError, make_config
 from sim.errors import InputError
 

@@ -9,12 +9,11 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.cli.args import (
-    check_output_file,
     check_world,
     physics_budget,
     problem_arg,
-    record_path,
 )
+from scenarios.cli.paths import check_output_file, record_path
 
 
 def cmd_route(args: argparse.Namespace) -> int:

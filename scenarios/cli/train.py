@@ -10,18 +10,17 @@ from pathlib import Path
 from learning.streams import streams
 from scenarios.cli.args import (
     MAX_EPISODES,
-    check_output_file,
     check_world,
     parse_overrides,
     physics_budget,
     positive,
     print_run,
     problem_arg,
-    record_path,
     rewards_note,
     seed_value,
     starts_note,
 )
+from scenarios.cli.paths import check_output_file, record_path
 from scenarios.runs.spec import ExperimentError, make_config
 from sim.files import atomic_write_bytes, atomic_write_text
 

@@ -25,6 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
+from learning.checkpoint_fields import (
+    CheckpointError,
+    check_rng_state,
+    read_field,
+    read_header,
+    read_metrics,
+)
 from learning.config import FieldMovedError, MethodConfig
 from learning.geometry import Geometry
 from learning.limits import MAX_MAGNITUDE, config_problem
@@ -33,9 +40,6 @@ from learning.registry import METHODS, config_from_fields, family_of, n_states_o
 from learning.state import init_state
 
 FORMAT = "rnhql-checkpoint-2"
-METRIC_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std",
-                 "test_episodes", "test_route_length")
-
 # float state arrays that hold learned values (Q, network weights, V): finite and sane in
 # magnitude, or every later update is inf or NaN. Others may hold inf by design (a move
 # reading's "not seen yet") and are only checked for NaN.
@@ -57,21 +61,9 @@ INDEX_RANGES: dict[str, tuple[int, str]] = {
     "tally.n_shaped": (0, ""),
 }
 
-# the largest array a checkpoint may hold, read from its .npy header before it is read: a
-# 4096 x 4096 arena's Q-table is 0.5 GiB, RNH-QL's dense features on it 13 GiB at k = 10
-MAX_ARRAY_BYTES = 16 * 1024**3
-# per-episode metrics (one value per episode trained) and per-test ones (one per test)
-EPISODE_METRICS = ("steps", "success", "returns", "wall_time_s", "shaping_mean",
-                   "shaping_std")
-TEST_METRICS = ("test_episodes", "test_route_length")
-
 _UMASK = os.umask(0)
 os.umask(_UMASK)
 _FILE_MODE = 0o666 & ~_UMASK  # what open() would have given the file
-
-
-class CheckpointError(ValueError):
-    """A checkpoint that cannot be used: unreadable, or not for this run."""
 
 
 @dataclass(eq=False)
@@ -249,50 +241,6 @@ def save_checkpoint(path: str | os.PathLike, ckpt: Checkpoint) -> Path:
     return path
 
 
-def _header(data, name: str, path: Path) -> tuple[tuple[int, ...], np.dtype]:
-    """The shape and dtype ``name``'s .npy header claims, read without reading the array:
-    a claim beyond :data:`MAX_ARRAY_BYTES` or beyond the bytes the file holds is refused
-    before anything is allocated."""
-    from numpy.lib import format as npy
-
-    try:
-        info = data.zip.getinfo(f"{name}.npy")
-        with data.zip.open(info) as f:
-            version = npy.read_magic(f)
-            shape, _fortran, dtype = (npy.read_array_header_1_0(f) if version == (1, 0)
-                                      else npy.read_array_header_2_0(f))
-    except (KeyError, ValueError, OSError, EOFError, zipfile.BadZipFile, AttributeError,
-            TypeError, SyntaxError):
-        raise CheckpointError(f"{path}: field {name!r} is unreadable: not an rnhql checkpoint "
-                              "(corrupt, or an .npz from elsewhere); train again with "
-                              "--save") from None
-    size = int(np.prod(shape, dtype=object)) * dtype.itemsize
-    if size > MAX_ARRAY_BYTES:
-        raise CheckpointError(f"{path}: field {name!r} claims shape {shape} ({size:,} bytes), "
-                              f"more than the limit of {MAX_ARRAY_BYTES:,} bytes; the file is "
-                              "corrupt: train again with --save")
-    if size > info.file_size:
-        raise CheckpointError(f"{path}: field {name!r} claims shape {shape} ({size:,} bytes) "
-                              f"but the file holds {info.file_size:,}; the file is corrupt: "
-                              "train again with --save")
-    return tuple(shape), dtype
-
-
-def _field(data, name: str, path: Path) -> np.ndarray:
-    if name not in data.files:
-        raise CheckpointError(f"{path}: field {name!r} is missing; the file is not a complete "
-                              "rnhql checkpoint, delete it and train again")
-    if getattr(data, "zip", None) is not None:
-        _header(data, name, path)
-    try:
-        return data[name]
-    except (ValueError, OSError, EOFError, zipfile.BadZipFile):  # numpy's text would suggest
-        # loading pickled data unsafely: advice a user must never take for a checkpoint
-        raise CheckpointError(f"{path}: field {name!r} is unreadable: not an rnhql checkpoint "
-                              "(corrupt, or an .npz from elsewhere); train again with "
-                              "--save") from None
-
-
 def _tiny_geometry() -> Geometry:
     """A 3 x 3 open arena: a template state on it has every array's dtype and rank."""
     ix, iy = np.meshgrid(np.arange(3), np.arange(3))
@@ -313,7 +261,7 @@ def _state(data, cfg: MethodConfig, path: Path, geometry: Geometry | None,
         rebuild(template, lambda name, want: want if name in derived
                 else _stored(data, path, name, want))
         if n_states is not None and "state_q" in data.files:
-            shape = _header(data, "state_q", path)[0]
+            shape = read_header(data, "state_q", path)[0]
             got = int(shape[0]) if shape else -1
             if got != n_states:
                 raise CheckpointError(f"{path}: field 'n_states' is {got} but the scenario "
@@ -337,7 +285,7 @@ def _stored(data, path: Path, name: str, want: np.ndarray) -> np.ndarray:
     """The stored array ``state_<name>``, of ``want``'s dtype and rank."""
     if want.size == 0 and f"state_{name}" not in data.files:
         return want  # an empty field added after the checkpoint was written: nothing to read
-    arr = _field(data, f"state_{name}", path)
+    arr = read_field(data, f"state_{name}", path)
     if arr.dtype != want.dtype or arr.ndim != want.ndim:
         raise CheckpointError(f"{path}: field 'state_{name}' is {arr.dtype}[{arr.ndim}d], "
                               f"expected {want.dtype}[{want.ndim}d]; the file is corrupt, "
@@ -349,63 +297,14 @@ def _stored(data, path: Path, name: str, want: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(arr).copy()
 
 
-BIT_GENERATORS = ("PCG64", "PCG64DXSM", "MT19937", "Philox", "SFC64")  # numpy's own
-
-
-def _check_rng_state(state: object, fld: str, path: Path) -> None:
-    """A generator state numpy accepts (checked now: a resumed run restores it only after
-    the checks that name the file)."""
-    name = state.get("bit_generator") if isinstance(state, dict) else None
-    try:
-        if name not in BIT_GENERATORS:
-            raise ValueError(f"names no numpy bit generator ({name!r})")
-        getattr(np.random, name)().state = state
-    except (ValueError, TypeError, KeyError, OverflowError) as exc:
-        raise CheckpointError(f"{path}: field {fld!r} is not a generator state ({exc}); the "
-                              "file is corrupt, delete it and train again") from None
-
-
-def _metrics(data, path: Path, episodes: int) -> dict[str, np.ndarray]:
-    """The metrics so far: every one of :data:`METRIC_FIELDS` or none (an agent saved from
-    a physics run keeps none). A file with some missing would report figures computed
-    from part of the record (a missing ``success`` read as "never"), so it is refused, as
-    is one whose per-episode metrics do not cover the episodes its state has trained."""
-    present = [k for k in METRIC_FIELDS if f"metric_{k}" in data.files]
-    if not present:
-        return {}
-    missing = [k for k in METRIC_FIELDS if k not in present]
-    if missing:
-        raise CheckpointError(f"{path}: field 'metric_{missing[0]}' is missing while other "
-                              "metrics are there; the file is incomplete: train again with "
-                              "--save")
-    metrics = {k: _field(data, f"metric_{k}", path).copy() for k in METRIC_FIELDS}
-    for k in EPISODE_METRICS:
-        if metrics[k].shape != (episodes,):
-            raise CheckpointError(f"{path}: field 'metric_{k}' has shape {metrics[k].shape} "
-                                  f"but the agent has trained {episodes} episodes; the file "
-                                  "is corrupt: train again with --save")
-    if metrics["test_episodes"].shape != metrics["test_route_length"].shape or \
-            metrics["test_episodes"].ndim != 1:
-        raise CheckpointError(f"{path}: fields 'metric_test_episodes' and "
-                              "'metric_test_route_length' differ in length; the file is "
-                              "corrupt: train again with --save")
-    for k, arr in metrics.items():
-        if arr.dtype.kind == "f" and arr.size and (not np.isfinite(arr).all()
-                                                   or np.abs(arr).max() > MAX_MAGNITUDE):
-            raise CheckpointError(f"{path}: field 'metric_{k}' holds non-finite values or "
-                                  f"values beyond {MAX_MAGNITUDE:g}; the file is corrupt: "
-                                  "train again with --save")
-    return metrics
-
-
 def _read(data, path: Path, method: str | None, geometry: Geometry | None,
           n_states: int | None = None):
     """Every field of an open npz, checked; raises CheckpointError naming the field."""
-    fmt = str(_field(data, "format", path))
+    fmt = str(read_field(data, "format", path))
     if fmt != FORMAT:
         raise CheckpointError(f"{path}: field 'format' is {fmt!r}, expected {FORMAT!r}; "
                               "train again with this version")
-    name = str(_field(data, "method", path))
+    name = str(read_field(data, "method", path))
     if name not in METHODS:
         raise CheckpointError(f"{path}: field 'method' is {name!r}, not one of "
                               f"{', '.join(METHODS)}; the file is corrupt, train again")
@@ -414,11 +313,11 @@ def _read(data, path: Path, method: str | None, geometry: Geometry | None,
                               f"asked for; resume with --method {name} or start "
                               "without --resume")
     try:
-        cfg = config_from_fields(name, json.loads(str(_field(data, "config", path))))
-        rng_state = json.loads(str(_field(data, "rng_state", path)))
-        start_rng_state = (json.loads(str(_field(data, "start_rng_state", path)))
+        cfg = config_from_fields(name, json.loads(str(read_field(data, "config", path))))
+        rng_state = json.loads(str(read_field(data, "rng_state", path)))
+        start_rng_state = (json.loads(str(read_field(data, "start_rng_state", path)))
                            if "start_rng_state" in data.files else None)
-        problem = (json.loads(str(_field(data, "problem", path)))
+        problem = (json.loads(str(read_field(data, "problem", path)))
                    if "problem" in data.files else None)
         if problem is not None and not isinstance(problem, dict):
             raise ValueError("problem is not a table")
@@ -433,15 +332,15 @@ def _read(data, path: Path, method: str | None, geometry: Geometry | None,
                               "the file is corrupt, delete it and train again") from None
     for fld, st in (("rng_state", rng_state), ("start_rng_state", start_rng_state)):
         if st is not None or fld == "rng_state":
-            _check_rng_state(st, fld, path)
+            check_rng_state(st, fld, path)
     problem_text = config_problem(cfg.fields())
     if problem_text is not None:
         raise CheckpointError(f"{path}: field 'config': {problem_text}; the file is corrupt "
                               "or edited: train again with --save")
     state = _state(data, cfg, path, geometry, n_states)
-    metrics = _metrics(data, path, episodes_done(state))
+    metrics = read_metrics(data, path, episodes_done(state))
     try:
-        env_steps = int(_field(data, "env_steps", path))
+        env_steps = int(read_field(data, "env_steps", path))
     except (TypeError, ValueError):
         raise CheckpointError(f"{path}: field 'env_steps' is not a number; the file is "
                               "corrupt, delete it and train again") from None

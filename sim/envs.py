@@ -21,7 +21,7 @@ from sim.env_args import DEFAULT_REWARDS
 ENV_SPECS = {
     "rnhql/GridRoute-v0": "sim.grid.env:GridRouteEnv",
     "rnhql/PhysicsRoute-v0": "sim.physics.envs:PhysicsRouteEnv",
-    "rnhql/DiffDrive-v0": "sim.physics.envs:DiffDriveEnv",
+    "rnhql/DiffDrive-v0": "sim.physics.diffdrive_env:DiffDriveEnv",
 }
 # make_vec(id, num_envs=N, vectorization_mode="vector_entry_point"): N robots in one Space
 VECTOR_ENTRY_POINTS = {

@@ -12,7 +12,8 @@ import pytest
 
 from sim.grid import build_model
 from sim.grid.planning import bfs_route
-from sim.physics.envs import DIFFDRIVE_CONFIG, DiffDriveEnv, PhysicsRouteEnv
+from sim.physics.diffdrive_env import DIFFDRIVE_CONFIG, DiffDriveEnv
+from sim.physics.envs import PhysicsRouteEnv
 from sim.physics.world import PhysicsConfig, PhysicsWorld
 from sim.scenario import Scenario
 from sim.scenario_io import builtin_names, resolve_scenario

@@ -15,7 +15,8 @@ Modules, in import order (each imports only those above it):
   integrated as Chipmunk integrates it, contact steps handed back to Chipmunk;
 - :mod:`sim.physics.batch`: N robots in one ``pymunk.Space`` driven by that kernel;
 - :mod:`sim.physics.model`: the physics world's own tabular model (graded tests);
-- :mod:`sim.physics.envs`, :mod:`sim.physics.vector`: the gymnasium envs.
+- :mod:`sim.physics.envs`, :mod:`sim.physics.diffdrive_env`, :mod:`sim.physics.vector`:
+  the gymnasium envs (:mod:`sim.physics.env_parts`: what they share).
 """
 
 from sim.physics.jitcache import drop_stale_cache as _drop_stale_cache

@@ -48,7 +48,8 @@ from gymnasium.vector.utils import batch_space
 from sim.env_args import SCENARIO_REWARDS, config_arg, env_scenario, episode_limit
 from sim.grid.env import start_state_from_options
 from sim.physics.batch import RouteBatch
-from sim.physics.envs import DIFFDRIVE_CONFIG, DiffDriveEnv, PhysicsRouteEnv, diffdrive_periods
+from sim.physics.diffdrive_env import DIFFDRIVE_CONFIG, DiffDriveEnv, diffdrive_periods
+from sim.physics.envs import PhysicsRouteEnv
 from sim.physics.fidelity import Fidelity
 from sim.physics.static import PhysicsConfig
 from sim.physics.world import SharedSpace

@@ -10,7 +10,9 @@ A problem is ``MAP@PROTOCOL``. ``MAP`` is a generated map, regenerated from its 
   1-cell walls (:func:`sim.map_generators.maze`, ``--braid`` of its inner walls
   knocked out: loops, several routes);
 * ``KIND-N``: any other kind of :mod:`sim.map_generators` (``city-256`` is Berlin);
-* a path ending in ``.map``.
+* a path ending in ``.map``;
+* a built-in scenario (``rnhql scenarios``: the suite's maps, e.g. ``paper-50``), run as
+  it is (its S, G and steps per episode) for ``--suite-episodes`` episodes.
 
 S and G are the ends of the map's diameter (a double BFS sweep), the budget that of the
 large-map study (:mod:`scenarios.experiments.scaling_maps`): ``8 x the side`` episodes
@@ -42,6 +44,7 @@ from sim.files import atomic_write_text
 from sim.grid.planning import far_start_goal
 from sim.map_generators import KINDS, generate
 from sim.maps import movingai_to_cell, read_free_grid, write_free_grid
+from sim.scenario_io import builtin_names
 
 PROBLEMS = "maze-w4-256@s10,city-256@uniform"
 METHODS = "rnh-ql+,haql,dyna-q"
@@ -61,6 +64,7 @@ class Args:
     map_seed: int = arg(37, "generator seed of the generated maps (not one anything was "
                             "tuned on)")
     braid: float = arg(0.02, "share of a generated maze's inner walls knocked out")
+    suite_episodes: int = arg(3000, "episodes on a built-in scenario (the suite's budget)")
     rewards: str = arg("goal-only", "reward scheme")
     jobs: int = arg(1, "worker processes")
     resume: bool = arg(False, "skip runs already finished in --out")
@@ -129,17 +133,27 @@ def main(argv: list[str] | None = None) -> int:
     seeds = list(range(args.seeds))
     columns, rows = [], {}
     for name, _, protocol in problems:
-        toml, route, episodes = write_problem(name, share_of(protocol or "s10"), args.map_seed,
-                                              args.braid, out / "maps")
+        share = share_of(protocol or "s10")
+        if name in builtin_names():
+            from scenarios.runs.spec import load
+
+            scenario, episodes = name, args.suite_episodes
+            model = load(name, s_starts=share)[1]
+            route = int(model.distance_to_goal[model.start])
+            stem = f"{name}-s{round(share * 100)}"
+        else:
+            toml, route, episodes = write_problem(name, share, args.map_seed, args.braid,
+                                                  out / "maps")
+            scenario, stem = str(toml), toml.stem
         col = f"{name} {protocol or 's10'} (route {route})"
         columns.append(col)
         for label in labels:
             m, ov = method_of(label)
-            specs = make_specs(str(toml), [m], seeds, episodes, ["grid"], overrides=ov,
-                               rewards=args.rewards)
+            specs = make_specs(scenario, [m], seeds, episodes, ["grid"], overrides=ov,
+                               rewards=args.rewards, s_starts=share)
             print(f"{col}: {label}: {len(specs)} runs", file=sys.stderr)
             tag = re.sub(r"[^A-Za-z0-9+.=-]", "_", label)
-            res = run_sweep(specs, out / toml.stem / tag, run_local, resume=args.resume,
+            res = run_sweep(specs, out / stem / tag, run_local, resume=args.resume,
                             figures=False, jobs=args.jobs, progress=Progress(len(specs)))
             rows.setdefault(label, {})[col] = cell(res["summary"][m]["grid"], args.seeds)
     lines = ["| method | " + " | ".join(columns) + " |", "|---|" + "---|" * len(columns)]

@@ -52,16 +52,19 @@ class RNHQLPlus(MethodConfig):
       optimistic model's, every move (tried or not) valued by one step of look-ahead on
       Phi, a move the model holds blocked never; ties drawn. Q is still learned, off
       policy, and the test is unchanged. Why: by default a *tried* move is valued by its
-      Q, which lags behind a Phi that drops whenever a wall moves a distance, so an
-      untried move (valued by the model) beats it. In corridors several cells wide
-      every cell has untried moves of equal model value, and the agent wanders across
-      them instead of walking its route: on a 512² maze with 4-cell corridors 9 % of the
-      episodes reached G, the model still believed a route 336 moves shorter than the
-      real one after 4096 episodes, and the known-route test kept a route 24 moves too
-      long (its shortcuts were never tried). Acting on the model walks the route it
-      believes shortest, so each walk either confirms it (its moves are then seen to
-      work and the test follows them) or finds the wall that refutes it (HAQL's and
-      D* Lite's behaviour). Needs ``lookahead=1`` and ``shaping_scale > 0``.
+      Q, and on long routes Q holds the scale of earlier potentials: Phi = gamma^(d-1) r_G
+      spans ~70 orders of magnitude along a 3000-move route, and each wall that lengthens
+      a distance by hundreds of moves drops Phi there by 1e-8 or more, far faster than TD
+      steps of alpha shrink what Q learned before. On a 512² maze with 4-cell corridors a
+      cell's largest |Q| of a working move was a median 6e11 x Phi(s) at the end, the
+      max-Q move headed for G at 67 % of cells (92 % at 256²), 9 % of the episodes
+      reached G, the model still
+      believed a route 336 moves shorter than the real one after 4096 episodes, and the
+      known-route test kept a route 24 moves too long (at 11 of its 12 detours the move
+      one nearer G was never tried). Acting on the model walks the route it believes
+      shortest, so each walk either confirms it (its moves are then seen to work and the
+      test follows them) or finds the wall that refutes it (HAQL's and D* Lite's
+      behaviour). Needs ``lookahead=1`` and ``shaping_scale > 0``.
 
     With ``shaping_scale=0, lookahead=0`` it is Dyna-Q (bit for bit).
     """

@@ -30,3 +30,9 @@ def test_the_study_runs_and_prints_its_table(tmp_path, capsys):
     assert "| rnh-ql+:model_acting=1 |" in text and "maze-w2-24 uniform" in text
     assert text.count(" s |") == 2 * 3  # 2 methods x 3 problems
     assert "rooms-102 uniform (route 38)" in text
+
+
+def test_a_bad_artifact_name_is_refused_before_any_run(tmp_path):
+    with pytest.raises(SystemExit) as exc:
+        heldout.main(["--out", str(tmp_path / "h"), "--artifact", "Not A Name"])
+    assert exc.value.code == 2 and not (tmp_path / "h").exists()

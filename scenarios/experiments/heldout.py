@@ -37,7 +37,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from scenarios.experiments.args import arg, parse
+from scenarios.experiments.args import arg, parse, parser_of
 from scenarios.experiments.compare import make_specs, run_sweep
 from scenarios.runs.backends import Progress, run_local
 from sim.files import atomic_write_text
@@ -68,6 +68,8 @@ class Args:
     rewards: str = arg("goal-only", "reward scheme")
     jobs: int = arg(1, "worker processes")
     resume: bool = arg(False, "skip runs already finished in --out")
+    artifact: str | None = arg(None, "also write docs/results/heldout.NAME.json (a docs "
+                                     "table, rendered by scenarios.artifacts)", metavar="NAME")
 
 
 def problem_map(name: str, map_seed: int, braid: float) -> tuple[Any, str]:
@@ -127,6 +129,10 @@ def cell(stat: dict[str, Any], seeds: int) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse(Args, __doc__, argv)
+    if args.artifact:
+        from scenarios.artifacts import check_artifact_name
+
+        check_artifact_name(parser_of(Args, __doc__), args.artifact)
     out = Path(args.out)
     problems = [p.partition("@") for p in args.problems.split(",") if p]
     labels = [m for m in args.methods.split(",") if m]
@@ -156,13 +162,22 @@ def main(argv: list[str] | None = None) -> int:
             res = run_sweep(specs, out / stem / tag, run_local, resume=args.resume,
                             figures=False, jobs=args.jobs, progress=Progress(len(specs)))
             rows.setdefault(label, {})[col] = cell(res["summary"][m]["grid"], args.seeds)
-    lines = ["| method | " + " | ".join(columns) + " |", "|---|" + "---|" * len(columns)]
-    lines += [f"| {m} | " + " | ".join(c.get(k, "–") for k in columns) + " |"
-              for m, c in rows.items()]
-    text = (f"Rewards {args.rewards}, {args.seeds} seeds, map seed {args.map_seed}, maze braid "
-            f"{args.braid:g}; cells: optimal seeds / seeds · median episodes to a stable "
-            "optimal route · median wall time per run.\n\n" + "\n".join(lines) + "\n")
+    caption = (f"Rewards {args.rewards}, {args.seeds} seeds, map seed {args.map_seed}, maze "
+               f"braid {args.braid:g}; cells: optimal seeds / seeds · median episodes to a "
+               "stable optimal route · median wall time per run.")
+    data = {"caption": caption, "columns": columns, "rows": rows}
+    from scenarios.artifact_tables import heldout
+
+    text = heldout(data)
     atomic_write_text(out / "heldout.md", text)
+    if args.artifact:
+        from scenarios.artifacts import write_artifact
+
+        command = "python -m scenarios.experiments.heldout " + " ".join(
+            f"--{k.replace('_', '-')} {v}" for k, v in vars(args).items()
+            if v not in (None, False) and k not in ("artifact", "resume", "jobs"))
+        write_artifact(f"heldout.{args.artifact}", f"{command} --artifact {args.artifact}",
+                       ["grid"], data, study=__file__)
     print(text)
     return 0
 

@@ -22,13 +22,14 @@ def test_problems_and_methods_parse():
 
 def test_the_study_runs_and_prints_its_table(tmp_path, capsys):
     out = tmp_path / "h"
-    problems = "maze-w2-24@s20,maze-w2-24@uniform,rooms-102@uniform"
+    toml, _, _ = heldout.write_problem("maze-w2-24", 0.0, 5, 0.0, tmp_path / "own")
+    problems = f"maze-w2-24@s20,maze-w2-24@uniform,rooms-102@uniform,{toml}@uniform"
     assert heldout.main(["--out", str(out), "--problems", problems, "--suite-episodes", "30",
                          "--methods", "rnh-ql+,rnh-ql+:model_acting=1", "--seeds", "1"]) == 0
     text = (out / "heldout.md").read_text()
     assert text in capsys.readouterr().out
     assert "| rnh-ql+:model_acting=1 |" in text and "maze-w2-24 uniform" in text
-    assert text.count(" s |") == 2 * 3  # 2 methods x 3 problems
+    assert text.count(" s |") == 2 * 4  # 2 methods x 4 problems
     assert "rooms-102 uniform (route 38)" in text
 
 

@@ -12,7 +12,9 @@ A problem is ``MAP@PROTOCOL``. ``MAP`` is a generated map, regenerated from its 
 * ``KIND-N``: any other kind of :mod:`sim.map_generators` (``city-256`` is Berlin);
 * a path ending in ``.map``;
 * a built-in scenario (``rnhql scenarios``: the suite's maps, e.g. ``paper-50``), run as
-  it is (its S, G and steps per episode) for ``--suite-episodes`` episodes.
+  it is (its S, G and steps per episode) for ``--suite-episodes`` episodes;
+* a scenario ``.toml`` (e.g. Berlin with another S and G), run as it is for 8 x its
+  side episodes.
 
 S and G are the ends of the map's diameter (a double BFS sweep), the budget that of the
 large-map study (:mod:`scenarios.experiments.scaling_maps`): ``8 x the side`` episodes
@@ -140,13 +142,15 @@ def main(argv: list[str] | None = None) -> int:
     columns, rows = [], {}
     for name, _, protocol in problems:
         share = share_of(protocol or "s10")
-        if name in builtin_names():
+        if name in builtin_names() or name.endswith(".toml"):
             from scenarios.runs.spec import load
 
-            scenario, episodes = name, args.suite_episodes
             model = load(name, s_starts=share)[1]
+            side = int(model.coords.max() - model.coords.min() + 1)  # 1 m cells
+            scenario = name
+            episodes = args.suite_episodes if name in builtin_names() else 8 * side
             route = int(model.distance_to_goal[model.start])
-            stem = f"{name}-s{round(share * 100)}"
+            stem = f"{Path(name).stem}-s{round(share * 100)}"
         else:
             toml, route, episodes = write_problem(name, share, args.map_seed, args.braid,
                                                   out / "maps")

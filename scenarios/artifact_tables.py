@@ -241,6 +241,18 @@ def scaling_maps(d: dict[str, Any]) -> str:
             "route · median wall time per run.\n\n" + "\n\n".join(out) + "\n")
 
 
+@renderer("heldout")
+def heldout(d: dict[str, Any]) -> str:
+    """Held-out maps (issue 37): a row per method, a column per map and protocol; cells
+    optimal seeds / seeds · median episodes to a stable optimal route · median wall time."""
+    cols = d["columns"]
+    lines = [d["caption"], "", "| method | " + " | ".join(cols) + " |",
+             "|---|" + "---|" * len(cols)]
+    for row, cells in d["rows"].items():
+        lines.append(f"| {row} | " + " | ".join(cells.get(c, "–") for c in cols) + " |")
+    return "\n".join(lines) + "\n"
+
+
 @renderer("paper-claims")
 def paper_claims(d: dict[str, Any]) -> str:
     """The paper's claims, one by one: whether each holds here and what was measured."""

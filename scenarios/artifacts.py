@@ -101,7 +101,8 @@ def machine_load() -> dict[str, Any]:
     return {"cores": os.cpu_count(), "load_1min": load}
 
 
-TIMED_KINDS = {"scaling", "scaling-maps", "physics-batch", "paper-claims", "optimum", "memory"}
+TIMED_KINDS = {"scaling", "scaling-maps", "heldout", "physics-batch", "paper-claims", "optimum",
+               "memory"}
 
 
 def busy_note(doc: dict[str, Any]) -> str:

@@ -140,10 +140,19 @@ def small_rooms(seed: int) -> np.ndarray:
 
 def maze(size: int, seed: int, corridor: int = 3, braid: float = 0.05) -> np.ndarray:
     """A ``size``-cell maze with ``corridor``-cell corridors (wide enough that a large map
-    is not all walls), ``braid`` of its inner walls knocked out."""
+    is not all walls) and 1-cell walls, ``braid`` of its inner walls knocked out: Moving
+    AI's maze kind (``maze512-W-*``: corridors W cells wide) at ``braid=0``, a few loops
+    (several routes of different lengths) above. Every corridor, and every gap knocked
+    into a wall, is exactly ``corridor`` cells wide (tested), so ``corridor`` sets how many
+    equal-length routes run side by side."""
+    if corridor < 1 or not 0.0 <= braid <= 1.0:
+        raise ValueError(f"maze: corridor {corridor} must be >= 1 and braid {braid} in [0, 1]")
     rng = np.random.default_rng(seed)
     pitch = corridor + 1
     n = (size - 1) // pitch
+    if n < 2:
+        raise ValueError(f"maze: {size} cells hold no 2 x 2 lattice of {corridor}-cell "
+                         "corridors")
     lattice = np.zeros(size, dtype=bool)  # the rows (and columns) of the corridors
     for k in range(n):
         lattice[k * pitch + 1:k * pitch + 1 + corridor] = True
@@ -209,8 +218,10 @@ GENERATORS = {"city": city, "maze": maze, "rooms": rooms, "random": random_cells
 KINDS = tuple(GENERATORS)
 
 
-def generate(kind: str, size: int, seed: int) -> np.ndarray:
-    """The ``kind`` map (one of :data:`KINDS`) of ``size`` x ``size`` cells from ``seed``."""
+def generate(kind: str, size: int, seed: int, **options: int | float) -> np.ndarray:
+    """The ``kind`` map (one of :data:`KINDS`) of ``size`` x ``size`` cells from ``seed``;
+    ``options`` are the generator's own keywords (e.g. ``corridor=4, braid=0`` for a maze
+    of Moving AI's kind with 4-cell corridors)."""
     if kind not in GENERATORS:
         raise ValueError(f"unknown map kind {kind!r}: use one of {', '.join(GENERATORS)}")
-    return GENERATORS[kind](size, seed)
+    return GENERATORS[kind](size, seed, **options)

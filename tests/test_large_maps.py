@@ -21,6 +21,53 @@ def test_generated_maps_are_seeded_and_connected(kind):
     assert 0.3 < a.mean() < 0.95
 
 
+def _wall_segments(free, corridor):
+    """The maze's structure read back from the map: every lattice cell free, every wall
+    junction blocked, and each wall segment between two lattice cells all free (a gap
+    exactly ``corridor`` cells wide) or all blocked. Returns the number of gaps."""
+    pitch = corridor + 1
+    n = (free.shape[0] - 1) // pitch
+    inner = np.zeros_like(free)
+    inner[1:n * pitch, 1:n * pitch] = True
+    assert not (free & ~inner).any()  # nothing free beyond the lattice
+    on_wall = (np.arange(free.shape[0]) % pitch) == 0
+    assert free[np.outer(~on_wall, ~on_wall) & inner].all()  # every lattice cell free
+    assert not free[np.ix_(on_wall, on_wall)].any()  # wall junctions blocked
+    gaps = 0
+    for t in (free, free.T):
+        for k in range(1, n):
+            for j in range(n):
+                seg = t[k * pitch, j * pitch + 1:j * pitch + 1 + corridor]
+                assert seg.all() or not seg.any(), (k, j, seg)
+                gaps += int(seg.all())
+    return gaps
+
+
+@pytest.mark.parametrize("corridor", [1, 2, 4, 8])
+def test_maze_corridors_are_as_wide_as_asked(corridor):
+    """Moving AI's maze kind (braid 0): corridors and gaps exactly ``corridor`` cells wide,
+    1-cell walls, a perfect maze (a spanning tree: n*n - 1 gaps, one route between any two
+    cells); with braid, more gaps, still exactly as wide. Seeded and connected."""
+    size = 64
+    n = (size - 1) // (corridor + 1)
+    perfect = generate("maze", size, 5, corridor=corridor, braid=0.0)
+    assert np.array_equal(perfect, generate("maze", size, 5, corridor=corridor, braid=0.0))
+    assert not np.array_equal(perfect, generate("maze", size, 6, corridor=corridor, braid=0.0))
+    assert _wall_segments(perfect, corridor) == n * n - 1
+    braided = generate("maze", size, 5, corridor=corridor, braid=0.2)
+    assert _wall_segments(braided, corridor) > n * n - 1
+    for free in (perfect, braided):
+        r, c = np.argwhere(free)[0]
+        assert np.array_equal(grid_distances(free, (int(c), int(r))) >= 0, free)
+
+
+def test_maze_refuses_widths_that_do_not_fit():
+    with pytest.raises(ValueError, match="corridor"):
+        generate("maze", 64, 0, corridor=0)
+    with pytest.raises(ValueError, match="lattice"):
+        generate("maze", 16, 0, corridor=8)
+
+
 def test_city_is_berlin_and_scales_by_whole_cells():
     small = generate("city", 256, 0)
     big = generate("city", 512, 0)

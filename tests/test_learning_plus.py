@@ -252,3 +252,52 @@ def test_known_route_off_is_the_look_ahead_test_and_training_is_unchanged(paper5
     off = train_tabular(RNHQLPlus(known_route=0), paper50_model, 40, np.random.default_rng(5))
     np.testing.assert_array_equal(on.state.q, off.state.q)  # the test never changes training
     np.testing.assert_array_equal(on.steps, off.steps)
+
+
+def test_model_acting_heads_for_g_in_the_optimistic_model(paper50_model):
+    """model_acting (issue 37): the behaviour's greedy move goes to a neighbour one move
+    nearer G in the optimistic model, tried or not, never a move it holds blocked, and
+    equal moves are drawn (not the lowest index)."""
+    from learning.rnh_ql_plus.rules import act
+
+    r = train_tabular(RNHQLPlus(model_acting=1, eps=0.0), paper50_model, 20,
+                      np.random.default_rng(3))
+    st = r.state
+    nb, blocked, dist = st.free.neighbour, st.free.blocked, st.free.distance
+    rng = np.random.default_rng(0)
+    tried = st.model.successor >= 0
+    n_tied = n_tried = 0
+    for s in np.flatnonzero(dist > 0):
+        toward = [a for a in range(4) if nb[s, a] >= 0 and not blocked[s, a]
+                  and dist[nb[s, a]] == dist[s] - 1]
+        picked = {int(act(st, int(s), rng)) for _ in range(12)}
+        assert picked <= set(toward), (s, picked, toward)
+        n_tied += len(toward) > 1 and len(picked) > 1
+        n_tried += any(tried[s, a] for a in picked)
+    assert n_tied > 0 and n_tried > 0
+
+
+def test_model_acting_learns_paper_50_and_is_off_by_default(paper50_model):
+    """Off by default, and then not listed in a run's record (records from before it, and
+    the behaviour digests hashed from them, are unchanged); on, it is listed, round-trips,
+    changes training and finds the optimal route."""
+    from learning import config_from_fields
+
+    assert RNHQLPlus().model_acting == 0 and "model_acting" not in RNHQLPlus().record_fields()
+    on = RNHQLPlus(model_acting=1)
+    assert on.record_fields()["model_acting"] == 1
+    assert config_from_fields("rnh-ql+", on.record_fields()) == on
+    assert config_from_fields("rnh-ql+", RNHQLPlus().record_fields()) == RNHQLPlus()
+    a = train_tabular(on, paper50_model, 100, np.random.default_rng(1))
+    b = train_tabular(RNHQLPlus(), paper50_model, 100, np.random.default_rng(1))
+    assert not np.array_equal(a.steps, b.steps)
+    assert a.final_route_length == a.optimal_length
+
+
+def test_model_acting_needs_look_ahead_on_a_potential():
+    with pytest.raises(ValueError, match="model_acting"):
+        RNHQLPlus(model_acting=1, lookahead=0)
+    with pytest.raises(ValueError, match="model_acting"):
+        RNHQLPlus(model_acting=1, shaping_scale=0.0)
+    with pytest.raises(ValueError, match="model_acting"):
+        RNHQLPlusAblation(model_acting=1)

@@ -48,6 +48,23 @@ class RNHQLPlus(MethodConfig):
       cell with one, the shortest route over moves seen to work
       (:mod:`learning.known_routes`); elsewhere the greedy choice above. The moves seen
       to work only grow, so once the optimal route is walked the test stays optimal.
+    * ``model_acting=1`` (off by default, issue 37): the behaviour's greedy move is the
+      optimistic model's, every move (tried or not) valued by one step of look-ahead on
+      Phi, a move the model holds blocked never; ties drawn. Q is still learned, off
+      policy, and the test is unchanged. Why: by default a *tried* move is valued by its
+      Q, and on long routes Q holds the scale of earlier potentials: Phi = gamma^(d-1) r_G
+      spans ~70 orders of magnitude along a 3000-move route, and each wall that lengthens
+      a distance by hundreds of moves drops Phi there by 1e-8 or more, far faster than TD
+      steps of alpha shrink what Q learned before. On a 512² maze with 4-cell corridors a
+      cell's largest |Q| of a working move was a median 6e11 x Phi(s) at the end, the
+      max-Q move headed for G at 67 % of cells (92 % at 256²), 9 % of the episodes
+      reached G, the model still
+      believed a route 336 moves shorter than the real one after 4096 episodes, and the
+      known-route test kept a route 24 moves too long (at 11 of its 12 detours the move
+      one nearer G was never tried). Acting on the model walks the route it believes
+      shortest, so each walk either confirms it (its moves are then seen to work and the
+      test follows them) or finds the wall that refutes it (HAQL's and D* Lite's
+      behaviour). Needs ``lookahead=1`` and ``shaping_scale > 0``.
 
     With ``shaping_scale=0, lookahead=0`` it is Dyna-Q (bit for bit).
     """
@@ -60,6 +77,13 @@ class RNHQLPlus(MethodConfig):
     lookahead: int = 1  # 1: untried actions valued by one step of look-ahead on Phi
     known_route: int = 1  # 1: the greedy test follows the shortest route of moves seen to work
     sweeping: int = 0  # 1: planned updates go to the pairs whose values changed most first
+    model_acting: int = 0  # 1: the behaviour acts greedily on the optimistic model (see above)
+
+    # Options added after records and checkpoints were written: a record lists one only when
+    # it is not at its default, so every record from before (and the behaviour digests
+    # hashed from them, scenarios.artifacts) stays what it was; a file without it loads it
+    # at its default, the behaviour it was trained with.
+    UNLISTED_AT_DEFAULT: ClassVar[dict[str, Any]] = {"model_acting": 0}
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -67,18 +91,23 @@ class RNHQLPlus(MethodConfig):
             raise ValueError(f"RNHQLPlus.gamma = {self.gamma!r} must be < 1 (the optimistic "
                              f"model's value discounts: use {ABLATION_CLI} with v_target 0-2 "
                              "for gamma = 1)")
+        if self.model_acting and not (self.lookahead and self.shaping_scale > 0):
+            raise ValueError(f"{type(self).__name__}.model_acting = {self.model_acting!r} "
+                             "acts on the optimistic model's look-ahead: it needs lookahead = 1 "
+                             "and shaping_scale > 0")
 
     def params(self) -> Params:
         """The compiled rules' scalars."""
         return Params(float(self.eps), float(self.alpha), float(self.gamma),
                       float(self.warmup_episodes), int(self.n_planning),
                       float(self.shaping_scale), bool(self.lookahead), bool(self.known_route),
-                      bool(self.sweeping))
+                      bool(self.sweeping), bool(self.model_acting))
 
     def record_fields(self) -> dict[str, object]:
-        """The fields, and the ablation's switches at the values this method has
-        (:data:`RETIRED`)."""
-        own = self.fields()
+        """The fields (but the newer options at their defaults, :attr:`UNLISTED_AT_DEFAULT`),
+        and the ablation's switches at the values this method has (:data:`RETIRED`)."""
+        own = {k: v for k, v in self.fields().items()
+               if k not in self.UNLISTED_AT_DEFAULT or v != self.UNLISTED_AT_DEFAULT[k]}
         return {**own, **{k: v for k, v in RETIRED.items() if k not in own}}
 
     @classmethod
@@ -107,3 +136,4 @@ class Params(NamedTuple):
     lookahead: bool
     known_route: bool
     sweeping: bool
+    model_acting: bool

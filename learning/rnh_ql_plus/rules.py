@@ -73,6 +73,22 @@ def action_values(par, q, out, y, succ, nb, goal, r_free, r_goal, s):
 
 
 @njit(**HOOK)
+def model_values(par, out, y, blocked, nb, goal, r_free, r_goal, s):
+    """Row s's action values in the optimistic model (``model_acting``) into ``out[0]``:
+    every move, tried or not, :func:`untried_value` (one step of look-ahead on Phi into the
+    cell it heads for); a move the model holds blocked -inf."""
+    scale = par.scale
+    phi_s = scale * y[s]
+    for a in range(out.shape[1]):
+        u = nb[s, a]
+        if blocked[s, a]:
+            out[0, a] = -np.inf
+        else:
+            out[0, a] = untried_value(u, goal, phi_s, scale * y[max(u, 0)], r_free, r_goal,
+                                      par.gamma)
+
+
+@njit(**HOOK)
 def known_route_move(nb, works, fails, known_d, known_q, known_stale, goal, s):
     """The first move of a shortest route from s over moves seen to work (-1: s has none),
     the routes brought up to date first if a move's standing changed since."""
@@ -93,7 +109,8 @@ def known_route_move(nb, works, fails, known_d, known_q, known_stale, goal, s):
 
 @njit(**HOOK)
 def act(st, s, rng):
-    """Epsilon-greedy; with look-ahead, greedy over :func:`action_values` (ties drawn)."""
+    """Epsilon-greedy; with look-ahead, greedy over :func:`action_values` (ties drawn), or
+    over :func:`model_values` with ``model_acting``."""
     par = st.par
     q = st.q
     values = st.values
@@ -103,14 +120,18 @@ def act(st, s, rng):
     r_free_seen = st.opt.r_free
     succ = st.model.successor
     nb = st.free.neighbour
+    blocked = st.free.blocked
     goal = st.free.goal[0]
     if not (par.lookahead and shaping[0]):
         a = eps_greedy(q, s, par.eps, rng)
     elif rng.random() < par.eps:
         a = draw_below(rng, q.shape[1])
     else:
-        action_values(par, q, values, y, succ, nb, goal, r_free_seen[0],
-                      goal_reward(r_goal_seen, r_free_seen, par.gamma), s)
+        r_goal = goal_reward(r_goal_seen, r_free_seen, par.gamma)
+        if par.model_acting:
+            model_values(par, values, y, blocked, nb, goal, r_free_seen[0], r_goal, s)
+        else:
+            action_values(par, q, values, y, succ, nb, goal, r_free_seen[0], r_goal, s)
         a = argmax_drawn(values, 0, rng)
     return a
 

@@ -82,6 +82,9 @@ class RNHQLPlusAblation(RNHQLPlus):
             raise ValueError(f"RNHQLPlusAblation.gamma = {self.gamma!r} must be < 1 with "
                              f"v_target = {self.v_target} (the optimistic model's value "
                              "discounts: use v_target 0-2 for gamma = 1)")
+        if self.model_acting:
+            raise ValueError(f"RNHQLPlusAblation.model_acting = {self.model_acting!r}: the "
+                             "ablation's rules do not have it; use rnh-ql+")
         if self.sweeping and (self.v_target != Potential.OPTIMISTIC or self.rebase):
             raise ValueError(f"RNHQLPlusAblation.sweeping = {self.sweeping!r} needs v_target "
                              "= 4 and rebase = 0 (its priorities read Phi as the optimistic "

@@ -1,0 +1,39 @@
+"""The held-out study (issue 37): its problems, methods and table."""
+
+from __future__ import annotations
+
+import pytest
+
+from scenarios.experiments import heldout
+
+
+def test_problems_and_methods_parse():
+    assert heldout.share_of("uniform") == 0.0 and heldout.share_of("s10") == 0.1
+    assert heldout.method_of("rnh-ql+:model_acting=1;sweeping=1") == (
+        "rnh-ql+", (("model_acting", 1.0), ("sweeping", 1.0)))
+    assert heldout.method_of("haql") == ("haql", ())
+    free, stem = heldout.problem_map("maze-w4-64", 37, 0.02)
+    assert free.shape == (64, 64) and stem == "maze-w4-64-s37-b0.02"
+    with pytest.raises(ValueError, match="maze-wW-N"):
+        heldout.problem_map("forest-64", 0, 0.0)
+    with pytest.raises(ValueError, match="uniform"):
+        heldout.share_of("half")
+
+
+def test_the_study_runs_and_prints_its_table(tmp_path, capsys):
+    out = tmp_path / "h"
+    toml, _, _ = heldout.write_problem("maze-w2-24", 0.0, 5, 0.0, tmp_path / "own")
+    problems = f"maze-w2-24@s20,maze-w2-24@uniform,rooms-102@uniform,{toml}@uniform"
+    assert heldout.main(["--out", str(out), "--problems", problems, "--suite-episodes", "30",
+                         "--methods", "rnh-ql+,rnh-ql+:model_acting=1", "--seeds", "1"]) == 0
+    text = (out / "heldout.md").read_text()
+    assert text in capsys.readouterr().out
+    assert "| rnh-ql+:model_acting=1 |" in text and "maze-w2-24 uniform" in text
+    assert text.count(" s |") == 2 * 4  # 2 methods x 4 problems
+    assert "rooms-102 uniform (route 38)" in text
+
+
+def test_a_bad_artifact_name_is_refused_before_any_run(tmp_path):
+    with pytest.raises(SystemExit) as exc:
+        heldout.main(["--out", str(tmp_path / "h"), "--artifact", "Not A Name"])
+    assert exc.value.code == 2 and not (tmp_path / "h").exists()

@@ -5,6 +5,12 @@ pooled sweep promptly, whatever the workers were doing (the pool's end could han
 
 from __future__ import annotations
 
+import os
+import signal
+import sys
+import threading
+import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -132,3 +138,200 @@ def test_the_two_model_caches_share_one_mechanism():
         assert isinstance(mod.CACHE, disk_cache.CacheKind)
         src = Path(mod.__file__).read_text()
         assert "np.load(" not in src and "np.savez" not in src and "atomic_path" not in src
+
+
+# ------------------------------------------------------------------ 3: the pool's end
+def _stopped_mid_send(size: int) -> bytes:
+    """A pool task whose result (``size`` bytes: many pipe-fulls) is still being sent when
+    its worker stops: a thread of the worker stops it (SIGSTOP) once the worker's main
+    thread is inside the pipe write of the result. The parent's pool is then part-way
+    through reading one message, as when a signal ends a sweep while a run's record is in
+    transit."""
+    main = threading.main_thread().ident
+
+    def watch() -> None:
+        while True:
+            frame = sys._current_frames().get(main)
+            while frame is not None:
+                code = frame.f_code
+                if code.co_name == "_send" and "multiprocessing" in code.co_filename:
+                    os.kill(os.getpid(), signal.SIGSTOP)
+                    return
+                frame = frame.f_back
+            time.sleep(0.0002)
+
+    threading.Thread(target=watch, daemon=True).start()
+    return b"x" * size
+
+
+def _state(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, IndexError):
+        return "gone"
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_ending_the_pool_while_a_result_is_half_sent_does_not_leave_its_reader_waiting():
+    """One hang of a signalled sweep on a loaded machine: a worker killed part-way through sending a
+    finished run's record left the pool's manager thread waiting for the rest of the
+    message for ever (this process holds the result pipe's write end as well, so the read
+    never ends), and the interpreter's exit joins that thread."""
+    from scenarios.runs.backends import _end_workers
+
+    pool = ProcessPoolExecutor(max_workers=1)
+    pool.submit(_stopped_mid_send, 32 * 1024 * 1024)
+    manager = pool._executor_manager_thread
+    worker = next(iter(pool._processes.values()))
+    results = pool._result_queue
+    try:
+        t0 = time.monotonic()
+        while _state(worker.pid) != "T":
+            assert time.monotonic() - t0 < 60, "the worker never began sending"
+            time.sleep(0.01)
+        time.sleep(0.2)  # the manager thread reads what is in the pipe, then waits
+        assert manager.is_alive()
+        _end_workers(pool)
+        manager.join(timeout=10)
+        assert not manager.is_alive(), "the pool's manager thread still waits for the result"
+        assert not worker.is_alive()
+    finally:
+        if worker.is_alive():
+            worker.kill()
+        results._writer.close()  # (without the fix: release the thread so pytest can exit)
+        manager.join(timeout=10)
+
+
+def _die_holding(lock) -> None:
+    lock.acquire()
+    os._exit(0)  # ended mid-count, as a signal ends a worker: the lock is never released
+
+
+def test_a_worker_that_died_holding_the_episode_counter_stalls_nothing():
+    """The other hang: a worker ended while it held the shared episode counter's lock, and
+    the sweep's last progress line waited for that lock for ever."""
+    import multiprocessing
+
+    from scenarios.runs import work
+    from scenarios.runs.backends import Progress
+
+    progress = Progress(4, enabled=False)
+    try:
+        work.add_episodes(5)
+        child = multiprocessing.get_context("fork").Process(
+            target=_die_holding, args=(progress.counter.get_lock(),))
+        child.start()
+        child.join(30)
+        assert child.exitcode == 0
+        seen: list[int] = []
+        reader = threading.Thread(target=lambda: seen.append(progress.episodes_done),
+                                  daemon=True)
+        reader.start()
+        reader.join(10)
+        assert seen == [5], "reading the progress waited on a dead worker's lock"
+        t0 = time.monotonic()
+        work.add_episodes(3)  # a worker still running gives up counting, not its run
+        assert time.monotonic() - t0 < work.LOCK_WAIT_S + 5
+        assert progress.episodes_done == 5
+    finally:
+        progress.close()
+        work.share(None)
+
+
+# a sweep whose records (~200 kB each) take many pipe-fulls from a worker to the parent
+SWEEP = ["compare", "paper-50", "--methods", "st-ql,q-lambda", "--seeds", "4", "--episodes",
+         "8000", "--jobs", "2"]
+STOP_S = 30.0  # a stopped sweep has ended within this, on a loaded machine too [s]
+EXIT = {signal.SIGINT: 130, signal.SIGTERM: 143, signal.SIGHUP: 129}
+
+
+def _terminal_signals() -> None:
+    """The sweep starts with a terminal's SIGINT and SIGHUP, whatever this test inherited."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
+def _wait(cond, proc, timeout: float = 180.0) -> None:
+    t0 = time.monotonic()
+    while not cond():
+        assert proc.poll() is None, "the sweep ended before the signal"
+        assert time.monotonic() - t0 < timeout, "the moment never came"
+        time.sleep(0.02)
+
+
+def _finished(partial: Path) -> int:
+    return partial.read_text().count("\n") if partial.exists() else 0
+
+
+def _signalled_sweep(tmp_path: Path, sig: int, moment: str, delay: float = 0.0
+                     ) -> tuple[Path, Path, str, int]:
+    """Start a recorded two-worker sweep, send ``sig`` at ``moment`` (+ ``delay`` s), and see
+    it end within :data:`STOP_S` with the signal's exit status. ``moment``: "pool" (the
+    workers start), "running" (a run is recording, none finished) or "finished" (the first
+    run's record arrived: the others' are finishing). (out, record, stderr, runs finished
+    when the signal was sent)."""
+    import subprocess
+
+    out, rec = tmp_path / "out", tmp_path / "c.rrd"
+    parts, partial = Path(str(rec) + ".parts"), out / "runs.partial.jsonl"
+    proc = subprocess.Popen([sys.executable, "-m", "scenarios.cli", *SWEEP, "--out", str(out),
+                             "--record", str(rec)], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=_terminal_signals,
+                            env={**os.environ, "PYTHONPATH": str(REPO)})
+    try:
+        if moment == "pool":
+            _wait(parts.is_dir, proc)
+        elif moment == "running":
+            _wait(lambda: any(parts.glob("*.part")), proc)
+        else:
+            _wait(lambda: _finished(partial) >= 1, proc)
+        time.sleep(delay)
+        before = _finished(partial)
+        if sig == signal.SIGTERM:
+            os.kill(proc.pid, sig)  # the main process only, as `timeout` and schedulers do
+        else:
+            os.killpg(proc.pid, sig)  # a terminal's Ctrl-C and hang-up reach the group
+        try:
+            _, err = proc.communicate(timeout=STOP_S)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"{signal.Signals(sig).name} at {moment}+{delay:.2f}s: no exit "
+                        f"within {STOP_S:.0f} s")
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == EXIT[sig], err
+    assert "Traceback" not in err, err
+    assert not (out / ".rnhql-sweep.lock").exists()
+    assert _finished(partial) >= before  # what had finished is kept
+    return out, rec, err, before
+
+
+@pytest.mark.parametrize(("sig", "moment", "delay"), [(signal.SIGHUP, "pool", 0.0),
+                                                      (signal.SIGTERM, "finished", 0.1)])
+def test_a_signal_ends_a_pooled_sweep_promptly(tmp_path, sig, moment, delay):
+    _signalled_sweep(tmp_path, sig, moment, delay)
+
+
+@pytest.mark.slow
+def test_a_signal_at_many_moments_of_a_loaded_machine_always_ends_the_sweep(tmp_path):
+    """The long version: 25 sweeps, each sent SIGTERM or SIGHUP at a moment drawn from a
+    seeded generator (pool start, a run recording, up to 1.5 s after the first run
+    finished: when records are in transit), with a busy process loading the machine."""
+    import random
+    import subprocess
+
+    rng = random.Random(39)
+    load = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        for i in range(25):
+            sig = rng.choice([signal.SIGTERM, signal.SIGHUP])
+            moment = rng.choice(["pool", "running", "finished", "finished"])
+            delay = rng.uniform(0.0, 1.5) if moment == "finished" else rng.uniform(0.0, 0.5)
+            trial = tmp_path / f"t{i}"
+            trial.mkdir()
+            _signalled_sweep(trial, sig, moment, delay)
+    finally:
+        load.kill()
+        load.wait()

@@ -6,6 +6,11 @@ run's compilation as work. Each training loop adds the episodes it finishes to o
 counter shared by every worker process (:func:`share` in each worker, from the pool's
 initializer), so :class:`scenarios.runs.backends.Progress` can say how much of the
 sweep's episodes are done and estimate the rest from the recent rate.
+
+The counter's lock is shared by the processes, and a worker ended by a signal (the sweep
+ends its workers mid-run) can die holding it: so the count is read without the lock (an
+aligned 8-byte integer is read whole), and a worker waits for the lock at most
+:data:`LOCK_WAIT_S` (progress is a display; a sweep must never wait on it).
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ import multiprocessing
 from typing import Any
 
 _counter: Any = None  # a multiprocessing.Value("q") while a sweep runs, else None
+LOCK_WAIT_S = 1.0  # a worker waits this long for the counter's lock, then counts nothing [s]
 
 
 def new_counter() -> Any:
@@ -31,9 +37,19 @@ def share(counter: Any) -> None:
 def add_episodes(n: int) -> None:
     """``n`` more episodes finished in this process (a no-op outside a sweep)."""
     c = _counter
-    if c is not None and n:
-        with c.get_lock():
-            c.value += n
+    if c is None or not n:
+        return
+    lock = c.get_lock()
+    if lock.acquire(timeout=LOCK_WAIT_S):
+        try:
+            c.get_obj().value += n
+        finally:
+            lock.release()
+
+
+def episodes(counter: Any) -> int:
+    """The episodes ``counter`` holds, read without its lock (see the module's doc)."""
+    return int(counter.get_obj().value)
 
 
 class CountingObserver:

@@ -308,6 +308,26 @@ def _signalled_sweep(tmp_path: Path, sig: int, moment: str, delay: float = 0.0
     return out, rec, err, before
 
 
+def test_ctrl_c_before_any_run_finished_leaves_nothing_behind(tmp_path):
+    out, rec, err, before = _signalled_sweep(tmp_path, signal.SIGINT, "running")
+    assert before == 0
+    assert not Path(str(rec) + ".parts").exists() and not rec.exists()
+    assert not out.exists()  # made by this sweep, and nothing kept in it
+    assert "nothing was kept" in err and "--resume" not in err
+
+
+def test_stopped_after_a_run_finished_keeps_the_parts_and_says_so(tmp_path):
+    from scenarios.recording.file import verify_recording
+
+    _, rec, err, before = _signalled_sweep(tmp_path, signal.SIGTERM, "finished")
+    parts = Path(str(rec) + ".parts")
+    assert before >= 1 and "--resume" in err
+    assert not list(parts.glob("*.part"))  # half-written parts are gone
+    if parts.exists():  # only with a finished run's recording in it, and then it is named
+        assert list(parts.glob("*.rrd")) and f"{parts}/ for --resume" in err
+    assert rec.exists() and verify_recording(rec)[0]
+
+
 @pytest.mark.parametrize(("sig", "moment", "delay"), [(signal.SIGHUP, "pool", 0.0),
                                                       (signal.SIGTERM, "finished", 0.1)])
 def test_a_signal_ends_a_pooled_sweep_promptly(tmp_path, sig, moment, delay):

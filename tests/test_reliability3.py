@@ -263,18 +263,19 @@ def _finished(partial: Path) -> int:
     return partial.read_text().count("\n") if partial.exists() else 0
 
 
-def _signalled_sweep(tmp_path: Path, sig: int, moment: str, delay: float = 0.0
-                     ) -> tuple[Path, Path, str, int]:
+def _signalled_sweep(tmp_path: Path, sig: int, moment: str, delay: float = 0.0,
+                     sweep: list[str] = SWEEP) -> tuple[Path, Path, str, int]:
     """Start a recorded two-worker sweep, send ``sig`` at ``moment`` (+ ``delay`` s), and see
     it end within :data:`STOP_S` with the signal's exit status. ``moment``: "pool" (the
-    workers start), "running" (a run is recording, none finished) or "finished" (the first
-    run's record arrived: the others' are finishing). (out, record, stderr, runs finished
-    when the signal was sent)."""
+    workers start), "running" (a run is recording, none finished), "finished" (the first
+    run's record arrived: the others' are finishing) or "merging" (every run finished: the
+    recording is being merged). (out, record, stderr, runs finished when the signal was
+    sent)."""
     import subprocess
 
     out, rec = tmp_path / "out", tmp_path / "c.rrd"
     parts, partial = Path(str(rec) + ".parts"), out / "runs.partial.jsonl"
-    proc = subprocess.Popen([sys.executable, "-m", "scenarios.cli", *SWEEP, "--out", str(out),
+    proc = subprocess.Popen([sys.executable, "-m", "scenarios.cli", *sweep, "--out", str(out),
                              "--record", str(rec)], cwd=tmp_path, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True,
                             preexec_fn=_terminal_signals,
@@ -284,6 +285,8 @@ def _signalled_sweep(tmp_path: Path, sig: int, moment: str, delay: float = 0.0
             _wait(parts.is_dir, proc)
         elif moment == "running":
             _wait(lambda: any(parts.glob("*.part")), proc)
+        elif moment == "merging":
+            _wait(Path(str(rec) + ".part").exists, proc)
         else:
             _wait(lambda: _finished(partial) >= 1, proc)
         time.sleep(delay)
@@ -326,6 +329,25 @@ def test_stopped_after_a_run_finished_keeps_the_parts_and_says_so(tmp_path):
     if parts.exists():  # only with a finished run's recording in it, and then it is named
         assert list(parts.glob("*.rrd")) and f"{parts}/ for --resume" in err
     assert rec.exists() and verify_recording(rec)[0]
+
+
+def test_stopped_while_the_recording_is_merged_the_parts_stay_and_resume_merges(tmp_path):
+    import subprocess
+
+    from scenarios.recording.file import verify_recording
+
+    sweep = ["compare", "paper-40", "--methods", "st-ql,q-lambda", "--seeds", "2",
+             "--episodes", "3000", "--jobs", "2"]
+    out, rec, err, _ = _signalled_sweep(tmp_path, signal.SIGTERM, "merging", sweep=sweep)
+    parts = Path(str(rec) + ".parts")
+    assert (out / "results.json").exists() and len(list(parts.glob("*.rrd"))) == 2
+    assert f"{parts}/" in err and "--resume" in err
+    done = subprocess.run([sys.executable, "-m", "scenarios.cli", *sweep, "--out", str(out),
+                           "--record", str(rec), "--resume"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "PYTHONPATH": str(REPO)})
+    assert done.returncode == 0, done.stderr
+    assert not parts.exists() and verify_recording(rec)[0]
 
 
 @pytest.mark.parametrize(("sig", "moment", "delay"), [(signal.SIGHUP, "pool", 0.0),

@@ -35,6 +35,7 @@ from scenarios.experiments.sweep_stop import (
     finishing,
     interrupted,
     keep_finished,
+    merge_stopped,
     removed_if_left_empty,
 )
 from scenarios.runs.outdir import check_out_dir, sweep_lock
@@ -247,6 +248,9 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
                 try:
                     with finishing(recording.path):  # every run is done: the recording holds all
                         gather_parts(specs, recording.path, records=results["runs"])
+                except KeyboardInterrupt:  # SIGTERM, SIGHUP: the parts stay for --resume
+                    merge_stopped(recording.path)
+                    raise
                 except OSError as err:
                     if err.errno != errno.ENOSPC:
                         raise

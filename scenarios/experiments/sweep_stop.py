@@ -6,6 +6,8 @@ that ``--resume`` cannot use: half-written parts go, the parts folder goes when 
 finished run's recording is in it, and when no run had finished at all there is nothing
 to resume: the empty ``runs.partial.jsonl`` goes too, as does the output folder when
 this sweep created it and it is empty, and the line says to run the command again.
+Stopped while the finished runs are merged into the recording (SIGTERM, SIGHUP: Ctrl-C
+there only says so), the parts stay for ``--resume`` to merge, and the line says so.
 """
 
 from __future__ import annotations
@@ -106,3 +108,10 @@ def keep_finished(specs: Sequence[RunSpec], out_dir: Path,
     finally:
         if main:
             signal.signal(signal.SIGINT, old)
+
+
+def merge_stopped(record: str) -> None:
+    """Stopped while every run's recording was being merged (the results are written)."""
+    tell(f"\ninterrupted while writing the recording: every run finished and its results "
+         f"are written; the recording's parts stay in {record}.parts/: run the same command "
+         "with --resume to merge them")

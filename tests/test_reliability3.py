@@ -350,6 +350,27 @@ def test_stopped_while_the_recording_is_merged_the_parts_stay_and_resume_merges(
     assert not parts.exists() and verify_recording(rec)[0]
 
 
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_after_the_command_finished_keeps_its_exit_status(sig):
+    """The console script's end (interpreter shutdown): the work is done, and a SIGTERM or
+    SIGHUP then ends the process at once with the command's own status."""
+    import subprocess
+
+    code = (f"import os, signal, sys, time\n"
+            f"import scenarios.cli as cli\n"
+            f"cli._import_app = lambda: (lambda argv: 3)  # a command that ended with 3\n"
+            f"cli.main()\n"
+            f"os.kill(os.getpid(), {int(sig)})\n"
+            f"time.sleep(20)\n"
+            f"sys.exit(99)\n")
+    t0 = time.monotonic()
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=60, preexec_fn=_terminal_signals,
+                          env={**os.environ, "PYTHONPATH": str(REPO)})
+    assert done.returncode == 3, done.stderr
+    assert time.monotonic() - t0 < 15 and "Traceback" not in done.stderr
+
+
 @pytest.mark.parametrize(("sig", "moment", "delay"), [(signal.SIGHUP, "pool", 0.0),
                                                       (signal.SIGTERM, "finished", 0.1)])
 def test_a_signal_ends_a_pooled_sweep_promptly(tmp_path, sig, moment, delay):

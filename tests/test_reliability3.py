@@ -19,7 +19,7 @@ import pytest
 REPO = Path(__file__).resolve().parent.parent
 
 
-# ------------------------------------------------------------------ 1: the stochastic-model cache
+# -------------------------------------------------------------- 1: the stochastic-model cache
 @pytest.fixture
 def small_model(tmp_path, monkeypatch):
     """A small map's stochastic model at ``noisy`` built into an empty cache folder: (the
@@ -173,10 +173,10 @@ def _state(pid: int) -> str:
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_ending_the_pool_while_a_result_is_half_sent_does_not_leave_its_reader_waiting():
-    """One hang of a signalled sweep on a loaded machine: a worker killed part-way through sending a
-    finished run's record left the pool's manager thread waiting for the rest of the
-    message for ever (this process holds the result pipe's write end as well, so the read
-    never ends), and the interpreter's exit joins that thread."""
+    """One hang of a signalled sweep on a loaded machine: a worker killed part-way through
+    sending a finished run's record left the pool's manager thread waiting for the rest of
+    the message for ever (this process holds the result pipe's write end as well, so the
+    read never ends), and the interpreter's exit joins that thread."""
     from scenarios.runs.backends import _end_workers
 
     pool = ProcessPoolExecutor(max_workers=1)

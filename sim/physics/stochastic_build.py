@@ -348,7 +348,8 @@ MAX_CACHE_BYTES = 4 * 1024 ** 3  # far beyond any model a build can drive in a d
 
 
 def _arrays(m: StochasticModel) -> disk_cache.Arrays:
-    return {**{a: getattr(m, a) for a in _ARRAYS}, **{s: np.array(getattr(m, s)) for s in _SCALARS}}
+    return {**{a: getattr(m, a) for a in _ARRAYS},
+            **{s: np.array(getattr(m, s)) for s in _SCALARS}}
 
 
 def _check(a: disk_cache.Arrays, sc: Scenario) -> str | None:

@@ -238,6 +238,42 @@ def test_a_worker_that_died_holding_the_episode_counter_stalls_nothing():
         work.share(None)
 
 
+
+FORK_SIGNAL = """
+import os, signal, sys
+from scenarios.cli.app import Terminated, _terminate
+from scenarios.experiments.compare import make_specs
+from scenarios.runs.backends import run_local
+
+signal.signal(signal.SIGTERM, _terminate)
+fired = []
+
+def signalled_while_forking():  # the signal lands as the pool forks a worker: its handler
+    if not fired:               # runs in an at-fork callback, as logging's or Rerun's
+        fired.append(1)
+        os.kill(os.getpid(), signal.SIGTERM)
+        sum(range(10000))
+
+os.register_at_fork(after_in_parent=signalled_while_forking)
+try:
+    run_local(make_specs("paper-40", ["st-ql"], [0, 1, 2, 3], 300, ["grid"]), jobs=2)
+    print("ran on")
+except Terminated:
+    print("stopped")
+"""
+
+
+def test_a_signal_while_the_pool_forks_its_workers_stops_the_sweep():
+    """A signal that arrived while the pool forked its workers ran its handler inside an
+    at-fork callback, where Python prints an exception and drops it: the signal was lost and
+    the sweep ran to its end (exit 0 after SIGHUP, found by the signal tests below)."""
+    import subprocess
+
+    done = subprocess.run([sys.executable, "-c", FORK_SIGNAL], capture_output=True, text=True,
+                          timeout=300, env={**os.environ, "PYTHONPATH": str(REPO)})
+    assert done.stdout.strip() == "stopped", done.stdout + done.stderr
+    assert "Exception ignored" not in done.stderr, done.stderr
+
 # a sweep whose records (~200 kB each) take many pipe-fulls from a worker to the parent
 SWEEP = ["compare", "paper-50", "--methods", "st-ql,q-lambda", "--seeds", "4", "--episodes",
          "8000", "--jobs", "2"]

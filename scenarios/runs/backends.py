@@ -27,6 +27,7 @@ from typing import Any
 from scenarios.runs.physics_batch import plan_tasks
 from scenarios.runs.run import run_task
 from scenarios.runs.spec import RunSpec
+from scenarios.signals import stop_signals_held
 from sim.errors import InputError
 
 OnResult = Callable[[dict[str, Any]], None] | None
@@ -295,7 +296,8 @@ def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector) -> list[dic
     counter = getattr(col.progress, "counter", None)
     pool = ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(counter,))
     try:
-        futures = {pool.submit(run_task, [specs[i] for i in task]): task for task in tasks}
+        with stop_signals_held():  # the workers are forked here (see stop_signals_held)
+            futures = {pool.submit(run_task, [specs[i] for i in task]): task for task in tasks}
         for fut in as_completed(futures):
             task = futures[fut]
             try:

@@ -3,7 +3,9 @@
 Long loops (physics training) turn the first Ctrl-C into a flag they act on between
 steps; a file being finished ignores it for that moment. Either way SIGINT is only
 rerouted from the main thread, and not where it is ignored on purpose (a pool worker:
-its parent owns Ctrl-C), and the old handler is always restored.
+its parent owns Ctrl-C), and the old handler is always restored. A block whose Python
+callbacks drop exceptions (forking a pool's workers) holds Ctrl-C, SIGTERM and SIGHUP
+until it ends (:func:`stop_signals_held`).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 Handler = Callable[[int, Any], Any] | int
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 @contextlib.contextmanager
@@ -30,3 +33,30 @@ def sigint_handled_by(handler: Handler, *, unless_ignored: bool = True) -> Itera
         yield
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+@contextlib.contextmanager
+def stop_signals_held() -> Iterator[None]:
+    """Ctrl-C, SIGTERM and SIGHUP are noted while the block runs and acted on as it ends
+    (their handlers called then: the first one's raises), for a block that runs Python
+    callbacks which print an exception and drop it. Forking does: a handler that ran in
+    an at-fork callback (logging's, Rerun's) raised there, and the signal was lost (a
+    sweep signalled as its pool started ran to its end). A forked child starts with the
+    noting handlers too, so a signal to the whole group is harmless in it until its own
+    initializer sets its signals. Main thread only; signals that have no Python handler
+    (ignored, or default) are left as they are."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    noted: list[tuple[int, Any]] = []
+    old = {sig: signal.getsignal(sig) for sig in STOP_SIGNALS}
+    held = {sig: h for sig, h in old.items() if callable(h)}
+    for sig in held:
+        signal.signal(sig, lambda s, frame: noted.append((s, frame)))
+    try:
+        yield
+    finally:
+        for sig, h in held.items():
+            signal.signal(sig, h)
+    for sig, frame in noted[:1]:
+        held[sig](sig, frame)

@@ -318,7 +318,7 @@ def _rebuilt(sc, path: Path):
 @pytest.mark.parametrize("damage", ["truncate", "junk", "folder", "wrong-digest",
                                     "one-move-route", "wrong-key"])
 def test_a_damaged_or_tampered_cache_is_rebuilt_not_believed(tiny_physics, damage):
-    from sim.physics import model as pm
+    from sim.physics.disk_cache import content_digest
 
     sc, fresh, path = tiny_physics
     raw = path.read_bytes()
@@ -337,7 +337,7 @@ def test_a_damaged_or_tampered_cache_is_rebuilt_not_believed(tiny_physics, damag
             nxt[0, 0] = nxt[0, 1]
         elif damage == "one-move-route":  # every move lands on G, with a matching digest
             nxt[:] = fresh.goal
-            arrays["sha256"] = np.array(pm.content_digest(nxt))
+            arrays["sha256"] = np.array(content_digest({"next_state": nxt}))
         else:
             arrays["key"] = np.array("0" * 20)
         arrays["next_state"] = nxt

@@ -4,12 +4,15 @@ The top of the stack: may import every other part of ``scenarios``, nothing impo
 :func:`main` imports the parser lazily so that a Ctrl-C while the heavy modules load
 (numpy, numba, pymunk: about half a second) is one line and exit 130 like any other,
 and a Ctrl-C after the command has finished (interpreter shutdown) is ignored: the
-work is done and its exit status stands. SIGTERM and SIGHUP while the modules load end
-the command with one line and 143 or 129, as they do later.
+work is done and its exit status stands; a SIGTERM or SIGHUP there ends the process at
+once with that status (it was a traceback from a garbage collector's callback, or a
+status killed by the signal). SIGTERM and SIGHUP while the modules load end the command
+with one line and 143 or 129, as they do later.
 """
 
 from __future__ import annotations
 
+import functools
 import os
 import signal
 import sys
@@ -55,7 +58,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         os._exit(code)
     if argv is None:  # the console script: nothing after this may turn into a traceback
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+        for sig in (signal.SIGTERM, signal.SIGHUP):  # nor a status killed by a signal
+            if signal.getsignal(sig) is not signal.SIG_IGN:
+                signal.signal(sig, functools.partial(_exit_now, code))
     return code
+
+
+def _exit_now(code: int, _sig: int, _frame: object) -> None:
+    """SIGTERM or SIGHUP once the command has finished: end now, with its exit status."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(code)
 
 
 def _import_app():

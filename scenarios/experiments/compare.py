@@ -18,28 +18,40 @@ import contextlib
 import errno
 import functools
 import json
-import os
-import signal
 import sys
-import threading
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from scenarios.experiments.sweep_recording import (
+    SweepRecording,
+    gather_parts,
+    run_label,
+    with_recording,
+)
+from scenarios.experiments.sweep_stop import (
+    finishing,
+    interrupted,
+    keep_finished,
+    merge_stopped,
+    removed_if_left_empty,
+)
 from scenarios.runs.outdir import check_out_dir, sweep_lock
 from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
 from scenarios.runs.resume_state import (
     PARTIAL,
+    Finished,
     check_out_files,
     finished_compare,
     read_partial,
 )
-from scenarios.runs.spec import RecordOptions, RunSpec, load
+from scenarios.runs.spec import RunSpec, load
 from scenarios.signals import sigint_handled_by
 
-__all__ = ["PARTIAL", "finished_compare", "make_specs", "read_partial", "run_sweep"]
+__all__ = ["PARTIAL", "SweepRecording", "finished_compare", "gather_parts", "interrupted",
+           "make_specs", "read_partial", "run_label", "run_sweep", "with_recording"]
 
 
 def version() -> str:
@@ -66,91 +78,6 @@ def make_specs(scenario: str, methods: Sequence[str], seeds: Sequence[int], epis
                     rewards=rewards, fidelity=fidelity if w == "physics" else None,
                     s_starts=s_starts)
             for w in worlds for m in methods for s in seeds]
-
-
-def run_label(spec: RunSpec, worlds: set[str]) -> str:
-    """A run's name in a comparison recording: the method, plus the world if several."""
-    return spec.method if len(worlds) == 1 else f"{spec.method}-{spec.world}"
-
-
-@dataclass(frozen=True)
-class SweepRecording:
-    """A sweep's comparison recording: every run records a part file, merged at the end
-    into one ``.rrd`` with a comparison blueprint."""
-
-    path: str  # the .rrd to write
-    every: int = 100  # episodes recorded in full per run: the first, every N-th, the last
-    values_every: int = 300  # value heat maps every K episodes [episodes]
-    detail_seeds: int = 1  # seeds per method and world recorded in full (others: curves)
-
-
-def with_recording(specs: Sequence[RunSpec], recording: SweepRecording) -> list[RunSpec]:
-    """Each run records a part file under ``<record>.parts/`` in its own subtree.
-
-    The first ``detail_seeds`` seeds of each method and world are recorded in
-    full; the others record their curves only. A 90-run comparison recorded in
-    full is >100 MB, more than the viewer draws comfortably, and the comparison
-    blueprint shows each method's first seed on the map anyway.
-    """
-    import dataclasses
-    import uuid
-
-    from scenarios.recording.recorder import run_prefix
-
-    record = recording.path
-    parts = Path(record + ".parts")
-    parts.mkdir(parents=True, exist_ok=True)
-    # the same sweep gets the same id, so the parts of an interrupted run and of its
-    # --resume are one recording in the viewer
-    rid = str(uuid.uuid5(uuid.NAMESPACE_URL,
-                         f"rnhql:{Path(record).resolve()}|{'|'.join(s.key for s in specs)}"))
-    worlds = {s.world for s in specs}
-    first_seeds = sorted({s.seed for s in specs})[:recording.detail_seeds]
-    out = []
-    for s in specs:
-        label = run_label(s, worlds)
-        out.append(dataclasses.replace(s, recording=RecordOptions(
-            str(parts / f"{label}-s{s.seed}.rrd"), every=recording.every,
-            values_every=recording.values_every, detail=s.seed in first_seeds,
-            prefix=run_prefix(label, s.seed), recording_id=rid)))
-    return out
-
-
-def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False,
-                 records: Sequence[dict[str, Any]] = ()) -> Path:
-    """Merge the runs' part files into one recording with a comparison blueprint.
-
-    ``keep_parts`` (an interrupted sweep): the recording holds the runs finished
-    so far, and the parts stay for ``--resume`` to gather them all at the end.
-    """
-    import shutil
-
-    from scenarios.recording.comparison import gather_comparison
-
-    worlds = {s.world for s in specs}
-    sc, model = load(*specs[0].problem)
-    parts = [Path(s.recording.path) for s in specs
-             if s.recording is not None and s.recording.detail
-             and Path(s.recording.path).exists()]
-    runs = [(run_label(s, worlds), s.seed) for s in specs]
-    curves = None
-    curve_runs = []
-    if records:
-        from scenarios.recording.summary import summary_curves
-
-        by_key = {s.key: s for s in specs}
-        curves = summary_curves([r for r in records if r["key"] in by_key],
-                                lambda r: run_label(by_key[r["key"]], worlds))
-        record_of = {r["key"]: r for r in records}
-        curve_runs = [(run_label(s, worlds), record_of[s.key]) for s in specs
-                      if s.recording is not None and not s.recording.detail
-                      and s.key in record_of]
-    rid = next((s.recording.recording_id for s in specs if s.recording is not None), None)
-    out = gather_comparison(record, parts, sc, runs, recording_id=rid, curves=curves,
-                            model=model, curve_runs=curve_runs)
-    if not keep_parts:
-        shutil.rmtree(record + ".parts", ignore_errors=True)
-    return out
 
 
 def assemble(specs: Sequence[RunSpec], runs: list[dict[str, Any]]) -> dict[str, Any]:
@@ -243,7 +170,6 @@ def grading_protocol(fid: Any) -> dict[str, Any]:
 
 
 Writer = Callable[[Sequence[RunSpec], list[dict[str, Any]], Path], dict[str, Any]]
-Finished = Callable[[Path], dict[str, dict[str, Any]]]
 
 
 @dataclass(frozen=True)
@@ -304,41 +230,56 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     recording (``recording``); or, given ``files``, what they write.
 
     On Ctrl-C the runs finished so far are in ``runs.partial.jsonl``, the recording
-    holds them (its parts are kept for ``--resume``), a line on stderr says so, and the
+    holds them (its parts are kept for ``--resume``), a line on stderr says so, nothing
+    ``--resume`` cannot use is left (:mod:`scenarios.experiments.sweep_stop`), and the
     ``KeyboardInterrupt`` propagates; ``resume=True`` later runs only the rest and
     writes the same ``results.json`` as an uninterrupted sweep.
     """
-    check_out_dir(out_dir)
-    check_out_files(out_dir)  # a folder named results.json fails now, not after every run
-    files = files or compare_files(figures)
-    if recording is not None:
-        specs = with_recording(specs, recording)
-    with sweep_lock(out_dir):
-        try:
-            results = _run_sweep(specs, out_dir, execute, resume, files, **execute_kwargs)
-        except KeyboardInterrupt:
-            _keep_finished(specs, out_dir, recording, files.finished)
-            raise
-        except ImportError as err:
-            if not interrupted(err):
-                raise
-            # Ctrl-C inside a C extension's import (matplotlib's, while the figures are
-            # drawn) surfaces as "ImportError: initialization failed": it is the same Ctrl-C
-            _keep_finished(specs, out_dir, recording, files.finished)
-            raise KeyboardInterrupt from err
-        except OSError as err:
-            if err.errno != errno.ENOSPC:
-                raise
-            raise _disk_full(err, out_dir, specs, recording, files) from None
+    with removed_if_left_empty(out_dir):  # by a stop before anything was kept in it
+        check_out_dir(out_dir)
+        check_out_files(out_dir)  # a folder named results.json fails now, not after every run
+        files = files or compare_files(figures)
         if recording is not None:
-            try:
-                with _finishing(recording.path):  # every run is done: the recording holds all
-                    gather_parts(specs, recording.path, records=results["runs"])
-            except OSError as err:
-                if err.errno != errno.ENOSPC:
+            specs = with_recording(specs, recording)
+        with sweep_lock(out_dir):
+            results = _run_and_keep(specs, out_dir, execute, resume, files, recording,
+                                    **execute_kwargs)
+            if recording is not None:
+                try:
+                    with finishing(recording.path):  # every run is done: the recording holds all
+                        gather_parts(specs, recording.path, records=results["runs"])
+                except KeyboardInterrupt:  # SIGTERM, SIGHUP: the parts stay for --resume
+                    merge_stopped(recording.path)
                     raise
-                raise _disk_full(err, out_dir, specs, recording, files, True) from None
+                except OSError as err:
+                    if err.errno != errno.ENOSPC:
+                        raise
+                    raise _disk_full(err, out_dir, specs, recording, files, True) from None
     return results
+
+
+def _run_and_keep(specs: Sequence[RunSpec], out_dir: Path,
+                  execute: Callable[..., list[dict[str, Any]]], resume: bool,
+                  files: SweepFiles, recording: SweepRecording | None,
+                  **execute_kwargs: Any) -> dict[str, Any]:
+    """:func:`_run_sweep`; when it is stopped, what was finished is kept
+    (:func:`~scenarios.experiments.sweep_stop.keep_finished`)."""
+    try:
+        return _run_sweep(specs, out_dir, execute, resume, files, **execute_kwargs)
+    except KeyboardInterrupt:
+        keep_finished(specs, out_dir, recording, files.finished)
+        raise
+    except ImportError as err:
+        if not interrupted(err):
+            raise
+        # Ctrl-C inside a C extension's import (matplotlib's, while the figures are
+        # drawn) surfaces as "ImportError: initialization failed": it is the same Ctrl-C
+        keep_finished(specs, out_dir, recording, files.finished)
+        raise KeyboardInterrupt from err
+    except OSError as err:
+        if err.errno != errno.ENOSPC:
+            raise
+        raise _disk_full(err, out_dir, specs, recording, files) from None
 
 
 def _disk_full(err: OSError, out_dir: Path, specs: Sequence[RunSpec],
@@ -354,69 +295,6 @@ def _disk_full(err: OSError, out_dir: Path, specs: Sequence[RunSpec],
     finished = sum(s.key in done for s in specs)
     return disk_full_error(err, out_dir, specs, None if recording is None else recording.path,
                            len(specs) if all_done else finished, all_done)
-
-
-def interrupted(err: BaseException) -> bool:
-    """Whether ``err`` was caused by a Ctrl-C (a KeyboardInterrupt in its cause chain)."""
-    seen = set()
-    e: BaseException | None = err
-    while e is not None and id(e) not in seen:
-        if isinstance(e, KeyboardInterrupt):
-            return True
-        seen.add(id(e))
-        e = e.__cause__ or e.__context__
-    return False
-
-
-@contextlib.contextmanager
-def _finishing(record: str) -> Iterator[None]:
-    """While the finished runs are merged into the recording (seconds), a first Ctrl-C only
-    says so; a second one abandons the recording (its partial file removed) with 130."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    pressed = [False]
-
-    def on_sigint(_sig: int, _frame: object) -> None:
-        if pressed[0]:
-            Path(record + ".part").unlink(missing_ok=True)
-            os._exit(130)
-        pressed[0] = True
-        print("\nrnhql: all runs are finished; writing the recording (a few seconds). Ctrl-C "
-              "again abandons it", file=sys.stderr)
-
-    old = signal.signal(signal.SIGINT, on_sigint)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
-
-
-def _tell(line: str) -> None:
-    """A line on stderr that may be gone (SIGHUP: the terminal closed, writes fail with
-    EIO): what is kept must be kept all the same."""
-    with contextlib.suppress(OSError, ValueError):
-        print(line, file=sys.stderr, flush=True)
-
-
-def _keep_finished(specs: Sequence[RunSpec], out_dir: Path,
-                   recording: SweepRecording | None, finished: Finished | None) -> None:
-    """After Ctrl-C: say what was kept, and write the recording of the runs done so far.
-    A second Ctrl-C while this runs exits at once (status 130)."""
-    main = threading.current_thread() is threading.main_thread()
-    old = signal.signal(signal.SIGINT, lambda *_: os._exit(130)) if main else None
-    try:
-        done = read_partial(out_dir, finished)
-        over = [s for s in specs if s.key in done]
-        _tell(f"\ninterrupted: {len(over)} of {len(specs)} runs finished, kept in "
-              f"{out_dir / PARTIAL}; finish with the same command and --resume")
-        if recording is not None and over:
-            gather_parts(over, recording.path, keep_parts=True,
-                         records=list(done.values()))
-            _tell(f"recording of the finished runs: {recording.path}")
-    finally:
-        if main:
-            signal.signal(signal.SIGINT, old)
 
 
 def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,

@@ -28,10 +28,12 @@ from scenarios.runs import work
 from scenarios.runs.physics_batch import plan_tasks
 from scenarios.runs.run import run_task
 from scenarios.runs.spec import RunSpec
+from scenarios.signals import stop_signals_held
 from sim.errors import InputError
 
 OnResult = Callable[[dict[str, Any]], None] | None
 Keep = Callable[[dict[str, Any]], dict[str, Any]] | None
+END_WAIT_S = 5.0  # the pool's manager thread ends within this once its workers are gone [s]
 
 
 class SweepError(RuntimeError):
@@ -236,13 +238,21 @@ def _ignore_sigint() -> None:
 
 
 def _end_workers(pool: ProcessPoolExecutor) -> None:
-    """Stop a pool now: drop queued runs and terminate the workers mid-run.
+    """Stop a pool now: drop queued runs, terminate the workers mid-run, and see the pool's
+    manager thread end (the interpreter joins it on exit).
 
     ``shutdown(cancel_futures=True)`` alone still waits for the running tasks
     (minutes in a physics sweep); Python 3.11 has no public way to end the
-    workers, so this reaches for the pool's process table.
+    workers, so this reaches for the pool's process table. A worker ended while it was
+    sending a finished run's record (hundreds of kB: many pipe-fulls) leaves the manager
+    thread reading the rest of that message, and this process holds the result pipe's
+    write end too, so that read would never end and the exit would hang joining the
+    thread (a signalled sweep, now and then, on a loaded machine). Closing that end once the
+    workers are gone ends the read (end of file: a broken pool, which it then cleans up).
     """
     processes = list((getattr(pool, "_processes", None) or {}).values())
+    results = getattr(pool, "_result_queue", None)
+    manager = getattr(pool, "_executor_manager_thread", None)
     pool.shutdown(wait=False, cancel_futures=True)
     for proc in processes:
         proc.terminate()
@@ -250,6 +260,12 @@ def _end_workers(pool: ProcessPoolExecutor) -> None:
         proc.join(timeout=1.0)
         if proc.is_alive():
             proc.kill()
+            proc.join(timeout=1.0)
+    writer = getattr(results, "_writer", None)
+    if writer is not None:
+        writer.close()
+    if manager is not None:
+        manager.join(timeout=END_WAIT_S)
 
 
 def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = None,
@@ -282,7 +298,8 @@ def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector) -> list[dic
     counter = getattr(col.progress, "counter", None)
     pool = ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(counter,))
     try:
-        futures = {pool.submit(run_task, [specs[i] for i in task]): task for task in tasks}
+        with stop_signals_held():  # the workers are forked here (see stop_signals_held)
+            futures = {pool.submit(run_task, [specs[i] for i in task]): task for task in tasks}
         for fut in as_completed(futures):
             task = futures[fut]
             try:

@@ -13,11 +13,10 @@ when it holds finished runs' recordings that ``--resume`` merges at the end.
 from __future__ import annotations
 
 import errno
-import shutil
 from collections.abc import Sequence
 from pathlib import Path
 
-from scenarios.runs.resume_state import PARTIAL
+from scenarios.runs.resume_state import PARTIAL, tidy_parts
 from scenarios.runs.spec import RunSpec
 
 
@@ -26,7 +25,7 @@ def disk_full_error(err: OSError, out_dir: Path, specs: Sequence[RunSpec],
                     ) -> OSError:
     """The one-line error for ``err`` (ENOSPC); cleans the recording's parts folder."""
     where = err.filename or str(out_dir)
-    kept = _tidy_parts(record, finished)
+    kept = tidy_parts(record, finished)
     if all_runs_done:
         tail = (f"every run finished and {out_dir / 'results.json'} is written; the "
                 f"recording's parts are kept in {kept}: free some space and run the same "
@@ -40,19 +39,3 @@ def disk_full_error(err: OSError, out_dir: Path, specs: Sequence[RunSpec],
         tail = "no run had finished: free some space and run the command again"
     text = f"{where}: cannot be written (no space left on device). Fix: {tail}"
     return OSError(errno.ENOSPC, text, where)
-
-
-def _tidy_parts(record: str | None, finished: int) -> str | None:
-    """Remove what ``--resume`` cannot use: half-written ``.part`` files, and the whole parts
-    folder when no finished run's recording is in it. The folder kept, or None."""
-    if record is None:
-        return None
-    parts = Path(record + ".parts")
-    if not parts.is_dir():
-        return None
-    for half in parts.glob("*.part"):
-        half.unlink(missing_ok=True)
-    if finished and any(parts.glob("*.rrd")):
-        return str(parts)
-    shutil.rmtree(parts, ignore_errors=True)
-    return None

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -149,3 +150,19 @@ def read_partial(out_dir: Path, finished: Finished | None = None) -> dict[str, d
                                    "then run again with --resume") from None
         done[rec["key"]] = rec
     return done
+
+
+def tidy_parts(record: str | None, finished: int) -> str | None:
+    """Remove what ``--resume`` cannot use: half-written ``.part`` files, and the whole parts
+    folder when no finished run's recording is in it. The folder kept, or None."""
+    if record is None:
+        return None
+    parts = Path(record + ".parts")
+    if not parts.is_dir():
+        return None
+    for half in parts.glob("*.part"):
+        half.unlink(missing_ok=True)
+    if finished and any(parts.glob("*.rrd")):
+        return str(parts)
+    shutil.rmtree(parts, ignore_errors=True)
+    return None

@@ -13,6 +13,11 @@ seconds for some methods, during which the other worker's episodes flow at a rat
 later minute will see). While any worker warms up, the estimate is withheld and its
 rate window restarts (:meth:`Progress.eta_s`): a time left extrapolated from a compile
 was 8x too long on the main command.
+
+The block's lock is shared by the processes, and a worker ended by a signal (the sweep
+ends its workers mid-run) can die holding it: so the counts are read without the lock (an
+aligned 8-byte integer is read whole), and a worker waits for the lock at most
+:data:`LOCK_WAIT_S` (progress is a display; a sweep must never wait on it).
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from collections.abc import Iterable, Iterator
 from typing import Any
 
 EPISODES, WARMING = 0, 1  # slots of the shared block
+LOCK_WAIT_S = 1.0  # a worker waits this long for the block's lock, then counts nothing [s]
 
 _shared: Any = None  # a multiprocessing.Array("q", 2) while a sweep runs, else None
 _warm: set[str] = set()  # methods whose first task ran in this process
@@ -45,19 +51,26 @@ def share(counter: Any) -> None:
 
 
 def episodes(counter: Any) -> int:
-    return int(counter[EPISODES])
+    """The episodes ``counter`` holds, read without its lock (see the module's doc)."""
+    return int(counter.get_obj()[EPISODES])
 
 
 def warming(counter: Any) -> int:
-    """How many processes are in the first task of a method right now."""
-    return int(counter[WARMING])
+    """How many processes are in the first task of a method right now (read without the
+    lock)."""
+    return int(counter.get_obj()[WARMING])
 
 
 def _add(slot: int, n: int) -> None:
     c = _shared
-    if c is not None and n:
-        with c.get_lock():
-            c[slot] += n
+    if c is None or not n:
+        return
+    lock = c.get_lock()
+    if lock.acquire(timeout=LOCK_WAIT_S):
+        try:
+            c.get_obj()[slot] += n
+        finally:
+            lock.release()
 
 
 def add_episodes(n: int) -> None:

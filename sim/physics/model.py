@@ -14,14 +14,11 @@ on it unchanged. Cells never reached from S keep "stay" for every action.
 
 Building it drives 4 primitives per reachable cell (paper-50: ~10k primitives,
 a few seconds), so it is cached in-process and on disk
-(``$XDG_CACHE_HOME/rnhql/physics-graph/<digest>.npz``, written atomically). A cache
-file is an input like any other and is checked before it is used (:func:`_load`): its
-format, the key it was built for, the SHA-256 of its array, the array's shape and dtype,
-and that every move either stays or reaches the neighbour in its direction (a primitive
-moves one cell at most). A file that fails any check, or does not load at all (truncated,
-a folder, not a zip), is rebuilt and rewritten, never trusted: a tampered model would
-grade a policy on moves the robot cannot make. ``RNHQL_NO_DISK_CACHE=1`` turns the disk
-cache off.
+(``$XDG_CACHE_HOME/rnhql/physics-graph/<digest>.npz``; :mod:`sim.physics.disk_cache`
+checks a file before it is used, rebuilds one that fails, and says so). This model's own
+check (:func:`_check`): the array's shape and dtype, and that every move either stays or
+reaches the neighbour in its direction (a primitive moves one cell at most).
+``RNHQL_NO_DISK_CACHE=1`` turns the disk cache off.
 """
 
 from __future__ import annotations
@@ -29,26 +26,26 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-import os
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import pymunk
 
-from sim.files import atomic_path
 from sim.grid.actions import ACTION_DELTAS, N_ACTIONS
 from sim.grid.model import TabularModel, build_model, episode_starts
 from sim.grid.planning import breadth_first, distances_to
+from sim.physics import disk_cache
 from sim.physics.static import PhysicsConfig
 from sim.scenario import Scenario
 
-FORMAT = "rnhql-physics-graph-2"  # 2: with its key and the SHA-256 of its content
+# 2: with its key and the SHA-256 of its content; 3: the digest of disk_cache
+FORMAT = "rnhql-physics-graph-3"
+CACHE = disk_cache.CacheKind("physics-graph", FORMAT, ("next_state",), "physics-model")
 
 
 def cache_dir() -> Path:
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "rnhql" / "physics-graph"
+    return disk_cache.cache_dir(CACHE)
 
 
 def digest(sc: Scenario, config: PhysicsConfig) -> str:
@@ -116,13 +113,6 @@ def model_from_transitions(sc: Scenario, nxt: np.ndarray) -> TabularModel:
                                start_states=start_states)
 
 
-def content_digest(nxt: np.ndarray) -> str:
-    """SHA-256 of the transition array as stored (dtype, shape and bytes)."""
-    h = hashlib.sha256(f"{nxt.dtype.str}{nxt.shape}".encode())
-    h.update(np.ascontiguousarray(nxt).tobytes())
-    return h.hexdigest()
-
-
 def moves_are_local(nxt: np.ndarray, nx: int, ny: int) -> bool:
     """Whether every transition stays put or reaches the neighbouring cell in the action's
     direction, inside the arena: what a primitive from rest at a cell centre can do."""
@@ -138,52 +128,23 @@ def moves_are_local(nxt: np.ndarray, nx: int, ny: int) -> bool:
     return True
 
 
-def _load(path: Path, key: str, nx: int, ny: int) -> np.ndarray | None:
-    """The cached transitions of ``key`` in ``path``, or None when the file does not hold
-    exactly what this build would write (see the module's doc)."""
+def _check(arrays: disk_cache.Arrays, nx: int, ny: int) -> str | None:
+    """Why cached transitions cannot be this scenario's model, or None (see the module's doc)."""
+    nxt = arrays["next_state"]
     n = nx * ny
-    try:
-        if not path.is_file() or path.stat().st_size > 64 + 64 * n + 4096:
-            return None  # a folder, a device, or far larger than n x 4 int32 can be
-        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
-            if set(data.files) != {"format", "key", "sha256", "next_state"}:
-                return None
-            if str(data["format"]) != FORMAT or str(data["key"]) != key:
-                return None
-            nxt = data["next_state"]
-            stored = str(data["sha256"])
-    except Exception:  # BadZipFile, a torn header, a folder ...: any failure rebuilds
-        return None
-    if nxt.shape != (n, 4) or nxt.dtype != np.int32 or stored != content_digest(nxt):
-        return None
+    if nxt.shape != (n, 4) or nxt.dtype != np.int32:
+        return f"its transitions are not int32[{n}, 4]"
     if nxt.min() < 0 or nxt.max() >= n or not moves_are_local(nxt, nx, ny):
-        return None
-    return nxt
-
-
-def _save(path: Path, key: str, nxt: np.ndarray) -> None:
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
-        np.savez(f, format=np.array(FORMAT), key=np.array(key),
-                 sha256=np.array(content_digest(nxt)), next_state=nxt)
+        return "a move goes beyond the neighbouring cell"
+    return None
 
 
 @lru_cache(maxsize=8)
 def physics_model(sc: Scenario, config: PhysicsConfig | None = None) -> TabularModel:
     """The physics world's tabular model of ``sc`` (cached in-process and on disk)."""
     config = config or PhysicsConfig()
-    use_disk = os.environ.get("RNHQL_NO_DISK_CACHE", "") in ("", "0")
-    key = digest(sc, config)
-    path = cache_dir() / f"{key}.npz"
-    nxt = _load(path, key, sc.nx, sc.ny) if use_disk else None
-    if nxt is None:
-        nxt = drive_transitions(sc, config)
-        if use_disk:
-            try:
-                if path.is_dir() and not path.is_symlink():
-                    import shutil
-
-                    shutil.rmtree(path)  # a folder under the cache file's own name
-                _save(path, key, nxt)
-            except (OSError, ValueError):  # a read-only home, a device under the name: the
-                pass  # in-process cache still works
-    return model_from_transitions(sc, nxt)
+    arrays = disk_cache.cached(
+        CACHE, digest(sc, config),
+        lambda: {"next_state": drive_transitions(sc, config)},
+        lambda a: _check(a, sc.nx, sc.ny), max_bytes=64 + 64 * sc.nx * sc.ny + 4096)
+    return model_from_transitions(sc, arrays["next_state"])

@@ -22,8 +22,10 @@ them. Rest poses that arrive later are assigned to the nearest particle like any
 Built models are cached in-process and on disk
 (``$XDG_CACHE_HOME/rnhql/stochastic-model/<digest>.npz``; the digest holds the scenario,
 physics config, fidelity, sampling, batch size and a hash of the source of the modules a
-drive runs through, so a new contact rule means a new model; written atomically; a file
-that does not load is rebuilt, never trusted). ``RNHQL_NO_DISK_CACHE=1`` turns the disk
+drive runs through, so a new contact rule means a new model). :mod:`sim.physics.disk_cache`
+checks a file before it is used (format, key, the SHA-256 of its content), rebuilds one that
+fails and says so; this model's own check is :func:`_check` (dtypes, shapes, the
+scenario's size, indices in range, probabilities). ``RNHQL_NO_DISK_CACHE=1`` turns the disk
 cache off.
 """
 
@@ -33,7 +35,6 @@ import dataclasses
 import hashlib
 import json
 import math
-import os
 import time
 from functools import lru_cache
 from pathlib import Path
@@ -41,9 +42,9 @@ from pathlib import Path
 import numpy as np
 import pymunk
 
-from sim.files import atomic_path
 from sim.grid.actions import N_ACTIONS
 from sim.grid.discretiser import Discretiser
+from sim.physics import disk_cache
 from sim.physics.batch import RouteBatch
 from sim.physics.fidelity import Fidelity
 from sim.physics.static import PhysicsConfig
@@ -61,7 +62,7 @@ from sim.physics.stochastic_model import (
 )
 from sim.scenario import Scenario
 
-FORMAT = "rnhql-stochastic-model-3"
+FORMAT = "rnhql-stochastic-model-4"  # 4: with its key and the SHA-256 of its content
 BATCH = 256  # robots per batched step while building
 _NAN_POSE = np.full(4, np.nan)
 
@@ -306,8 +307,7 @@ def build_stochastic_model(sc: Scenario, fidelity: Fidelity | None = None,
 
 # ---------------------------------------------------------------------------- caching
 def cache_dir() -> Path:
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "rnhql" / "stochastic-model"
+    return disk_cache.cache_dir(CACHE)
 
 
 @lru_cache(maxsize=1)
@@ -338,38 +338,46 @@ def digest(sc: Scenario, config: PhysicsConfig, fid: Fidelity, sampling: Samplin
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 
-_ARRAYS = ("state_cell", "state_context", "state_pose", "sa_ptr", "dst", "prob", "mean_steps")
+# every array of the model and its dtype, then its scalars (stored as 0-d arrays)
+_ARRAYS = {"state_cell": np.int32, "state_context": np.int8, "state_pose": np.float64,
+           "sa_ptr": np.int64, "dst": np.int32, "prob": np.float64, "mean_steps": np.float64}
 _SCALARS = ("nx", "ny", "cell_m", "start_cell", "goal_cell", "primitives", "build_s", "timeouts")
+CACHE = disk_cache.CacheKind("stochastic-model", FORMAT, (*_ARRAYS, *_SCALARS),
+                             "stochastic-model")
+MAX_CACHE_BYTES = 4 * 1024 ** 3  # far beyond any model a build can drive in a day
 
 
-def _save(path: Path, m: StochasticModel) -> None:
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
-        np.savez(f, format=np.array(FORMAT), **{a: getattr(m, a) for a in _ARRAYS},
-                 **{s: np.array(getattr(m, s)) for s in _SCALARS})
+def _arrays(m: StochasticModel) -> disk_cache.Arrays:
+    return {**{a: getattr(m, a) for a in _ARRAYS},
+            **{s: np.array(getattr(m, s)) for s in _SCALARS}}
 
 
-def _load(path: Path, fid: Fidelity, sampling: Sampling, sc: Scenario
-          ) -> StochasticModel | None:
-    """The model in ``path``, or None when it is not one this scenario can use."""
-    try:
-        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
-            if str(data["format"]) != FORMAT:
-                return None
-            arrays = {a: data[a] for a in _ARRAYS}
-            scalars = {s: data[s].item() for s in _SCALARS}
-    except Exception:  # BadZipFile, a torn header, a folder ...: any failure rebuilds
-        return None
-    n = arrays["state_cell"].size
-    ptr, dst, prob = arrays["sa_ptr"], arrays["dst"], arrays["prob"]
-    ok = (scalars["nx"] == sc.nx and scalars["ny"] == sc.ny and scalars["cell_m"] == sc.cell_size_m
-          and arrays["state_context"].shape == (n,) and arrays["state_pose"].shape == (n, 4)
-          and ptr.shape == (N_ACTIONS * n + 1,) and arrays["mean_steps"].shape == (n, N_ACTIONS)
-          and dst.shape == prob.shape and ptr[0] == 0 and ptr[-1] == dst.size
-          and bool(np.all(np.diff(ptr) >= 1)) and bool(np.all(prob > 0))
-          and (dst.size == 0 or (dst.min() >= 0 and dst.max() <= n)))
-    if not ok:
-        return None
-    return StochasticModel(fidelity=fid, sampling=sampling, **arrays, **scalars)
+def _check(a: disk_cache.Arrays, sc: Scenario) -> str | None:
+    """Why cached arrays cannot be the model of ``sc``, or None: every dtype and shape, the
+    scenario's size and its S and G, indices in range, probabilities in (0, 1]."""
+    if any(a[k].dtype != t for k, t in _ARRAYS.items()) or any(a[k].shape for k in _SCALARS):
+        return "an array has the wrong dtype or shape"
+    disc = Discretiser.from_scenario(sc)
+    if (a["nx"].item(), a["ny"].item(), a["cell_m"].item(), a["start_cell"].item(),
+            a["goal_cell"].item()) != (sc.nx, sc.ny, sc.cell_size_m, disc.index(*sc.start),
+                                       disc.index(*sc.goal)):
+        return "it was built for another arena"
+    n = a["state_cell"].size
+    ptr, dst, prob = a["sa_ptr"], a["dst"], a["prob"]
+    if not (a["state_cell"].shape == a["state_context"].shape == (n,)
+            and a["state_pose"].shape == (n, 4) and ptr.shape == (N_ACTIONS * n + 1,)
+            and a["mean_steps"].shape == (n, N_ACTIONS) and dst.ndim == 1
+            and dst.shape == prob.shape):
+        return "its arrays' shapes do not fit together"
+    cells, ctx = a["state_cell"], a["state_context"]
+    if not (ptr[0] == 0 and ptr[-1] == dst.size and bool(np.all(np.diff(ptr) >= 1))
+            and (n == 0 or (cells.min() >= 0 and cells.max() < sc.nx * sc.ny
+                            and ctx.min() >= 0 and ctx.max() < N_CONTEXTS))
+            and (dst.size == 0 or (dst.min() >= 0 and dst.max() <= n))
+            and bool(np.all((prob > 0) & (prob <= 1)))
+            and min(a["primitives"].item(), a["timeouts"].item()) >= 0):
+        return "an index or a probability is out of range"
+    return None
 
 
 @lru_cache(maxsize=8)
@@ -381,14 +389,10 @@ def stochastic_model(sc: Scenario, fidelity: Fidelity | None = None,
     config = config or PhysicsConfig()
     sampling = sampling or Sampling.default(fid)
     sampling.validate()
-    use_disk = os.environ.get("RNHQL_NO_DISK_CACHE", "") in ("", "0")
-    path = cache_dir() / f"{digest(sc, config, fid, sampling)}.npz"
-    model = _load(path, fid, sampling, sc) if use_disk and path.exists() else None
-    if model is None:
-        model = build_stochastic_model(sc, fid, sampling, config)
-        if use_disk:
-            try:
-                _save(path, model)
-            except OSError:  # a read-only home: the in-process cache still works
-                pass
-    return model
+    a = disk_cache.cached(
+        CACHE, digest(sc, config, fid, sampling),
+        lambda: _arrays(build_stochastic_model(sc, fid, sampling, config)),
+        lambda got: _check(got, sc), max_bytes=MAX_CACHE_BYTES)
+    return StochasticModel(fidelity=fid, sampling=sampling,
+                           **{k: a[k] for k in _ARRAYS},
+                           **{k: a[k].item() for k in _SCALARS})

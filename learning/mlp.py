@@ -74,19 +74,15 @@ def net_row(w, x, s, out, hid):
 
 @njit(cache=True)
 def add_gradient(w, x, s, a, n_hidden, e):
-    """e[block a] += d net_a(x[s]) / d w (back-propagation through the sigmoid layer)."""
+    """e[block a] += d net_a(x[s]) / d w (back-propagation through the sigmoid layer), from
+    scratch: the training step reuses the activations :func:`net_row` kept instead."""
     o = a * (4 * n_hidden + 1)
     h2 = 2 * n_hidden
-    h3 = 3 * n_hidden
     x0, x1 = x[s, 0], x[s, 1]
+    hid = np.empty((a + 1, n_hidden))
     for j in range(n_hidden):
-        hj = _sigmoid(w[o + 2 * j] * x0 + w[o + 2 * j + 1] * x1 + w[o + h2 + j])
-        e[o + h3 + j] += hj  # dW2_j
-        g = w[o + h3 + j] * hj * (1.0 - hj)
-        e[o + 2 * j] += g * x0  # dW1_j0
-        e[o + 2 * j + 1] += g * x1  # dW1_j1
-        e[o + h2 + j] += g  # db1_j
-    e[o + 4 * n_hidden] += 1.0  # db2
+        hid[a, j] = _sigmoid(w[o + 2 * j] * x0 + w[o + 2 * j + 1] * x1 + w[o + h2 + j])
+    _add_gradient_at(w, x0, x1, a, n_hidden, hid, e)
 
 
 @njit(cache=True)

@@ -335,3 +335,14 @@ def test_a_copied_scenario_under_a_new_file_name_says_so(capsys, monkeypatch, tm
     assert main(["train", "mine", "--episodes", "2"]) == 2
     err = capsys.readouterr().err
     assert "mine.toml: name: is 'paper-50'" in err and 'set name = "mine"' in err
+
+
+def test_the_default_recording_keeps_the_method_name_the_docs_print(tmp_path, monkeypatch):
+    """docs/usage.md's tour opens recordings/paper-50-rnh-ql+-grid-s0.rrd: the file a
+    default --record of rnh-ql+ writes (it was rnh-ql_)."""
+    from scenarios.cli.paths import RECORD_DEFAULT, record_path
+
+    monkeypatch.chdir(tmp_path)
+    args = type("A", (), {"record": RECORD_DEFAULT})()
+    assert record_path(args, "paper-50", "rnh-ql+-grid-s0") == \
+        "recordings/paper-50-rnh-ql+-grid-s0.rrd"

@@ -46,7 +46,7 @@ def record_path(args: argparse.Namespace, scenario: str, rest: str) -> str | Non
     # a scenario's name is the user's text: never let it climb out of recordings/, and
     # keep the file name within what a file system takes (255 bytes)
     safe = re.sub(r"[^A-Za-z0-9._-]+", "_", scenario).lstrip("._")[:MAX_NAME_CHARS] or "run"
-    rest = re.sub(r"[^A-Za-z0-9._-]+", "_", rest)
+    rest = re.sub(r"[^A-Za-z0-9._+-]+", "_", rest)  # method names keep their "+" (rnh-ql+)
     # (an explicit --record '' never reaches here: check_empty_paths refuses it)
     path = Path(f"recordings/{safe}-{rest}.rrd" if args.record in (RECORD_DEFAULT, "")
                 else args.record)

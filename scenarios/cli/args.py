@@ -112,13 +112,13 @@ def rewards_note(args: argparse.Namespace) -> str:
 
 def add_fidelity_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fidelity", default=None, metavar="NAME|KEY=VALUE,...",
-                   help="physics fidelity: exact (default), noisy (wheel_noise=0.05, "
-                        "carried_pose=true), rough (wheel_noise=0.15, carried_pose=true), or "
-                        "a preset then knobs, e.g. noisy,wheel_noise=0.1. Knobs: wheel_noise "
-                        "[relative sigma of each wheel's speed per control period], "
-                        "carried_pose [true/false: after a contact the robot rests where it "
-                        "stopped], bumper_travel_m [m, default 0.002: a drive pressing into "
-                        "the surface it rests on bumps after this travel]. Above exact, "
+                   help="physics fidelity, a rung of the ladder: exact (default), noisy "
+                        "(wheel_noise=0.05, carried_pose=true), slippery (wheel_noise=0.15), "
+                        "uncalibrated (noisy + a per-run wheel-diameter and wheelbase bias, 1 "
+                        "%% sigma), open-loop (uncalibrated, primitives without feedback), "
+                        "localised (uncalibrated, pose from odometry and a fix every 5 "
+                        "primitives); or a preset then knobs, e.g. noisy,wheel_noise=0.1 "
+                        "(every knob, with units: docs/fidelity.md). Above exact, "
                         "greedy tests drive 10 rollouts and the final policy 50 (physics "
                         "runs only)")
 

@@ -124,8 +124,8 @@ def optimum_at_fidelity(sc: Any, fid: Any) -> dict[str, Any] | None:
     ``RNHQL_NO_OPTIMUM=1`` skips it (tiny test sweeps)."""
     import os
 
-    if os.environ.get("RNHQL_NO_OPTIMUM") == "1":
-        return None
+    if os.environ.get("RNHQL_NO_OPTIMUM") == "1" or fid.hidden_state:
+        return None  # hidden state (open loop, localisation): no V* (Fidelity.hidden_state)
     from sim.physics.stochastic_build import stochastic_model
     from sim.physics.stochastic_rollouts import ABS_TOL, P_TOL, REL_TOL
     from sim.physics.stochastic_solve import solve

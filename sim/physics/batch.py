@@ -103,7 +103,10 @@ class RouteBatch:
             cfg.dt_s, cfg.substeps, cfg.control_period_s, cfg.tolerance_m, cfg.tolerance_rad,
             timeout_steps, cfg.contact_depth_m, pivot.max_force * cfg.dt_s / body.mass,
             gear.max_force * cfg.dt_s / body.moment, self.cell_m, self.nx, self.ny, self.radius_m,
-            lim.wheel_base_m, fid.wheel_noise, fid.carried_pose, fid.bumper_travel_m)
+            lim.wheel_base_m, fid.wheel_noise, fid.carried_pose, fid.bumper_travel_m,
+            fid.biased, fid.open_loop, fid.localisation, fid.odometry_rot_rot,
+            fid.odometry_rot_trans, fid.odometry_trans_trans, fid.odometry_trans_rot,
+            fid.fix_every, fid.fix_sigma_m, fid.fix_sigma_rad)
         self.profiles = prof
         self.static = Geometry(g.circles, g.walls, g.boxes, g.start, g.items)
         n_s = self.nx * self.ny
@@ -118,7 +121,10 @@ class RouteBatch:
         self._args = (tuple(self.params), tuple(prof), tuple(self.static), tuple(self.scratch))
         self.robots = np.zeros(n_robots, ROBOT)
         self.r = r = by_name(self.robots)
-        r.x[:], r.y[:] = x0, y0
+        # each robot's per-run bias (gain_l, gain_r, base_k): drawn by set_noise_rng
+        self._bias = np.ones((n_robots, 3))
+        for i in range(n_robots):
+            self._blank(i, x0, y0, 0.0)
         cap = (timeout_steps + 2 * (prof.drive_sums.size + prof.turn_sums.size) + 8
                if trajectories else 0)
         self._traj = np.zeros((n_robots, cap, 3))
@@ -130,7 +136,8 @@ class RouteBatch:
         self.kernel_s = 0.0  # wall time in the compiled kernel so far [s]
         self.chipmunk_s = 0.0  # wall time in Chipmunk contact checks so far [s]
         # each robot's normals for wheel noise, drawn in blocks from its own generator
-        self._noise = np.zeros((n_robots, NOISE_BLOCK if fid.wheel_noise > 0 else 2))
+        self._noise = np.zeros((n_robots, NOISE_BLOCK if fid.wheel_noise > 0
+                                              or fid.localisation else 2))
         self._npos = np.full(n_robots, self._noise.shape[1], dtype=np.int64)
         self._noise_rngs: list[np.random.Generator | None] = [None] * n_robots
         sigint.install(RouteBatch._check)
@@ -158,14 +165,37 @@ class RouteBatch:
         """Put robot ``i`` at rest at a pose: a new episode (its step clock and contacts
         reset); ``resting``: against a surface (as ``PhysicsWorld.place``)."""
         r = self.r
-        self.robots[i] = _BLANK
-        r.x[i], r.y[i], r.th[i] = x_m, y_m, heading_rad
+        self._blank(i, x_m, y_m, heading_rad)
         r.resting[i] = resting
         self.contacts[i] = []
         self.contact_counts[i] = dict.fromkeys(CollisionType, 0)
         body = self.bodies[i]
         body.position, body.angle = (x_m, y_m), heading_rad
         body.velocity, body.angular_velocity = (0.0, 0.0), 0.0
+
+    def _blank(self, i: int, x_m: float, y_m: float, heading_rad: float) -> None:
+        """Robot ``i``'s record all new at a pose, which it knows (its estimate is the pose:
+        placed by hand), keeping its per-run bias."""
+        r = self.r
+        self.robots[i] = _BLANK
+        r.x[i], r.y[i], r.th[i] = x_m, y_m, heading_rad
+        r.bx[i], r.by[i], r.bth[i] = x_m, y_m, heading_rad
+        r.gain_l[i], r.gain_r[i], r.base_k[i] = self._bias[i]
+
+    def believed_pose(self, i: int) -> tuple[float, float, float]:
+        """What robot ``i`` believes its pose is (with localisation: its estimate; in open loop
+        without it: the heading is the one last commanded; otherwise the true pose)."""
+        r, fid = self.r, self.fidelity
+        if fid.localisation:
+            return float(r.bx[i]), float(r.by[i]), float(r.bth[i])
+        if fid.open_loop:
+            return float(r.x[i]), float(r.y[i]), float(r.bth[i])
+        return self.pose(i)
+
+    def bias(self, i: int) -> tuple[float, float, float]:
+        """Robot ``i``'s per-run bias: left and right wheel gains, true over nominal
+        wheelbase (1, 1, 1 without one)."""
+        return tuple(float(v) for v in self._bias[i])  # type: ignore[return-value]
 
     def pose(self, i: int) -> tuple[float, float, float]:
         """(x [m], y [m], heading [rad], not wrapped) of robot ``i``."""
@@ -220,7 +250,7 @@ class RouteBatch:
         rb, r = self.robots, self.r
         if self.records_trajectories:
             self._traj_start[:] = self.poses()
-        K.begin_all(rb, acts, act, self.cell_m, self.nx, self.ny)
+        K.begin_all(rb, acts, act, self.cell_m, self.nx, self.ny, self.fidelity.localisation)
         clock = time.perf_counter
         while True:
             t0 = clock()
@@ -241,7 +271,7 @@ class RouteBatch:
         return PrimitiveOutcome(
             state=np.where(act, r.state, 0), bumped=act & r.bumped, reached=act & r.reached,
             timeout=act & r.timeout, steps=np.where(act, r.steps - r.steps0, 0),
-            contacts=np.where(act, r.ncontact, 0))
+            contacts=np.where(act, r.ncontact, 0), cell=np.where(act, r.tstate, 0))
 
     @property
     def casts(self) -> int:
@@ -249,9 +279,19 @@ class RouteBatch:
         return int(self.scratch.counters[1])
 
     def set_noise_rng(self, i: int, rng: np.random.Generator) -> None:
-        """Robot ``i``'s wheel noise comes from ``rng`` from now on (its buffer is emptied)."""
+        """Robot ``i``'s wheel noise comes from ``rng`` from now on (its buffer is emptied): a
+        new run. With a per-run bias (:attr:`Fidelity.biased`) the robot's E_d and E_b are
+        drawn first, two normals of ``rng``: a new robot."""
         self._noise_rngs[i] = rng
         self._npos[i] = self._noise.shape[1]
+        fid = self.fidelity
+        if fid.biased:
+            e_d, e_b = rng.standard_normal(2)
+            ratio = 1.0 + fid.wheel_ratio_sigma * e_d  # right over left wheel diameter
+            self._bias[i] = (2.0 / (ratio + 1.0), 2.0 * ratio / (ratio + 1.0),
+                             1.0 + fid.wheelbase_sigma * e_b)
+            r = self.r
+            r.gain_l[i], r.gain_r[i], r.base_k[i] = self._bias[i]
 
     def _refill(self, i: int) -> None:
         rng = self._noise_rngs[i]

@@ -86,15 +86,23 @@ def cell_of(x_m: float, y_m: float, cell_m: float, nx: int, ny: int) -> tuple[in
 
 @njit(cache=True)
 def wheel_twist(vx: float, vy: float, omega: float, heading: float, e_left: float,
-                e_right: float, wheel_noise: float, wheel_base_m: float
+                e_right: float, wheel_noise: float, wheel_base_m: float,
+                gain_left: float = 1.0, gain_right: float = 1.0, base_k: float = 1.0
                 ) -> tuple[float, float, float]:
     """A commanded twist as a diff drive delivers it above ``exact``: each wheel's speed times
-    ``1 + wheel_noise * e`` (``e_left``, ``e_right`` the robot's next two normals), and the
-    motion along the robot's ``heading`` [rad] (a diff drive cannot move sideways)."""
+    ``1 + wheel_noise * e`` (``e_left``, ``e_right`` the robot's next two normals) and its
+    per-run gain (``gain_left``, ``gain_right``: the wheel-diameter bias), yawing about the
+    true wheelbase (``base_k`` times the nominal one the command was computed with), and the
+    motion along the robot's ``heading`` [rad] (a diff drive cannot move sideways). With
+    gains and ``base_k`` 1 the arithmetic is the unbiased one, bit for bit."""
     vl, vr = twist_to_wheels(math.hypot(vx, vy), omega, wheel_base_m)
     if wheel_noise > 0.0:
         vl *= 1.0 + wheel_noise * e_left
         vr *= 1.0 + wheel_noise * e_right
+    if gain_left != 1.0 or gain_right != 1.0 or base_k != 1.0:
+        vl *= gain_left
+        vr *= gain_right
+        wheel_base_m *= base_k
     v, w = wheels_to_twist(vl, vr, wheel_base_m)
     return v * math.cos(heading), v * math.sin(heading), w
 
@@ -299,6 +307,8 @@ class PrimitiveOutcome(NamedTuple):
     timeout: Any  # bool: gave up at PhysicsConfig.timeout_s
     steps: Any  # int: physics steps driven
     contacts: Any  # int: contacts that began
+    cell: Any = None  # int: the true cell of the final pose (``state`` is the believed one
+    #   with localisation; the reference, which has none, gives the state)
 
 
 class PrimitiveController:
@@ -319,6 +329,11 @@ class PrimitiveController:
         self.config = config
         self.fidelity = fid = fidelity or Fidelity()
         fid.validate()
+        if fid.biased or fid.open_loop or fid.localisation:
+            raise ValueError(
+                f"the reference controller drives wheel noise and carried pose only, not "
+                f"{fid.label}: the bias, open-loop and localisation knobs live in the batched "
+                "kernel and are tested against their analytic models (tests/test_ladder_knobs.py)")
         period = config.control_period_s
         self._period = period
         self.profiles = profiles(lim, period, scenario.cell_size_m)
@@ -391,10 +406,10 @@ class PrimitiveController:
             if world.steps - steps0 >= self._timeout_steps:
                 break
         steps = world.steps - steps0
+        cell = disc.state_of(pose[0], pose[1])
         return PrimitiveOutcome(
-            state=disc.state_of(pose[0], pose[1]), bumped=bumped, reached=reached,
-            timeout=not (bumped or reached), steps=steps,
-            contacts=len(world.contacts) - n_contacts0)
+            state=cell, bumped=bumped, reached=reached, timeout=not (bumped or reached),
+            steps=steps, contacts=len(world.contacts) - n_contacts0, cell=cell)
 
     def _drive_noisy(self, world: PhysicsWorld, commands: list[tuple[float, float, float]],
                      nturn: int, rng: np.random.Generator | None) -> bool:

@@ -162,14 +162,15 @@ class PhysicsRouteEnv(gym.Env):
         self._s = s
         self._elapsed += 1
         bumped = bool(out.bumped[0])
-        reward = float(self.rewards.of_moves(bumped, s == self._goal))
+        at_goal = int(out.cell[0]) == self._goal  # the true cell (s: the believed one)
+        reward = float(self.rewards.of_moves(bumped, at_goal))
         if self._trail is not None:
             self._trail.chunks.append(batch.trajectory(0))
         info = {"state": s, "bumped": bumped, "reached": bool(out.reached[0]),
                 "timeout": bool(out.timeout[0]), "steps": int(out.steps[0]),
                 "contacts": len(batch.contacts[0]) - n_before,
                 "pose": info_pose(*batch.pose(0)), "time_s": batch.time_s(0)}
-        return s, reward, s == self._goal, self._elapsed >= self.steps_per_episode, info
+        return s, reward, at_goal, self._elapsed >= self.steps_per_episode, info
 
     def trajectory(self) -> np.ndarray:
         """float64[n, 3]: the pose before the last primitive, then after each physics step

@@ -17,8 +17,30 @@ a real robot does:
   into the surface it rests on by ``bumper_travel_m`` [m] (a switch with mm of travel);
   the surface holds the disc meanwhile (it slides along it, it does not sink in), and a
   turn in place against it turns.
+- ``wheel_ratio_sigma``, ``wheelbase_sigma`` [-]: a systematic error per robot, drawn once
+  per run from the robot's physics stream (UMBmark's two dominant odometry errors):
+  ``E_d = 1 + wheel_ratio_sigma * e`` (right over left wheel diameter; the mean diameter
+  is the nominal one, so the left wheel delivers ``2 / (E_d + 1)`` of its command, the right
+  ``2 E_d / (E_d + 1)``) and ``E_b = 1 + wheelbase_sigma * e`` (true over nominal
+  wheelbase: a turn commanded with the nominal one turns ``1 / E_b`` of it). Typical
+  uncalibrated robots: of the order of 1 %.
+- ``open_loop``: a primitive is planned once, from the pose the robot *believes* it has
+  (its cell's centre and the heading it was last told to take, or the pose estimate with
+  localisation), and its commands run without feedback from the true pose. A robot
+  without encoders; offsets within the cell and heading errors carry from move to move.
+- ``localisation``: the controller and the learner read a pose *estimate*, never the true
+  pose. The estimate is dead-reckoned from wheel odometry: each control period the wheels'
+  travel as encoders read it (through the robot's nominal geometry, so the per-run bias
+  shows as UMBmark's systematic drift), split into rotate-translate-rotate and perturbed
+  by the odometry motion model (Thrun et al., *Probabilistic Robotics* 5.4: variances
+  ``odometry_rot_rot * rot^2 + odometry_rot_trans * trans^2`` for each rotation,
+  ``odometry_trans_trans * trans^2 + odometry_trans_rot * (rot1^2 + rot2^2)`` for the
+  translation). Every ``fix_every`` primitives an absolute fix re-anchors it: the true
+  pose plus normal errors ``fix_sigma_m`` per axis and ``fix_sigma_rad``. The learner's
+  state is the *believed* cell; contacts, the reward and reaching G are the true pose's.
+  Needs carried pose (a bump does not teleport a robot to a centre it does not know).
 
-Every knob is deterministic per seed: the noise comes from the generator the env (or the
+What each preset stands for is written beside it in :data:`PRESETS`. Every knob is deterministic per seed: the noise comes from the generator the env (or the
 sweep) gives each robot. ``parse_fidelity("noisy")`` or ``"exact,wheel_noise=0.02"`` (a
 preset, then fields); bad names or values raise :class:`sim.errors.ScenarioError` naming
 the field.
@@ -34,6 +56,11 @@ from sim.errors import ScenarioError
 
 MAX_WHEEL_NOISE = 0.5  # beyond this a "primitive" is no longer a move to a neighbour
 MAX_BUMPER_TRAVEL_M = 0.005  # PhysicsConfig.contact_depth_m: no step goes deeper [m]
+MAX_BIAS_SIGMA = 0.1  # a 10 % wheel-radius or wheelbase error is a broken robot, not a bias
+MAX_ODOMETRY_ALPHA = 1.0  # odometry variance per squared motion; beyond, odometry is noise
+MAX_FIX_SIGMA_M = 1.0  # [m]
+MAX_FIX_SIGMA_RAD = math.pi / 4  # [rad]
+RENAMED = {"rough": "slippery"}  # old preset names: what they were renamed to (issue 38)
 
 
 @dataclass(frozen=True)
@@ -45,6 +72,21 @@ class Fidelity:
     carried_pose: bool = False  # after a contact the robot stays where it stopped
     bumper_travel_m: float = 0.002  # carried pose: a drive pressing into the surface the
     #   robot rests on reports a new bump after this much travel [m] (a bumper switch)
+    wheel_ratio_sigma: float = 0.0  # per-run bias: sigma of E_d - 1, E_d = right/left wheel
+    #   diameter (UMBmark), drawn once per run from the robot's physics stream [-]
+    wheelbase_sigma: float = 0.0  # per-run bias: sigma of E_b - 1, E_b = actual/nominal
+    #   wheelbase, drawn once per run [-]
+    open_loop: bool = False  # a primitive is planned once, from the pose the robot believes
+    #   it has, and its commands run without feedback from the true pose
+    localisation: bool = False  # the controller and the learner read a pose estimate (wheel
+    #   odometry, fixes), not the true pose; contacts and rewards stay the true pose's
+    odometry_rot_rot: float = 0.0  # alpha1: rotation variance per squared rotation [rad^2/rad^2]
+    odometry_rot_trans: float = 0.0  # alpha2: rotation variance per squared distance [rad^2/m^2]
+    odometry_trans_trans: float = 0.0  # alpha3: distance variance per squared distance [m^2/m^2]
+    odometry_trans_rot: float = 0.0  # alpha4: distance variance per squared rotation [m^2/rad^2]
+    fix_every: int = 0  # localisation: an absolute fix every this many primitives (0: never)
+    fix_sigma_m: float = 0.0  # the fix's position error, per axis [m]
+    fix_sigma_rad: float = 0.0  # the fix's heading error [rad]
 
     @property
     def label(self) -> str:
@@ -52,36 +94,106 @@ class Fidelity:
         base = PRESETS.get(self.name)
         if base is not None and base == self:
             return self.name
+        default = Fidelity()
         knobs = ", ".join(f"{f.name}={getattr(self, f.name)}" for f in dataclasses.fields(self)
-                          if f.name != "name")
+                          if f.name != "name" and (f.name in _FIRST_KNOBS
+                                                   or getattr(self, f.name)
+                                                   != getattr(default, f.name)))
         return f"{self.name} ({knobs})"
 
     @property
     def is_exact(self) -> bool:
-        return self.wheel_noise == 0.0 and not self.carried_pose
+        return self == dataclasses.replace(PRESETS["exact"], name=self.name,
+                                           bumper_travel_m=self.bumper_travel_m)
+
+    @property
+    def biased(self) -> bool:
+        """A per-run wheel bias is drawn (E_d or E_b)."""
+        return self.wheel_ratio_sigma > 0.0 or self.wheelbase_sigma > 0.0
+
+    @property
+    def hidden_state(self) -> bool:
+        """Where the robot stands within its cell is not known to what plans its moves (open
+        loop), or its cell itself is an estimate (localisation): the world is not Markov in
+        the stochastic model's states, so V* (:mod:`sim.physics.stochastic_model`) is not
+        defined at this rung."""
+        return self.open_loop or self.localisation
+
+    def knobs(self) -> dict[str, object]:
+        """Every knob by name (what records carry)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
 
     def validate(self, source: str = "fidelity") -> None:
-        if not (isinstance(self.wheel_noise, int | float) and math.isfinite(self.wheel_noise)
-                and 0.0 <= self.wheel_noise <= MAX_WHEEL_NOISE):
-            raise ScenarioError(source, "wheel_noise", f"must be in 0..{MAX_WHEEL_NOISE}, got "
-                                f"{self.wheel_noise!r}", "use e.g. 0.05 (5 % per wheel)")
+        _number(source, "wheel_noise", self.wheel_noise, 0.0, MAX_WHEEL_NOISE,
+                "use e.g. 0.05 (5 % per wheel)")
         if not (isinstance(self.bumper_travel_m, int | float)
                 and math.isfinite(self.bumper_travel_m)
                 and 0.0 < self.bumper_travel_m <= MAX_BUMPER_TRAVEL_M):
             raise ScenarioError(source, "bumper_travel_m", f"must be in (0, "
                                 f"{MAX_BUMPER_TRAVEL_M}] m, got {self.bumper_travel_m!r}",
                                 "use e.g. 0.002 (2 mm)")
-        if not isinstance(self.carried_pose, bool):
-            raise ScenarioError(source, "carried_pose", f"must be true or false, got "
-                                f"{self.carried_pose!r}", "use true or false")
+        for key in ("carried_pose", "open_loop", "localisation"):
+            if not isinstance(getattr(self, key), bool):
+                raise ScenarioError(source, key, f"must be true or false, got "
+                                    f"{getattr(self, key)!r}", "use true or false")
+        for key in ("wheel_ratio_sigma", "wheelbase_sigma"):
+            _number(source, key, getattr(self, key), 0.0, MAX_BIAS_SIGMA,
+                    "use e.g. 0.01 (1 %, an uncalibrated robot)")
+        for key in ("odometry_rot_rot", "odometry_rot_trans", "odometry_trans_trans",
+                    "odometry_trans_rot"):
+            _number(source, key, getattr(self, key), 0.0, MAX_ODOMETRY_ALPHA,
+                    "use e.g. 0.01 (a variance per squared motion)")
+        if not (isinstance(self.fix_every, int) and not isinstance(self.fix_every, bool)
+                and 0 <= self.fix_every <= 1_000_000):
+            raise ScenarioError(source, "fix_every", f"must be a whole number of primitives "
+                                f">= 0, got {self.fix_every!r}", "use e.g. 5 (0: no fixes)")
+        _number(source, "fix_sigma_m", self.fix_sigma_m, 0.0, MAX_FIX_SIGMA_M,
+                "use e.g. 0.05 (5 cm)")
+        _number(source, "fix_sigma_rad", self.fix_sigma_rad, 0.0, MAX_FIX_SIGMA_RAD,
+                "use e.g. 0.05 (about 3 degrees)")
+        if self.localisation and not self.carried_pose:
+            raise ScenarioError(source, "localisation", "needs carried_pose=true",
+                                "a robot that localises is never placed back on a centre it "
+                                "does not know: add carried_pose=true")
+        unused = [k for k in ("odometry_rot_rot", "odometry_rot_trans", "odometry_trans_trans",
+                              "odometry_trans_rot", "fix_every", "fix_sigma_m", "fix_sigma_rad")
+                  if getattr(self, k) and not self.localisation]
+        if unused:
+            raise ScenarioError(source, unused[0], "has no effect without localisation=true",
+                                "add localisation=true, or drop the knob")
 
 
+_FIRST_KNOBS = ("wheel_noise", "carried_pose", "bumper_travel_m")  # always in labels
+
+
+def _number(source: str, key: str, value: object, lo: float, hi: float, hint: str) -> None:
+    if not (isinstance(value, int | float) and not isinstance(value, bool)
+            and math.isfinite(value) and lo <= value <= hi):
+        raise ScenarioError(source, key, f"must be in {lo}..{hi}, got {value!r}", hint)
+
+
+_NOISY = dict(wheel_noise=0.05, carried_pose=True)
+_UNCALIBRATED = dict(_NOISY, wheel_ratio_sigma=0.01, wheelbase_sigma=0.01)
 PRESETS = {
+    # the paper's world: closed-loop primitives to cell centres, a bump places back
     "exact": Fidelity(),
-    "noisy": Fidelity(name="noisy", wheel_noise=0.05, carried_pose=True),
-    # a cheap robot on a poor floor: open-loop PWM motors without encoders, a slippery or
-    # uneven surface (15 % per wheel per control period), bumper stops as at noisy
-    "rough": Fidelity(name="rough", wheel_noise=0.15, carried_pose=True),
+    # motor gain noise on a robot that knows its true pose (feedback until within 2 cm)
+    "noisy": Fidelity(name="noisy", **_NOISY),
+    # the same on a slippery or uneven floor: 15 % per wheel per control period
+    "slippery": Fidelity(name="slippery", wheel_noise=0.15, carried_pose=True),
+    # noisy, and every robot (every run) has its own wheel-diameter ratio and wheelbase
+    # error, 1 % sigma each: a robot nobody calibrated (UMBmark)
+    "uncalibrated": Fidelity(name="uncalibrated", **_UNCALIBRATED),
+    # uncalibrated, and the primitives run open loop: planned from the cell centre and the
+    # heading the robot was last told to take, no feedback (encoder-less PWM motors; the
+    # cell itself is still known, e.g. an overhead camera between moves)
+    "open-loop": Fidelity(name="open-loop", **_UNCALIBRATED, open_loop=True),
+    # uncalibrated, and the robot knows only its dead-reckoned pose: wheel odometry with
+    # the odometry motion model's noise, a fix of 5 cm / 3 degrees every 5 primitives
+    "localised": Fidelity(name="localised", **_UNCALIBRATED, localisation=True,
+                          odometry_rot_rot=0.01, odometry_rot_trans=0.01,
+                          odometry_trans_trans=0.01, odometry_trans_rot=0.0001,
+                          fix_every=5, fix_sigma_m=0.05, fix_sigma_rad=0.05),
 }
 
 
@@ -95,6 +207,12 @@ def parse_fidelity(text: str | None, source: str = "--fidelity") -> Fidelity:
         raise ScenarioError(source, "fidelity", "is empty", f"use one of {', '.join(PRESETS)}")
     base = PRESETS["exact"]
     if "=" not in parts[0]:
+        if parts[0] in RENAMED:
+            raise ScenarioError(source, "fidelity", f"the preset {parts[0]!r} was renamed "
+                                f"{RENAMED[parts[0]]!r}: it models wheel noise on a robot "
+                                "that knows its true pose, not open-loop motors",
+                                f"use {RENAMED[parts[0]]!r}, or 'open-loop' for motors "
+                                "without feedback")
         if parts[0] not in PRESETS:
             raise ScenarioError(source, "fidelity", f"unknown preset {parts[0]!r}",
                                 f"use one of {', '.join(PRESETS)}, or key=value pairs")
@@ -113,6 +231,12 @@ def parse_fidelity(text: str | None, source: str = "--fidelity") -> Fidelity:
                 raise ScenarioError(source, key, f"expected true or false, got {value!r}",
                                     f"write {key}=true or {key}=false")
             changes[key] = value.strip().lower() in ("true", "1")
+        elif fields[key].type in (int, "int"):
+            try:
+                changes[key] = int(value)
+            except ValueError:
+                raise ScenarioError(source, key, f"expected a whole number, got {value!r}",
+                                    f"write e.g. {key}=5") from None
         else:
             try:
                 changes[key] = float(value)

@@ -60,14 +60,17 @@ _HEADINGS = np.array(ACTION_HEADINGS, dtype=np.float64)
 
 
 @njit(cache=True)
-def begin_all(robots, actions, active, cell_m, nx, ny):
+def begin_all(robots, actions, active, cell_m, nx, ny, localised):
     """Start grid ``actions[i]`` for every ``active`` robot from its pose (its cell as the
-    discretiser says, clamped into the grid)."""
+    discretiser says, clamped into the grid; with ``localised`` the pose it believes)."""
     for i in range(robots.shape[0]):
         if not active[i]:
             continue
         rb, a = robots[i], actions[i]
-        rb.cell_x, rb.cell_y = cell_of(rb.x, rb.y, cell_m, nx, ny)
+        if localised:
+            rb.cell_x, rb.cell_y = cell_of(rb.bx, rb.by, cell_m, nx, ny)
+        else:
+            rb.cell_x, rb.cell_y = cell_of(rb.x, rb.y, cell_m, nx, ny)
         rb.action = a
         rb.tx = (rb.cell_x + _DELTAS[a, 0] + 0.5) * cell_m
         rb.ty = (rb.cell_y + _DELTAS[a, 1] + 0.5) * cell_m
@@ -80,6 +83,7 @@ def begin_all(robots, actions, active, cell_m, nx, ny):
         rb.cmd_set = -1
         rb.ntraj = 0
         rb.status = Status.RUNNING
+        rb.fresh = True
 
 
 @njit(cache=True)
@@ -101,7 +105,9 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
     along within 10 um of parallel.
     """
     p, prof, g, s = Params(*pt), Profiles(*prof_t), Geometry(*geo_t), Scratch(*st)
-    noisy = p.wheel_noise > 0.0 or p.carried
+    noisy = p.wheel_noise > 0.0 or p.carried or p.biased or p.open_loop or p.localised
+    fixes = p.localised and p.fix_every > 0
+    normals = (2 if p.wheel_noise > 0.0 else 0) + (3 if p.localised else 0)  # per command
     for i in range(robots.shape[0]):
         if not active[i]:
             continue
@@ -116,6 +122,15 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
             rb.sub += 1
         rb.status = Status.RUNNING
         while rb.status == Status.RUNNING:
+            if rb.fresh:  # the primitive's first call: the fix's normals, when one is due
+                if fixes and rb.nfix + 1 >= p.fix_every:
+                    j = npos[i]
+                    if j + 3 > noise.shape[1]:
+                        rb.status = Status.NOISE
+                        break
+                    rb.f1, rb.f2, rb.f3 = noise[i, j], noise[i, j + 1], noise[i, j + 2]
+                    npos[i] = j + 3
+                rb.fresh = False
             if rb.phase == Phase.PLAN:
                 if not _plan(rb, p, prof.turn_sums, prof.drive_sums):
                     _done(rb, p, reached=True)
@@ -136,15 +151,21 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
                         break
                     if noisy:
                         e_left = e_right = 0.0
-                        if p.wheel_noise > 0.0:
+                        if normals:
                             j = npos[i]
-                            if j + 2 > noise.shape[1]:
+                            if j + normals > noise.shape[1]:
                                 rb.status = Status.NOISE
                                 break
-                            e_left, e_right = noise[i, j], noise[i, j + 1]
-                            npos[i] = j + 2
+                            if p.wheel_noise > 0.0:
+                                e_left, e_right = noise[i, j], noise[i, j + 1]
+                                j += 2
+                            if p.localised:  # this period's odometry noise
+                                rb.o1, rb.o2, rb.o3 = noise[i, j], noise[i, j + 1], noise[i, j + 2]
+                                j += 3
+                            npos[i] = j
                         vx, vy, w = wheel_twist(vx, vy, w, rb.th, e_left, e_right,
-                                                p.wheel_noise, p.wheel_base_m)
+                                                p.wheel_noise, p.wheel_base_m, rb.gain_l,
+                                                rb.gain_r, rb.base_k)
                     rb.cvx, rb.cvy, rb.cw = vx, vy, w
                     rb.cmd_set = k
                 while rb.sub < p.substeps:
@@ -164,8 +185,15 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
                         depth0 = _depth(p, g, s, rb.x, rb.y) if held else 0.0
                         _integrate(rb, vx, vy, p)
                         check = hit  # the sweep met a surface: ask Chipmunk
+                        if p.localised:  # the wheels turned (a hold slides them; below)
+                            moved, yaw = math.hypot(vx, vy) * p.dt, rb.th - rb.pth
+                            rb.odo_d += moved
+                            rb.odo_th += yaw
                         if held and _rest(rb, p, g, s, depth0):
                             check = True  # the bumper pressed home
+                            if p.localised:  # ... before this step's motion: none of it
+                                rb.odo_d -= moved
+                                rb.odo_th -= yaw
                         elif not hit and (held or 1e-12 < ln < 1e-5):  # where a sweep is
                             check = _new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, False)
                         elif not hit and ln > 1e-12 and g.boxes.shape[0] and (  # blind
@@ -185,15 +213,24 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
                 if rb.status == Status.RUNNING:
                     rb.cmd = k + 1
                     rb.sub = 0
+                    if p.localised:
+                        _odometry(rb, p)
             if rb.status == Status.RUNNING:
                 _finish_leg(rb, p)
 
 
 @njit(cache=True)
 def _plan(rb, p, turn_sums, drive_sums):
-    """Plan a leg from the pose (:func:`plan_leg`); False when there is nothing to do."""
-    leg = plan_leg(rb.x, rb.y, rb.th, rb.tx, rb.ty, rb.head, p.tol_m, p.period, turn_sums,
-                   drive_sums)
+    """Plan a leg from the pose (:func:`plan_leg`); False when there is nothing to do. The
+    pose is the one the controller knows: the estimate with localisation; in open loop
+    without it the start cell's centre and the heading last commanded; else the true one."""
+    if p.localised:
+        x, y, th = rb.bx, rb.by, rb.bth
+    elif p.open_loop:
+        x, y, th = (rb.cell_x + 0.5) * p.cell_m, (rb.cell_y + 0.5) * p.cell_m, rb.bth
+    else:
+        x, y, th = rb.x, rb.y, rb.th
+    leg = plan_leg(x, y, th, rb.tx, rb.ty, rb.head, p.tol_m, p.period, turn_sums, drive_sums)
     rb.nturn, rb.tsign, rb.tscale = leg.nturn, leg.tsign, leg.tscale
     rb.ndrive, rb.dscale, rb.ex, rb.ey, rb.dist = (leg.ndrive, leg.dscale, leg.ex, leg.ey,
                                                    leg.dist)
@@ -322,8 +359,13 @@ def _held(rb, p, g, s):
 @njit(cache=True)
 def _finish_leg(rb, p):
     """The leg's commands are driven without a contact: done (reached, or out of time), or
-    plan the next leg from the pose."""
-    if at_target(rb.x, rb.y, rb.th, rb.tx, rb.ty, rb.head, p.tol_m, p.tol_rad):
+    plan the next leg from the pose (the estimate with localisation). In open loop the one
+    leg's commands are the primitive: done, "reached" as far as the robot knows."""
+    if p.open_loop:
+        _done(rb, p, reached=True)
+    elif at_target(rb.bx if p.localised else rb.x, rb.by if p.localised else rb.y,
+                   rb.bth if p.localised else rb.th, rb.tx, rb.ty, rb.head, p.tol_m,
+                   p.tol_rad):
         _done(rb, p, reached=True)
     elif rb.steps - rb.steps0 >= p.timeout_steps:
         rb.timeout = True
@@ -342,21 +384,62 @@ def _bump(rb, p, g, s):
     rb.vx = rb.vy = rb.w = rb.cvx = rb.cvy = rb.cw = 0.0
     rb.bumped = True
     rb.forced = False
+    if p.localised:  # the travel of the period the contact ended
+        _odometry(rb, p)
     if p.carried:
         rb.resting = True
     else:
         rb.x = (rb.cell_x + 0.5) * p.cell_m
         rb.y = (rb.cell_y + 0.5) * p.cell_m
-        rb.resting = p.wheel_noise > 0.0 and _depth(p, g, s, rb.x, rb.y) > 0.0
+        rb.resting = ((p.wheel_noise > 0.0 or p.biased or p.open_loop)
+                      and _depth(p, g, s, rb.x, rb.y) > 0.0)
     _done(rb, p, reached=False)
 
 
 @njit(cache=True)
 def _done(rb, p, reached):
+    """The primitive ends: its state is the cell the robot believes it is in (the true one
+    unless localised); a fix, when one is due, comes first. In open loop without
+    localisation the robot believes it faces the heading it was told to take."""
     rb.reached = reached
     ix, iy = cell_of(rb.x, rb.y, p.cell_m, p.nx, p.ny)
+    rb.tstate = iy * p.nx + ix
+    if p.localised:
+        rb.nfix += 1
+        if p.fix_every > 0 and rb.nfix >= p.fix_every:
+            rb.bx = rb.x + p.fix_sigma_m * rb.f1
+            rb.by = rb.y + p.fix_sigma_m * rb.f2
+            rb.bth = rb.th + p.fix_sigma_rad * rb.f3
+            rb.nfix = 0
+        ix, iy = cell_of(rb.bx, rb.by, p.cell_m, p.nx, p.ny)
+    elif p.open_loop:
+        rb.bth = rb.head
     rb.state = iy * p.nx + ix
     rb.status = Status.DONE
+
+
+@njit(cache=True)
+def _odometry(rb, p):
+    """Dead reckoning over the control period that just ended (:mod:`sim.physics.fidelity`,
+    ``localisation``). The body's travel ``odo_d`` [m] and yaw ``odo_th`` [rad] as its wheels
+    drove them (a slide along a surface that holds the disc turns no wheel; wheels that
+    push against it do turn), as each wheel's encoder reads it through the nominal
+    geometry (the per-run bias shows as UMBmark's systematic drift), split into
+    rotate-translate-rotate with the odometry motion model's noise (the period's normals
+    o1..o3), composed onto the estimate."""
+    half = 0.5 * rb.odo_th * p.wheel_base_m * rb.base_k  # half the wheels' travel difference
+    d_l, d_r = (rb.odo_d - half) / rb.gain_l, (rb.odo_d + half) / rb.gain_r  # the encoders
+    trans = 0.5 * (d_l + d_r)
+    rot = 0.5 * (d_r - d_l) / p.wheel_base_m  # half the rotation: before and after
+    s_rot = math.sqrt(p.odo_a1 * rot * rot + p.odo_a2 * trans * trans)
+    s_trans = math.sqrt(p.odo_a3 * trans * trans + p.odo_a4 * 2.0 * rot * rot)
+    r1 = rot + s_rot * rb.o1
+    t = trans + s_trans * rb.o2
+    r2 = rot + s_rot * rb.o3
+    rb.bx += t * math.cos(rb.bth + r1)
+    rb.by += t * math.sin(rb.bth + r1)
+    rb.bth += r1 + r2
+    rb.odo_d = rb.odo_th = 0.0
 
 
 @njit(cache=True, inline="always")

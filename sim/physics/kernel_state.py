@@ -58,6 +58,16 @@ ROBOT = np.dtype([
     ("ey", _F), ("dist", _F),
     ("cmd", _I), ("sub", _I), ("cmd_set", _I),  # command and substep now; command in cv*
     ("gx", _F), ("gy", _F), ("limit", _F), ("free", _F),  # leg guard: start, allowance, free
+    # the fidelity's per-run bias (sim.physics.fidelity): each wheel's delivered fraction of
+    # its command, and the true wheelbase over the nominal one (1, 1, 1: none)
+    ("gain_l", _F), ("gain_r", _F), ("base_k", _F),
+    # what the robot believes (open loop, localisation): its pose estimate [m, m, rad]; the
+    # wheels' travel [m] and yaw [rad] this control period (odometry); the period's odometry
+    # normals; the fix's normals (reserved when the primitive starts); primitives since the
+    # last fix; the true cell (state: the believed one); a primitive not yet begun
+    ("bx", _F), ("by", _F), ("bth", _F), ("odo_d", _F), ("odo_th", _F),
+    ("o1", _F), ("o2", _F), ("o3", _F), ("f1", _F), ("f2", _F), ("f3", _F),
+    ("nfix", _I), ("tstate", _I), ("fresh", _B),
 ], align=True)
 
 # Python's view: every field of ROBOT as a 1-D array of length N (views into the records)
@@ -91,6 +101,16 @@ class Params(NamedTuple):
     wheel_noise: float  # fidelity: relative sigma of each wheel's speed per period [-]
     carried: bool  # fidelity: carried pose
     bumper_travel_m: float  # fidelity: bumper travel [m]
+    biased: bool  # fidelity: a per-run wheel bias (the robots' gain_l, gain_r, base_k)
+    open_loop: bool  # fidelity: plan once from the believed pose, no feedback
+    localised: bool  # fidelity: the controller and the state read the pose estimate
+    odo_a1: float  # odometry motion model: rotation variance per rotation^2 [-]
+    odo_a2: float  # ... per distance^2 [rad^2/m^2]
+    odo_a3: float  # translation variance per distance^2 [-]
+    odo_a4: float  # ... per rotation^2 [m^2/rad^2]
+    fix_every: int  # an absolute fix every this many primitives (0: never)
+    fix_sigma_m: float  # the fix's error per axis [m]
+    fix_sigma_rad: float  # ... in heading [rad]
 
 
 class Geometry(NamedTuple):

@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 import pymunk
 
+from sim.errors import ScenarioError
 from sim.grid.actions import N_ACTIONS
 from sim.grid.discretiser import Discretiser
 from sim.physics import disk_cache
@@ -297,12 +298,26 @@ def build_stochastic_model(sc: Scenario, fidelity: Fidelity | None = None,
                            config: PhysicsConfig | None = None) -> StochasticModel:
     """Drive the model of ``sc`` at ``fidelity`` (no cache; see :func:`stochastic_model`)."""
     fid = fidelity or Fidelity()
+    refuse_hidden_state(fid)
     sampling = sampling or Sampling.default(fid)
     sampling.validate()
     t0 = time.perf_counter()
     builder = _Builder(sc, fid, sampling, config or PhysicsConfig())
     builder.run()
     return builder.model(time.perf_counter() - t0)
+
+
+def refuse_hidden_state(fid: Fidelity) -> None:
+    """The model's states are cells and contexts: at a rung with hidden state (open loop:
+    the offset within the cell carries over; localisation: the estimate's error does) the
+    world is not Markov in them, and a V* built on them would be a wrong yardstick."""
+    if fid.hidden_state:
+        raise ScenarioError("--fidelity", "fidelity", f"{fid.label} has hidden state (open "
+                            "loop or localisation): the stochastic model's states (cell, "
+                            "context) do not capture it, so V* is not defined there",
+                            "grade by driving (rnhql compare ... --fidelity F) and compare "
+                            "with the best method; V* exists at exact, noisy, slippery and "
+                            "uncalibrated")
 
 
 # ---------------------------------------------------------------------------- caching
@@ -386,6 +401,7 @@ def stochastic_model(sc: Scenario, fidelity: Fidelity | None = None,
                      config: PhysicsConfig | None = None) -> StochasticModel:
     """The driven model of ``sc`` at ``fidelity`` (cached in-process and on disk)."""
     fid = fidelity or Fidelity()
+    refuse_hidden_state(fid)
     config = config or PhysicsConfig()
     sampling = sampling or Sampling.default(fid)
     sampling.validate()

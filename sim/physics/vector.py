@@ -253,7 +253,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
             moving = ~self._needs_reset
         out = self.batch.step(acts, moving)
         obs = np.where(moving, out.state, self._obs)
-        terminated = moving & (obs == self._goal)
+        terminated = moving & (out.cell == self._goal)  # the true cell: where the robot is
         rewards = self._rewards.of_moves(out.bumped, terminated) * moving
         self._elapsed += moving
         truncated = moving & (self._elapsed >= self.max_episode_steps)

@@ -51,10 +51,17 @@ from sim.physics.controller import (
 )
 from sim.physics.kernel_state import Geometry, Params, Phase, Scratch, Status
 from sim.physics.static import DEEPER_M, HOLD_STEP_M
-from sim.physics.sweep import _box_distance, _segment_distance, overlap_depth, sweep_fraction
+from sim.physics.sweep import (
+    _box_distance,
+    _fold_shapes,
+    _segment_distance,
+    overlap_depth,
+    sweep_fraction,
+)
 
 CHECK_MARGIN_M = 1e-6  # steps ending this close to a surface ask Chipmunk [m]
 CENTRE_TOL_M = 1e-9  # a leg starting this close to its cell centre uses the cached guard [m]
+CLEAR_MARGIN_M = 1e-3  # a step this far from every surface needs no sweep (_new_clear_ball) [m]
 _DELTAS = np.array(ACTION_DELTAS, dtype=np.int64)
 _HEADINGS = np.array(ACTION_HEADINGS, dtype=np.float64)
 
@@ -174,7 +181,16 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
                         vx, vy = rb.vx, rb.vy
                         ln = math.hypot(vx, vy) * p.dt
                         hit = False
-                        if ln > 1e-12:  # its own guard, as PhysicsWorld.before_step
+                        clear = False  # the step stays in the robot's clear ball
+                        if not held:
+                            x1, y1 = rb.x + vx * p.dt, rb.y + vy * p.dt
+                            clear = _in_clear_ball(rb, x1, y1)
+                            if not clear:
+                                _new_clear_ball(rb, p, g, s)
+                                clear = _in_clear_ball(rb, x1, y1)
+                        if clear:  # nothing within CLEAR_MARGIN_M of the step: no sweep
+                            pass  # can hit, no check can find a touch (see _new_clear_ball)
+                        elif ln > 1e-12:  # its own guard, as PhysicsWorld.before_step
                             alpha = _sweep(p, g, s, rb.x, rb.y, rb.x + vx * p.dt,
                                            rb.y + vy * p.dt)
                             hit = alpha < math.inf
@@ -194,6 +210,8 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
                             if p.localised:  # ... before this step's motion: none of it
                                 rb.odo_d -= moved
                                 rb.odo_th -= yaw
+                        elif clear:
+                            pass
                         elif not hit and (held or 1e-12 < ln < 1e-5):  # where a sweep is
                             check = _new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, False)
                         elif not hit and ln > 1e-12 and g.boxes.shape[0] and (  # blind
@@ -440,6 +458,49 @@ def _odometry(rb, p):
     rb.by += t * math.sin(rb.bth + r1)
     rb.bth += r1 + r2
     rb.odo_d = rb.odo_th = 0.0
+
+
+@njit(cache=True, inline="always")
+def _in_clear_ball(rb, x1, y1):
+    """Whether the step from the pose to (x1, y1) lies in the robot's clear ball."""
+    return (math.hypot(rb.x - rb.clear_x, rb.y - rb.clear_y) < rb.clear_r
+            and math.hypot(x1 - rb.clear_x, y1 - rb.clear_y) < rb.clear_r)
+
+
+@njit(cache=True)
+def _new_clear_ball(rb, p, g, s):
+    """The robot's clear ball from its pose: every centre within ``clear_r`` of it leaves the
+    disc at least CLEAR_MARGIN_M from every static shape (its clearance there, up to one
+    cell, less the margin). A step whose start and end lie in it sweeps a segment in it
+    (a ball is convex): the sweep finds no surface (alpha = inf) and no touch check can
+    fire (they look within 1e-6 m), so skipping both changes nothing; above ``exact``
+    most steps run in free space, and one point query per ball replaces a sweep per step.
+    """
+    s.counters[0] += 1
+    reach = p.radius_m + p.cell_m  # the query looks this far: shapes beyond it are beyond
+    c = _fold_shapes(_clear_wall, _clear_item, reach, g.circles, g.walls, g.boxes, p.cell_m,
+                     p.nx, p.ny, g.grid_start, g.grid_items, s.seen, s.counters[0],
+                     reach, rb.x, rb.y, rb.x, rb.y)
+    rb.clear_x, rb.clear_y = rb.x, rb.y
+    rb.clear_r = c - p.radius_m - CLEAR_MARGIN_M
+
+
+@njit(cache=True, inline="always")
+def _clear_wall(walls, k, _radius, x, y, _bx, _by, nearest):
+    """The nearest surface [m] from the centre (x, y), folding in wall ``k``."""
+    d = _segment_distance(x, y, walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3]) - walls[k, 4]
+    return d if d < nearest else nearest
+
+
+@njit(cache=True, inline="always")
+def _clear_item(circles, boxes, k, _radius, x, y, _bx, _by, nearest):
+    n_circles = circles.shape[0]
+    if k < n_circles:
+        d = math.hypot(x - circles[k, 0], y - circles[k, 1]) - circles[k, 2]
+    else:
+        m = k - n_circles
+        d = _box_distance(x, y, boxes[m, 0], boxes[m, 1], boxes[m, 2], boxes[m, 3])
+    return d if d < nearest else nearest
 
 
 @njit(cache=True, inline="always")

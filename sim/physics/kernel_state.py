@@ -68,6 +68,9 @@ ROBOT = np.dtype([
     ("bx", _F), ("by", _F), ("bth", _F), ("odo_d", _F), ("odo_th", _F),
     ("o1", _F), ("o2", _F), ("o3", _F), ("f1", _F), ("f2", _F), ("f3", _F),
     ("nfix", _I), ("tstate", _I), ("fresh", _B),
+    # a ball the disc's centre may roam without coming near any static shape (above exact:
+    # steps inside it need no sweep; sim.physics.kernel._new_clear_ball) [m]; radius <= 0: none
+    ("clear_x", _F), ("clear_y", _F), ("clear_r", _F),
 ], align=True)
 
 # Python's view: every field of ROBOT as a 1-D array of length N (views into the records)

@@ -124,8 +124,75 @@ def ablation(d: dict[str, Any]) -> str:
 
 @renderer("ladder")
 def ladder_table(d: dict[str, Any]) -> str:
-    """The fidelity ladder: each method trained in the grid (then driven at the rung) and
-    in physics at the rung, graded by driving its final policy at the rung."""
+    """The fidelity ladder: how well the grid predicts each rung (rank correlation), P(G)
+    and primitives per method and rung (trained at the rung, and transferred from the grid)
+    against V*, then every figure per map, rung, method and where it was trained."""
+    if "rungs" not in d:  # artifacts written before the predictivity and V* were kept
+        return ladder_full(d)
+    return "\n".join([ladder_predictivity(d), ladder_compact(d, physics=True),
+                      ladder_compact(d, physics=False), "#### Every figure", "",
+                      ladder_full(d)])
+
+
+def _rho(p: dict[str, Any]) -> str:
+    if p["rho"] is None:
+        return "— (no spread)"
+    ci = p["ci95"]
+    return f"{p['rho']:+.2f} [{ci[0]:+.2f}, {ci[1]:+.2f}]" if ci else f"{p['rho']:+.2f}"
+
+
+def ladder_predictivity(d: dict[str, Any]) -> str:
+    """Spearman's rho of the methods' ranks, grid vs rung, per map and rung."""
+    rungs = d["rungs"]
+    lines = ["#### Does the grid rank the methods as the rung does? (SRCC)", "",
+             "Spearman's ρ between the methods' order in the grid (grid-trained runs, the "
+             "grid's own figures) and at the rung (runs trained and driven there), with a 95 % "
+             "bootstrap interval over seeds (`scenarios/experiments/predictivity.py`). "
+             "*Deployed*: expected primitives of the final policy from S, a miss costing the "
+             "episode budget; *learning*: mean training episode length. 1: the grid orders "
+             "the methods exactly as the rung does; — (no spread): one of the two worlds "
+             "cannot tell the methods apart (every median equal).", "",
+             "| map | rung | ρ deployed | ρ learning | V* at the rung: P*(G) · E[primitives] |",
+             "|---|---|---|---|---|"]
+    for c in rungs:
+        opt = c["optimum"]
+        v = ("— (hidden state: not Markov in cells)" if opt is None and c["rung"] in
+             ("open-loop", "localised") else "—" if opt is None else
+             f"{opt['p_goal_within_budget']:.3f} · {opt['expected_primitives']:.1f}")
+        lines.append(f"| {c['map']} | {c['rung']} | {_rho(c['predictivity']['deployed'])} | "
+                     f"{_rho(c['predictivity']['learning'])} | {v} |")
+    return "\n".join(lines) + "\n"
+
+
+def ladder_compact(d: dict[str, Any], physics: bool) -> str:
+    """P(G) median · primitives median per map x method (rows) and rung (columns)."""
+    rows = [r for r in d["rows"] if (r["trained"] != "grid") == physics]
+    rungs = list(dict.fromkeys(r["rung"] for r in rows))
+    title = ("Trained at the rung" if physics else
+             "Trained in the grid, driven at the rung (transfer)")
+    lines = [f"#### {title}: P(G) · primitives", "",
+             "Median over seeds of each seed's share of drives reaching G · mean primitives "
+             "of those drives (— none reached G); reliable seeds (P(G) ≥ 0.98) after the "
+             "slash.", "",
+             "| map | method | " + " | ".join(rungs) + " |",
+             "|---|---|" + "---|" * len(rungs)]
+    for m in dict.fromkeys(r["map"] for r in rows):
+        for method in dict.fromkeys(r["method"] for r in rows if r["map"] == m):
+            cells = []
+            for rung in rungs:
+                r = next((x for x in rows if x["map"] == m and x["method"] == method
+                          and x["rung"] == rung), None)
+                if r is None:
+                    cells.append("")
+                    continue
+                prims = "—" if r["primitives"][0] is None else f"{r['primitives'][0]:.1f}"
+                cells.append(f"{r['p_goal'][0]:.2f} · {prims} / {r['reliable']}")
+            lines.append(f"| {m} | {method} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def ladder_full(d: dict[str, Any]) -> str:
+    """Every figure: one row per map, rung, method and where it was trained."""
     rows = d["rows"]
     best: dict[tuple[str, str], float] = {}
     for r in rows:

@@ -2,14 +2,20 @@
 
     python -m scenarios.experiments.continuous_vs_grid --out results/continuous-vs-grid
 
-Maps (default: paper-50 open, arena rooms, maze-1 maze) x rungs (exact, noisy,
-rough) x methods x 10 seeds. At each rung every method is trained in the grid
-(its final greedy policy then *driven* at the rung: transfer) and in physics at
-the rung. Each (map, rung) is one ordinary comparison in ``OUT/MAP/RUNG/``
-(``results.json``, ``summary.md``, figures, ``overlay.png``); ``OUT/ladder.md``
-is the one table (reached G, optimal routes, driven metres against the best
-method and against the disc's continuous optimum, sim time, contacts, aliasing)
-and ``OUT/ladder.png`` the one figure.
+Maps (default: paper-40 open circles, rooms-1 rooms, maze-1 maze, caves-40 a generated
+cave map) x rungs (exact, noisy, uncalibrated, open-loop, localised: see
+:mod:`sim.physics.fidelity`) x methods x 10 seeds. At each rung every method is trained
+in the grid (its final greedy policy then *driven* at the rung: transfer) and in physics
+at the rung. Each (map, rung) is one ordinary comparison in ``OUT/MAP/RUNG/``
+(``results.json``, ``summary.md``, figures, ``overlay.png``); ``OUT/ladder.md`` is the
+one table (reached G, optimal routes, driven metres against the best method and against
+the disc's continuous optimum, sim time, contacts, aliasing, V* where it is defined) and
+the rank correlation of the methods, grid vs rung
+(:mod:`scenarios.experiments.predictivity`), and ``OUT/ladder.png`` the one figure.
+
+A map is a built-in scenario, a ``.toml`` path, or ``KIND-N`` (a generated map of
+:mod:`sim.map_generators`, regenerated from ``--map-seed``; S and G the ends of its
+diameter, as the held-out study makes them).
 """
 
 from __future__ import annotations
@@ -23,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from scenarios.experiments.compare import run_sweep
+from scenarios.experiments.predictivity import srcc
 from scenarios.figures.save import save_figure
 from scenarios.runs.backends import Progress, run_local
 from scenarios.runs.spec import load
@@ -79,9 +86,9 @@ def overlay(results: dict[str, Any], scenario: str, method: str, path: Path) -> 
     plt.close(fig)
 
 
-STUDY_MAPS = ("paper-50", "arena", "maze-1")  # open, rooms, maze
-STUDY_METHODS = ("rnh-ql+", "haql", "dyna-q", "rnh-ql")
-STUDY_RUNGS = ("exact", "noisy", "rough")
+STUDY_MAPS = ("paper-40", "rooms-1", "maze-1", "caves-40")  # open, rooms, maze, caves
+STUDY_METHODS = ("rnh-ql+", "haql", "dyna-q", "q-lambda", "st-ql", "rnh-ql")
+STUDY_RUNGS = ("exact", "noisy", "uncalibrated", "open-loop", "localised")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -104,6 +111,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="drives per (cell, action) for the aliasing column")
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="worker processes")
     p.add_argument("--resume", action="store_true", help="keep the runs of an earlier call")
+    p.add_argument("--map-seed", type=int, default=38,
+                   help="generator seed of KIND-N maps (never one anything was tuned on)")
     p.add_argument("--out", default="results/continuous-vs-grid", help="output folder")
     p.add_argument("--artifact", default=None, metavar="NAME",
                    help="also write docs/results/ladder.NAME.json (the docs render it)")
@@ -113,28 +122,31 @@ def main(argv: list[str] | None = None) -> int:
     rungs = [r.strip() for r in args.rungs.split(",") if r.strip()]
     out = Path(args.out)
     cells: list[dict[str, Any]] = []
-    for name in maps:
+    for label in maps:
+        name = _map_path(label, args.map_seed, out)
         sc, model = load(name, rewards=args.rewards)
         for rung in rungs:
             specs = [spec for world in ("grid", "physics")
                      for spec in _rung_specs(name, methods, args, world, rung)]
-            sub = out / _slug(name) / rung
+            sub = out / _slug(label) / rung
             print(f"{name} at {rung}: {len(specs)} runs -> {sub}", flush=True)
             results = run_sweep(specs, sub, run_local, resume=args.resume, jobs=args.jobs,
                                 progress=Progress(len(specs)))
-            cells.append(dict(map=name, rung=rung, results=results,
-                              aliasing=_aliasing(sc, model, rung, args.repeats)))
+            cells.append(dict(map=label, path=name, rung=rung, results=results,
+                              aliasing=_aliasing(sc, model, rung, args.repeats),
+                              predictivity=srcc(results["runs"], sc.steps_per_episode),
+                              optimum=results.get("optimum_at_fidelity")))
             overlay(results, name, overlay_method(results, methods), sub / "overlay.png")
     text = ladder_report(cells, args)
     atomic_write_text(out / "ladder.md", text)
     data = ladder_data(cells, args)
-    ladder_figure(data["rows"], methods, out / "ladder.png")
+    ladder_figure(data["rows"], methods, out / "ladder.png", data["rungs"])
     if args.artifact:  # the docs' table and figure, from the same data
         from scenarios.artifacts import ROOT, write_artifact
 
         write_artifact(f"ladder.{args.artifact}", ladder_command(args)
-                       + f" --artifact {args.artifact}", ["grid", "physics-exact",
-                                                          "physics-noisy"], data, study=__file__)
+                       + f" --artifact {args.artifact}",
+                       ["grid", "physics-exact", "physics-noisy"], data, study=__file__)
         figure_from_artifact(f"ladder.{args.artifact}", ROOT / "docs" / "ladder.png")
     print(text)
     return 0
@@ -146,7 +158,18 @@ def figure_from_artifact(name: str, path: Path) -> None:
 
     d = load_artifact(name)["data"]
     methods = list(dict.fromkeys(r["method"] for r in d["rows"]))
-    ladder_figure(d["rows"], methods, path)
+    ladder_figure(d["rows"], methods, path, d.get("rungs"))
+
+
+def _map_path(label: str, map_seed: int, out: Path) -> str:
+    """A built-in name or .toml path as it is; ``KIND-N`` generated into ``OUT/maps``."""
+    from scenarios.experiments.heldout import KIND, write_problem
+    from sim.scenario_io import builtin_names
+
+    if label in builtin_names() or KIND.fullmatch(label) is None:
+        return label
+    toml, _, _ = write_problem(label, 0.0, map_seed, 0.0, out / "maps")
+    return str(toml)
 
 
 def _slug(name: str) -> str:
@@ -195,7 +218,7 @@ def ladder_rows(cells: list[dict[str, Any]]) -> list[dict[str, Any]]:
     for cell in cells:
         res = cell["results"]
         if cell["map"] not in optima:
-            sc, _ = load(cell["map"])
+            sc, _ = load(cell.get("path", cell["map"]))
             optima[cell["map"]] = continuous_optimum_m(sc)
         cont = optima[cell["map"]]
         groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
@@ -230,6 +253,8 @@ def ladder_data(cells: list[dict[str, Any]], args: argparse.Namespace) -> dict[s
         return [quantile(v, x) for x in (0.5, 0.25, 0.75)] if v else [None] * 3
 
     rows = ladder_rows(cells)
+    rungs = [{"map": c["map"], "rung": c["rung"], "predictivity": c["predictivity"],
+              "optimum": c["optimum"]} for c in cells]
     out = []
     for r in rows:
         out.append({k: r[k] for k in ("map", "rung", "method", "trained", "seeds",
@@ -237,13 +262,14 @@ def ladder_data(cells: list[dict[str, Any]], args: argparse.Namespace) -> dict[s
                                       "physics_opt", "cont")}
                    | {k: q(r[k]) for k in ("p_goal", "primitives", "metres", "ratio",
                                            "sim_time", "contacts", "train_contacts")})
-    return {"command": ladder_command(args), "repeats": args.repeats, "rows": out}
+    return {"command": ladder_command(args), "repeats": args.repeats, "rows": out,
+            "rungs": rungs}
 
 
 def ladder_command(args: argparse.Namespace) -> str:
     return (f"python -m scenarios.experiments.continuous_vs_grid --maps {args.maps} "
             f"--methods {args.methods} --rungs {args.rungs} --seeds {args.seeds} "
-            f"--episodes {args.episodes} --rewards {args.rewards}")
+            f"--episodes {args.episodes} --rewards {args.rewards} --map-seed {args.map_seed}")
 
 
 def ladder_report(cells: list[dict[str, Any]], args: argparse.Namespace) -> str:
@@ -253,11 +279,13 @@ def ladder_report(cells: list[dict[str, Any]], args: argparse.Namespace) -> str:
             f"Command: `{ladder_command(args)}`\n\n" + ladder_table(ladder_data(cells, args)))
 
 
-def ladder_figure(rows: list[dict[str, Any]], methods: list[str], path: Path) -> None:
-    """From the artifact's rows (:func:`ladder_data`). Per map: seeds with P(G) ≥ 0.98 (top)
-    and driven route over the continuous optimum (bottom)
-    against the rung, a line per method and where it was trained (solid: at the rung,
-    dashed: in the grid)."""
+def ladder_figure(rows: list[dict[str, Any]], methods: list[str], path: Path,
+                  rungs: list[dict[str, Any]] | None = None) -> None:
+    """From the artifact's rows and rungs (:func:`ladder_data`). Left: how well the grid
+    predicts each rung, Spearman's rho of the methods' order (deployed figure) with its
+    bootstrap interval, a line per map. Right, per map: P(G) of each method's final policy
+    driven at the rung (median over seeds), solid: trained at the rung, dashed: in the grid.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -266,34 +294,51 @@ def ladder_figure(rows: list[dict[str, Any]], methods: list[str], path: Path) ->
     from scenarios.palette import method_colour_mpl
 
     maps = list(dict.fromkeys(r["map"] for r in rows))
-    rungs = list(dict.fromkeys(r["rung"] for r in rows))
-    fig, axes = plt.subplots(2, len(maps), figsize=(4.2 * len(maps), 6.4), dpi=110,
-                             squeeze=False, sharex=True)
-    for j, m in enumerate(maps):
+    rung_names = list(dict.fromkeys(r["rung"] for r in rows))
+    x_of = {r: i for i, r in enumerate(rung_names)}
+    fig, axes = plt.subplots(1, len(maps) + 1, figsize=(3.6 * (len(maps) + 1), 3.9), dpi=110,
+                             squeeze=False)
+    ax0 = axes[0, 0]
+    for k, m in enumerate(maps):
+        pts = [(x_of[c["rung"]], c["predictivity"]["deployed"]) for c in rungs or []
+               if c["map"] == m and c["predictivity"]["deployed"]["rho"] is not None]
+        if not pts:
+            continue
+        dx = (k - (len(maps) - 1) / 2) * 0.06
+        x = [i + dx for i, _ in pts]
+        y = [p["rho"] for _, p in pts]
+        lo = [p["rho"] - p["ci95"][0] if p["ci95"] else 0 for _, p in pts]
+        hi = [p["ci95"][1] - p["rho"] if p["ci95"] else 0 for _, p in pts]
+        ax0.errorbar(x, y, yerr=[lo, hi], marker="o", ms=4, lw=1.2, capsize=2, label=m)
+    ax0.axhline(0, color="#999999", lw=0.7)
+    ax0.set_ylim(-1.05, 1.05)
+    ax0.set_xticks(range(len(rung_names)), rung_names, rotation=30, fontsize=8)
+    ax0.set_title("grid predicts the rung? SRCC", fontsize=10)
+    ax0.set_ylabel("Spearman ρ, grid vs rung (deployed)")
+    ax0.legend(fontsize=7, loc="lower left", frameon=False)
+    for j, m in enumerate(maps, start=1):
+        ax = axes[0, j]
         for method in methods:
             for physics in (False, True):
-                pts = [(i, r) for i, rung in enumerate(rungs) for r in rows
-                       if r["map"] == m and r["rung"] == rung and r["method"] == method
+                pts = [(x_of[r["rung"]], r) for r in rows
+                       if r["map"] == m and r["method"] == method
                        and (r["trained"] != "grid") == physics]
                 if not pts:
                     continue
-                x = [i for i, _ in pts]
-                style = dict(color=method_colour_mpl(method), ls="-" if physics else "--",
-                             marker="o" if physics else "s", ms=4, lw=1.3)
-                label = f"{method} ({'physics' if physics else 'grid'}-trained)"
-                axes[0, j].plot(x, [r["reliable"] / r["seeds"] for _, r in pts],
-                                label=label, **style)
-                y = [np.nan if r["ratio"][0] is None else r["ratio"][0] for _, r in pts]
-                axes[1, j].plot(x, y, **style)
-        axes[0, j].set_title(m, fontsize=10)
-        axes[0, j].set_ylim(-0.05, 1.05)
-        axes[1, j].set_xticks(range(len(rungs)), rungs)
-        axes[1, j].set_xlabel("physics fidelity")
-    axes[0, 0].set_ylabel("seeds with P(G) ≥ 0.98")
-    axes[1, 0].set_ylabel("driven / continuous optimum")
-    handles, labels = axes[0, 0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7, frameon=False)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
+                pts.sort(key=lambda t: t[0])
+                ax.plot([i for i, _ in pts], [r["p_goal"][0] for _, r in pts],
+                        color=method_colour_mpl(method), ls="-" if physics else "--",
+                        marker="o" if physics else "s", ms=3.5, lw=1.2,
+                        label=method if physics else None)
+        ax.set_title(f"{m}: P(G) of the final policy", fontsize=10)
+        ax.set_ylim(-0.05, 1.05)
+        ax.set_xticks(range(len(rung_names)), rung_names, rotation=30, fontsize=8)
+    axes[0, 1].set_ylabel("P(G), median over seeds")
+    handles, labels = axes[0, 1].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=len(methods), fontsize=8,
+               frameon=False, title="solid: trained at the rung; dashed: trained in the grid",
+               title_fontsize=8)
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
     save_figure(fig, path)
     plt.close(fig)
 

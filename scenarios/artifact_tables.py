@@ -143,6 +143,8 @@ def _rho(p: dict[str, Any]) -> str:
 
 def ladder_predictivity(d: dict[str, Any]) -> str:
     """Spearman's rho of the methods' ranks, grid vs rung, per map and rung."""
+    from sim.physics.fidelity import parse_fidelity
+
     rungs = d["rungs"]
     lines = ["#### Does the grid rank the methods as the rung does? (SRCC)", "",
              "Spearman's ρ between the methods' order in the grid (grid-trained runs, the "
@@ -156,8 +158,12 @@ def ladder_predictivity(d: dict[str, Any]) -> str:
              "|---|---|---|---|---|"]
     for c in rungs:
         opt = c["optimum"]
-        v = ("— (hidden state: not Markov in cells)" if opt is None and c["rung"] in
-             ("open-loop", "localised") else "—" if opt is None else
+        exact = next((r["physics_opt"] for r in d["rows"] if r["map"] == c["map"]
+                      and r["physics_opt"]), None)
+        v = ("— (hidden state: not Markov in cells)" if opt is None
+             and parse_fidelity(c["rung"]).hidden_state else
+             f"1 · {exact} (the physics world's BFS route)" if opt is None and exact
+             and c["rung"] == "exact" else "—" if opt is None else
              f"{opt['p_goal_within_budget']:.3f} · {opt['expected_primitives']:.1f}")
         lines.append(f"| {c['map']} | {c['rung']} | {_rho(c['predictivity']['deployed'])} | "
                      f"{_rho(c['predictivity']['learning'])} | {v} |")

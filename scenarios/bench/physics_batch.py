@@ -114,9 +114,12 @@ def learning(episodes: int = 300, seeds: int = 10, scenario: str = "paper-50",
 
 
 def run_bench(quick: bool = False) -> dict[str, Any]:
+    """The scaling of random primitives, and the learning run at ``exact`` and at ``noisy``
+    (the rung the ladder study trains most at: every step above exact has its own guard)."""
     return {"scaling": scaling(0.5 if quick else 2.0,
                                (1, 16, 256) if quick else SIZES),
-            "learning": learning(30 if quick else 300)}
+            "learning": learning(30 if quick else 300),
+            "learning_noisy": learning(10 if quick else 100, fidelity="noisy")}
 
 
 def plot(figures: dict[str, Any], path: Path) -> None:

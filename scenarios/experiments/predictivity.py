@@ -64,7 +64,7 @@ def spearman(a: np.ndarray, b: np.ndarray) -> float:
     ra, rb = ranks(np.asarray(a, float)), ranks(np.asarray(b, float))
     if ra.std() == 0.0 or rb.std() == 0.0:
         return float("nan")
-    return float(np.corrcoef(ra, rb)[0, 1])
+    return float(np.clip(round(float(np.corrcoef(ra, rb)[0, 1]), 12), -1.0, 1.0))
 
 
 def figures_by_method(runs: list[dict[str, Any]], budget: int

@@ -8,7 +8,14 @@
       "world": "grid" | "physics" | "grid,physics",
       "fidelity": the physics fidelity's label ("exact", "noisy", ...) or null (grid only),
       "fidelity_knobs": {"name", "wheel_noise" [relative sigma per wheel per control period],
-                         "carried_pose" [bool], "bumper_travel_m" [m]} or null,
+                         "carried_pose" [bool], "bumper_travel_m" [m],
+                         "wheel_ratio_sigma" [-], "wheelbase_sigma" [-], "open_loop" [bool],
+                         "localisation" [bool], "odometry_rot_rot" [rad^2/rad^2],
+                         "odometry_rot_trans" [rad^2/m^2], "odometry_trans_trans" [m^2/m^2],
+                         "odometry_trans_rot" [m^2/rad^2], "fix_every" [primitives],
+                         "fix_sigma_m" [m], "fix_sigma_rad" [rad]} or null (every field of
+                         sim.physics.fidelity.Fidelity; records from before issue 38 hold
+                         the first four),
       "physics_grading": how physics runs were graded (rollouts per test and final) or null,
       "optimum_at_fidelity": V* above exact {"expected_primitives", "p_goal_within_budget",
                              "budget", "tolerance"} or null (physics runs then carry
@@ -72,6 +79,25 @@ SUMMARY_FIGURES = ("episodes_to_stable_optimal", "episodes_to_optimal", "optimal
                    "final_route_length", "epsilon_route_length", "success_rate",
                    "reward_per_step", "reward_per_step_last_10pct", "wall_time_s", "env_steps",
                    "optimal_action_fraction")
+
+
+def _ladder_knob_text(knobs: dict) -> str:
+    """The bias, open-loop and localisation knobs of a summary's fidelity line, where set."""
+    parts = []
+    if knobs.get("wheel_ratio_sigma") or knobs.get("wheelbase_sigma"):
+        parts.append(f"per-run bias sigma E_d {knobs['wheel_ratio_sigma']}, "
+                     f"E_b {knobs['wheelbase_sigma']}")
+    if knobs.get("open_loop"):
+        parts.append("open-loop primitives")
+    if knobs.get("localisation"):
+        parts.append("localisation from odometry (alphas "
+                     + ", ".join(str(knobs[k]) for k in (
+                         "odometry_rot_rot", "odometry_rot_trans", "odometry_trans_trans",
+                         "odometry_trans_rot"))
+                     + (f"), a fix every {knobs['fix_every']} primitives ({knobs['fix_sigma_m']}"
+                        f" m, {knobs['fix_sigma_rad']} rad)" if knobs.get("fix_every")
+                        else "), no fixes"))
+    return "".join(f", {p}" for p in parts)
 
 def quantile(values: list[float | None], q: float) -> float:
     """The q-quantile of ``values`` by one definition used everywhere in rnhql.
@@ -173,6 +199,7 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
                  "carried_pose {carried_pose}, bumper_travel_m {bumper_travel_m} m"
                  .format(**knobs) if {"wheel_noise", "carried_pose", "bumper_travel_m"}
                  <= set(knobs) else "")
+    knob_text += _ladder_knob_text(knobs)
     world = f"{results['world']}" + (f" (physics fidelity `{fid}`{knob_text})" if fid else "")
     share = results["scenario"].get("s_start_share") or 0.0
     starts = (f", {share:.0%} of episodes start at S (the rest on random free cells)"

@@ -131,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
             specs = [spec for world in ("grid", "physics")
                      for spec in _rung_specs(name, methods, args, world, rung)]
             sub = out / _slug(label) / rung
-            print(f"{name} at {rung}: {len(specs)} runs -> {sub}", flush=True)
+            print(f"{label} at {rung}: {len(specs)} runs -> {sub}", flush=True)
             results = run_sweep(specs, sub, run_local, resume=args.resume, jobs=args.jobs,
                                 progress=Progress(len(specs)))
             cells.append(dict(map=label, path=name, rung=rung, results=results,

@@ -332,7 +332,11 @@ def ladder_figure(rows: list[dict[str, Any]], methods: list[str], path: Path,
     ax0.set_xticks(range(len(rung_names)), rung_names, rotation=30, fontsize=8)
     ax0.set_title("grid predicts the rung? SRCC", fontsize=10)
     ax0.set_ylabel("Spearman ρ, grid vs rung (deployed)")
-    ax0.legend(fontsize=7, loc="lower left", frameon=False)
+    if ax0.get_legend_handles_labels()[0]:
+        ax0.legend(fontsize=7, loc="lower left", frameon=False)
+    else:
+        ax0.text(0.5, 0.5, "undefined: no world tells\nthe methods apart", ha="center",
+                 va="center", fontsize=8, transform=ax0.transAxes)
     for j, m in enumerate(maps, start=1):
         ax = axes[0, j]
         for method in methods:

@@ -222,20 +222,31 @@ class HungUp(Terminated):
     SIGTERM (finished runs kept, the recording written, the lock released), exit 129."""
 
 
+_received: list[int] = []  # SIGTERM/SIGHUP seen while the command ran
+
+
 def _terminate(sig: int, _frame: object) -> None:
+    _received.append(sig)
     raise HungUp if sig == signal.SIGHUP else Terminated
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    _received.clear()
     if threading.current_thread() is threading.main_thread():
         for sig in (signal.SIGTERM, signal.SIGHUP):
             if signal.getsignal(sig) is signal.SIG_DFL:  # SIG_IGN (nohup) stays ignored
                 signal.signal(sig, _terminate)
     try:
         check_empty_paths(args)
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        if code == 0 and _received:
+            # the signal's exception was raised where Python swallows it (a weakref
+            # callback, a __del__: "Exception ignored in ..."), so the command ran on to
+            # its end; what finished is kept, and the exit status still says it was stopped
+            raise HungUp if _received[0] == signal.SIGHUP else Terminated
+        return code
     except InputError as err:
         print(f"rnhql: error: {err}", file=sys.stderr)
         return 2

@@ -225,8 +225,9 @@ def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str
 def main(argv: list[str] | None = None) -> int:
     ap = script_parser(__doc__)
     ap.add_argument("scenario", help="a built-in name, a .toml or a .map (with --start/--goal)")
-    ap.add_argument("--fidelity", default="exact", help="exact (default), a preset (noisy, slippery, uncalibrated, "
-                    "open-loop, localised) or knobs")
+    ap.add_argument("--fidelity", default="exact",
+                    help="exact (default), a preset (noisy, slippery, uncalibrated, "
+                         "open-loop, localised) or knobs")
     ap.add_argument("--repeats", type=int, default=20, help="drives per (cell, action)")
     ap.add_argument("--seed", type=int, default=0, help="noise and start-pose seed")
     ap.add_argument("--rewards", default=None, help="reward scheme (does not change aliasing)")

@@ -120,7 +120,7 @@ class RouteBatch:
         # numba types plain tuples fast, NamedTuples slowly (see sim.physics.kernel)
         self._args = (tuple(self.params), tuple(prof), tuple(self.static), tuple(self.scratch))
         self.robots = np.zeros(n_robots, ROBOT)
-        self.r = r = by_name(self.robots)
+        self.r = by_name(self.robots)
         # each robot's per-run bias (gain_l, gain_r, base_k): drawn by set_noise_rng
         self._bias = np.ones((n_robots, 3))
         for i in range(n_robots):

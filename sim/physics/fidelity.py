@@ -40,8 +40,9 @@ a real robot does:
   state is the *believed* cell; contacts, the reward and reaching G are the true pose's.
   Needs carried pose (a bump does not teleport a robot to a centre it does not know).
 
-What each preset stands for is written beside it in :data:`PRESETS`. Every knob is deterministic per seed: the noise comes from the generator the env (or the
-sweep) gives each robot. ``parse_fidelity("noisy")`` or ``"exact,wheel_noise=0.02"`` (a
+What each preset stands for is written beside it in :data:`PRESETS`. Every knob is
+deterministic per seed: the noise comes from the generator the env (or the sweep) gives
+each robot. ``parse_fidelity("noisy")`` or ``"exact,wheel_noise=0.02"`` (a
 preset, then fields); bad names or values raise :class:`sim.errors.ScenarioError` naming
 the field.
 """

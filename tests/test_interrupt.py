@@ -189,18 +189,39 @@ def test_workers_end_when_the_parent_is_killed(tmp_path):
         kids = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
         return [int(p) for p in re.findall(r"\d+", kids.read_text())] if kids.exists() else []
 
-    assert wait_for(lambda: len(children()) >= 2, 60)
-    workers = children()
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.communicate(timeout=30)
     def alive(pid: int) -> bool:
         try:  # a zombie (state Z) has ended; it waits only to be reaped by init
             return Path(f"/proc/{pid}/stat").read_text().split()[2] != "Z"
         except (FileNotFoundError, ProcessLookupError, IndexError):
             return False
 
-    assert wait_for(lambda: not any(alive(w) for w in workers), 10), \
-        "workers outlived their parent"
+    try:
+        # killed the moment the workers exist: some may not have run their initializer yet
+        assert wait_for(lambda: len(children()) >= 2, 60)
+        workers = children()
+        os.kill(proc.pid, signal.SIGKILL)
+        assert wait_for(lambda: not any(alive(w) for w in workers), 10), \
+            "workers outlived their parent"
+        proc.communicate(timeout=30)  # no worker holds the pipes any more
+    finally:  # a failure here must not leave runs going on into the next tests
+        if proc.poll() is None or any(alive(w) for w in children()):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate()
+
+
+def test_a_worker_orphaned_before_its_initializer_ends_at_once():
+    """The death signal is armed in the initializer, after the fork: a parent killed in
+    between is caught by the parent-pid check instead."""
+    code = ("import os; from scenarios.runs.backends import _ignore_sigint; "
+            "_ignore_sigint(parent=os.getppid() + 1_000_000); print('not ended')")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=60, cwd=Path(__file__).parent.parent)
+    assert done.returncode == 1 and "not ended" not in done.stdout, done
+    code = ("import os; from scenarios.runs.backends import _ignore_sigint; "
+            "_ignore_sigint(parent=os.getppid()); print('kept')")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=60, cwd=Path(__file__).parent.parent)
+    assert done.returncode == 0 and "kept" in done.stdout, done
 
 
 def test_ctrl_c_while_the_command_starts_is_one_line(tmp_path):

@@ -195,10 +195,11 @@ class _Collector:
         return done
 
 
-def _init_worker(counter: Any = None) -> None:
+def _init_worker(counter: Any = None, parent: int | None = None) -> None:
     """Pool worker initializer: the signals (:func:`_ignore_sigint`) and the sweep's shared
-    episode counter (:mod:`scenarios.runs.work`)."""
-    _ignore_sigint()
+    episode counter (:mod:`scenarios.runs.work`). ``parent``: the sweep's pid, to see
+    whether it died before this worker could ask to die with it."""
+    _ignore_sigint(parent)
     work.share(counter)
 
 
@@ -220,11 +221,14 @@ def disk_full_cause(exc: BaseException, spec: RunSpec) -> OSError | None:
     return None
 
 
-def _ignore_sigint() -> None:
+def _ignore_sigint(parent: int | None = None) -> None:
     """Pool worker initializer: Ctrl-C (and SIGHUP) reaches the whole process group, but only
     the parent decides what happens (it keeps the finished runs and ends the workers itself). On
     Linux a worker is also killed when its parent dies (``PR_SET_PDEATHSIG``): a parent
-    killed with SIGKILL would otherwise leave its workers blocked on a pipe."""
+    killed with SIGKILL would otherwise leave its workers running their runs (minutes) and
+    holding its pipes. The signal is armed only from here on, so a parent killed between
+    the fork and this line would go unnoticed: a worker whose parent is already gone
+    (``getppid`` is no longer ``parent``) ends at once."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGHUP, signal.SIG_IGN)  # a closed terminal: the parent's to handle
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
@@ -235,6 +239,8 @@ def _ignore_sigint() -> None:
             ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
         except (OSError, AttributeError):  # pragma: no cover - no prctl: nothing to do
             pass
+    if parent is not None and os.getppid() != parent:
+        os._exit(1)  # orphaned before the death signal was armed
 
 
 def _end_workers(pool: ProcessPoolExecutor) -> None:
@@ -296,7 +302,8 @@ def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector) -> list[dic
                     col.ok(i, rec)
         return col.result()
     counter = getattr(col.progress, "counter", None)
-    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, initargs=(counter,))
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker,
+                               initargs=(counter, os.getpid()))
     try:
         with stop_signals_held():  # the workers are forked here (see stop_signals_held)
             futures = {pool.submit(run_task, [specs[i] for i in task]): task for task in tasks}

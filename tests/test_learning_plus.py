@@ -301,3 +301,78 @@ def test_model_acting_needs_look_ahead_on_a_potential():
         RNHQLPlus(model_acting=1, shaping_scale=0.0)
     with pytest.raises(ValueError, match="model_acting"):
         RNHQLPlusAblation(model_acting=1)
+
+
+def test_model_test_walks_the_optimistic_models_route_unless_a_known_route_is_as_short(
+        paper50_model):
+    """model_test (issue 37): where s has no known route, or a longer one than the model's
+    distance, the test's move goes one move nearer G in the optimistic model (a move seen
+    to work first among equal ones); where the known route is as short, it is followed."""
+    from learning.rnh_ql_plus.rules import exploit
+
+    r = train_tabular(RNHQLPlus(model_test=1), paper50_model, 15, np.random.default_rng(2))
+    st = r.state
+    exploit(st, int(paper50_model.start))  # brings the known routes up to date
+    nb, blocked, dist = st.free.neighbour, st.free.blocked, st.free.distance
+    known = st.known.distance
+    works = st.model.works > st.model.fails
+    n_model = n_known = 0
+    for s in np.flatnonzero(dist > 0):
+        a = int(exploit(st, int(s)))
+        toward = [b for b in range(4) if nb[s, b] >= 0 and not blocked[s, b]
+                  and dist[nb[s, b]] == dist[s] - 1]
+        assert a in toward, (s, a, toward)
+        if known[s] == dist[s]:
+            assert works[s, a] and known[nb[s, a]] == known[s] - 1
+            n_known += 1
+        else:
+            assert works[s, a] or not any(works[s, b] for b in toward)
+            n_model += 1
+    assert n_model > 0 and n_known > 0
+    default = RNHQLPlus()
+    assert "model_test" not in default.record_fields()
+    assert RNHQLPlus(model_test=1).record_fields()["model_test"] == 1
+
+
+def test_coverage_distances_are_a_bfs_back_from_every_unvisited_cell():
+    """unvisited_distances on a 1 x 5 corridor, cells 0-2 visited, 3-4 not: distances
+    3, 2, 1, 0, 0; with the move 1->2 blocked, 0 and 1 reach none (-1); G is no source."""
+    from learning.coverage import unvisited_distances
+
+    nb = np.full((5, 4), -1, np.int32)  # up, down, left, right
+    for s in range(5):
+        nb[s, 2] = s - 1 if s > 0 else -1
+        nb[s, 3] = s + 1 if s < 4 else -1
+    succ = np.full((5, 4), -1, np.int32)
+    succ[0:3, 3] = [1, 2, 3]
+    blocked = np.zeros((5, 4), np.bool_)
+    dist = np.zeros(5, np.int32)
+    queue = np.zeros(5, np.int32)
+    unvisited_distances(nb, blocked, succ, -1, dist, queue)
+    assert dist.tolist() == [3, 2, 1, 0, 0]
+    blocked[1, 3] = True
+    unvisited_distances(nb, blocked, succ, -1, dist, queue)
+    assert dist.tolist() == [-1, -1, 1, 0, 0]
+    unvisited_distances(nb, blocked, succ, 4, dist, queue)  # G at 4
+    assert dist.tolist() == [-1, -1, 1, 0, 1]  # G is no source, but a cell like any
+
+
+def test_the_coverage_walk_tries_a_move_in_every_free_cell_and_then_ends(paper50_model):
+    """explore_steps (issue 37): with steps enough, the walk acts in every free cell it can
+    reach (obstacle cells it bumps instead: none has a move tried) and marks itself done;
+    the model then knows every wall, and model_test's route is optimal; with 0 it is the
+    default, not listed."""
+    m = paper50_model
+    r = train_tabular(RNHQLPlus(explore_steps=20_000, model_test=1), m, 40,
+                      np.random.default_rng(5))
+    st = r.state
+    acted = (st.model.successor >= 0).any(axis=1)
+    free = np.asarray(m.distance_to_goal) > 0  # reachable free cells but G
+    assert acted[free].all()
+    assert not acted[np.asarray(m.distance_to_goal) < 0].any()
+    assert st.coverage.done[0]
+    assert r.final_route_length == r.optimal_length
+    assert "explore_steps" not in RNHQLPlus().record_fields()
+    a = train_tabular(RNHQLPlus(explore_steps=50), m, 30, np.random.default_rng(1))
+    b = train_tabular(RNHQLPlus(), m, 30, np.random.default_rng(1))
+    assert not np.array_equal(a.steps, b.steps)

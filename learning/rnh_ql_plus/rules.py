@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from learning.coverage import coverage_move
 from learning.free_space import bfs_distances, distances_change, repair_distances
 from learning.known_routes import known_distances, known_move, reliable
 from learning.move_model import never_worked, note_pair, observe_outcome
@@ -89,6 +90,21 @@ def model_values(par, out, y, blocked, nb, goal, r_free, r_goal, s):
 
 
 @njit(**HOOK)
+def model_move(nb, blocked, dist, works, fails, s):
+    """``model_test``'s move: into the neighbour the optimistic model holds nearest G, ties
+    to a move seen to work, then to the lowest index (-1: every move blocked)."""
+    best, best_d, best_works = -1, -1, False
+    for a in range(nb.shape[1]):
+        u = nb[s, a]
+        if u < 0 or blocked[s, a] or dist[u] < 0:
+            continue
+        ok = reliable(works, fails, s, a)
+        if best < 0 or dist[u] < best_d or (dist[u] == best_d and ok and not best_works):
+            best, best_d, best_works = a, dist[u], ok
+    return best
+
+
+@njit(**HOOK)
 def known_route_move(nb, works, fails, known_d, known_q, known_stale, goal, s):
     """The first move of a shortest route from s over moves seen to work (-1: s has none),
     the routes brought up to date first if a move's standing changed since."""
@@ -109,8 +125,10 @@ def known_route_move(nb, works, fails, known_d, known_q, known_stale, goal, s):
 
 @njit(**HOOK)
 def act(st, s, rng):
-    """Epsilon-greedy; with look-ahead, greedy over :func:`action_values` (ties drawn), or
-    over :func:`model_values` with ``model_acting``."""
+    """The coverage walk's move while the episode has coverage steps left
+    (``explore_steps``); else epsilon-greedy: with look-ahead, greedy over
+    :func:`action_values` (ties drawn), or over :func:`model_values` with
+    ``model_acting``."""
     par = st.par
     q = st.q
     values = st.values
@@ -122,7 +140,21 @@ def act(st, s, rng):
     nb = st.free.neighbour
     blocked = st.free.blocked
     goal = st.free.goal[0]
-    if not (par.lookahead and shaping[0]):
+    cover_d = st.coverage.distance
+    cover_q = st.coverage.queue
+    cover_left = st.coverage.left
+    cover_done = st.coverage.done
+    cover_mark = st.coverage.mark
+    cover_first = st.coverage.first
+    cover_searches = st.coverage.searches
+    a = -1
+    if cover_left[0] > 0 and not cover_done[0]:
+        a = coverage_move(nb, blocked, succ, goal, cover_d, cover_q, cover_done, cover_mark,
+                          cover_first, cover_searches, s, rng)
+        cover_left[0] -= 1
+    if a >= 0:
+        pass
+    elif not (par.lookahead and shaping[0]):
         a = eps_greedy(q, s, par.eps, rng)
     elif rng.random() < par.eps:
         a = draw_below(rng, q.shape[1])
@@ -139,8 +171,9 @@ def act(st, s, rng):
 @njit(**HOOK)
 def exploit(st, s):
     """Greedy test policy, ties to the lowest index: with ``known_route``, the first move of
-    a shortest route over moves seen to work, where s has one; else with look-ahead over
-    :func:`action_values`; else over Q."""
+    a shortest route over moves seen to work, where s has one; with ``model_test``, the
+    optimistic model's move (:func:`model_move`) where s has no known route or a longer
+    one than the model's; else with look-ahead over :func:`action_values`; else over Q."""
     par = st.par
     q = st.q
     values = st.values
@@ -156,9 +189,13 @@ def exploit(st, s):
     known_d = st.known.distance
     known_q = st.known.queue
     known_stale = st.known.stale
+    blocked = st.free.blocked
+    dist = st.free.distance
     a = -1
     if par.known_route:
         a = known_route_move(nb, works, fails, known_d, known_q, known_stale, goal, s)
+    if par.model_test and (a < 0 or known_d[s] != dist[s]):
+        a = model_move(nb, blocked, dist, works, fails, s)
     if a >= 0:
         pass
     elif par.lookahead and shaping[0]:
@@ -284,7 +321,9 @@ def begin(st, s0):
     r_goal_seen = st.opt.r_goal
     r_free_seen = st.opt.r_free
     episode = st.tally.episode
+    cover_left = st.coverage.left
     begin_tally(tally)
+    cover_left[0] = par.explore_steps
     ensure_values(y, stamp, r_goal_seen, r_free_seen, dist, queue, par.gamma)
     shaping_on[0] = episode[0] >= par.warmup
     phi_here[0] = par.scale * y[s0]

@@ -6,6 +6,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from learning.coverage import Coverage, new_coverage
 from learning.free_space import FreeSpace, new_free_space
 from learning.geometry import Geometry
 from learning.known_routes import KnownRoutes, new_known_routes
@@ -30,9 +31,12 @@ class State(NamedTuple):
     known: KnownRoutes  # routes over moves seen to work (the greedy test's, known_route)
     sweep: PairQueue  # pairs queued for planned updates (sweeping; empty without)
     reading: MoveReading  # the rewards of a stay and of a clean arrival (bumps from rewards)
+    coverage: Coverage  # the coverage walk's field and scratch (explore_steps)
 
 
-DERIVED = ("known.distance", "known.queue", "known.stale", "free.neighbour")
+DERIVED = ("known.distance", "known.queue", "known.stale", "free.neighbour",
+           "coverage.distance", "coverage.queue", "coverage.mark", "coverage.first",
+           "coverage.searches", "coverage.left", "coverage.done")
 # Added to the state after checkpoints were written: a file without them loads the fresh
 # values (no reward seen), and the agent relearns both at its next stay and clean arrival;
 # until then every arrival counts as clean, the rule the file was trained under.
@@ -45,4 +49,4 @@ def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> Stat
                  new_free_space(geom), new_optimism(n_s), np.zeros((1, n_a)), np.zeros(1),
                  np.zeros(1, np.bool_), new_known_routes(n_s),
                  new_pair_queue(n_s * n_a) if cfg.sweeping else new_pair_queue(0, 0),
-                 new_move_reading())
+                 new_move_reading(), new_coverage(n_s))

@@ -11,14 +11,12 @@ from hypothesis import strategies as st
 
 from sim.grid.actions import ACTION_HEADINGS
 from sim.physics.controller import (
-    DriveLimits,
     PrimitiveController,
-    ProfileTable,
-    rate_limit,
     twist_to_wheels,
     wheels_to_twist,
     wrap_angle,
 )
+from sim.physics.drive_profiles import DriveLimits, ProfileTable, rate_limit
 from sim.physics.world import PhysicsConfig, PhysicsWorld
 from sim.scenario import Robot, Scenario
 

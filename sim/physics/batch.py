@@ -35,7 +35,8 @@ import pymunk
 from sim.grid.discretiser import Discretiser
 from sim.physics import kernel as K
 from sim.physics import sigint
-from sim.physics.controller import DriveLimits, PrimitiveOutcome, profiles
+from sim.physics.controller import PrimitiveOutcome
+from sim.physics.drive_profiles import DriveLimits, profiles
 from sim.physics.fidelity import Fidelity
 from sim.physics.kernel_state import ROBOT, Geometry, Params, Scratch, Status, by_name
 from sim.physics.static import (

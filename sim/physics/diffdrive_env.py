@@ -22,7 +22,8 @@ from sim.env_args import (
 from sim.grid import build_model
 from sim.grid.discretiser import Discretiser
 from sim.grid.env import check_start, start_state_from_options
-from sim.physics.controller import DriveLimits, rate_limit, wheels_to_twist
+from sim.physics.controller import wheels_to_twist
+from sim.physics.drive_profiles import DriveLimits, rate_limit
 from sim.physics.env_parts import Trail, info_pose
 from sim.physics.fidelity import Fidelity
 from sim.physics.static import Contact

@@ -23,7 +23,8 @@ own sweep meets a surface or, where a sweep can be blind (a step along a box fac
 Such a step is handed back (``CHECK``) and the caller asks Chipmunk's narrow phase
 (``cpSpaceShapeQuery``) whether a contact began. The controller is the controller
 module's compiled functions (:func:`sim.physics.controller.plan_leg`, ``leg_command``,
-``wheel_twist``, ``at_target``, ``cell_of``); the fidelity knobs follow the reference's
+``wheel_twist``, ``at_target``, ``cell_of``), the geometry's answers
+:mod:`sim.physics.kernel_queries`; the fidelity knobs follow the reference's
 rules (:meth:`PrimitiveController.run`), tested field by field at ``exact``, wheel noise
 only and ``noisy``.
 
@@ -42,26 +43,26 @@ from numba import njit
 from sim.grid.actions import ACTION_DELTAS, ACTION_HEADINGS
 from sim.physics.controller import (
     Leg,
-    Profiles,
     at_target,
     cell_of,
     leg_command,
     plan_leg,
     wheel_twist,
 )
+from sim.physics.drive_profiles import Profiles
+from sim.physics.kernel_queries import (
+    CHECK_MARGIN_M,
+    depth_at,
+    in_clear_ball,
+    new_clear_ball,
+    new_touch,
+    odometry,
+    sweep_step,
+)
 from sim.physics.kernel_state import Geometry, Params, Phase, Scratch, Status
 from sim.physics.static import DEEPER_M, HOLD_STEP_M
-from sim.physics.sweep import (
-    _box_distance,
-    _fold_shapes,
-    _segment_distance,
-    overlap_depth,
-    sweep_fraction,
-)
 
-CHECK_MARGIN_M = 1e-6  # steps ending this close to a surface ask Chipmunk [m]
 CENTRE_TOL_M = 1e-9  # a leg starting this close to its cell centre uses the cached guard [m]
-CLEAR_MARGIN_M = 1e-3  # a step this far from every surface needs no sweep (_new_clear_ball) [m]
 _DELTAS = np.array(ACTION_DELTAS, dtype=np.int64)
 _HEADINGS = np.array(ACTION_HEADINGS, dtype=np.float64)
 
@@ -105,7 +106,7 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
     step (the caller sets ``CONTACT`` if so); then call again. Per leg: :func:`_plan`,
     :func:`_guard_leg`, its commands (each a control period of physics steps: :func:`_step`
     at exact; above it the step's own sweep, :func:`_integrate`, :func:`_rest` and, where a
-    sweep can be blind, :func:`_new_touch`; then :func:`_solve`), :func:`_finish_leg`.
+    sweep can be blind, :func:`new_touch`; then :func:`_solve`), :func:`_finish_leg`.
 
     Where a step's sweep can be blind: the hold moved the disc off it; a step shorter than
     10 um loses precision; Munk2D skips a box face (all are axis-aligned) that the disc moves
@@ -184,21 +185,21 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
                         clear = False  # the step stays in the robot's clear ball
                         if not held:
                             x1, y1 = rb.x + vx * p.dt, rb.y + vy * p.dt
-                            clear = _in_clear_ball(rb, x1, y1)
+                            clear = in_clear_ball(rb, x1, y1)
                             if not clear:
-                                _new_clear_ball(rb, p, g, s)
-                                clear = _in_clear_ball(rb, x1, y1)
+                                new_clear_ball(rb, p, g, s)
+                                clear = in_clear_ball(rb, x1, y1)
                         if clear:  # nothing within CLEAR_MARGIN_M of the step: no sweep
-                            pass  # can hit, no check can find a touch (see _new_clear_ball)
+                            pass  # can hit, no check can find a touch (see new_clear_ball)
                         elif ln > 1e-12:  # its own guard, as PhysicsWorld.before_step
-                            alpha = _sweep(p, g, s, rb.x, rb.y, rb.x + vx * p.dt,
+                            alpha = sweep_step(p, g, s, rb.x, rb.y, rb.x + vx * p.dt,
                                            rb.y + vy * p.dt)
                             hit = alpha < math.inf
                             if hit and alpha * ln + p.depth_m < ln:
                                 scale = (alpha * ln + p.depth_m) / ln
                                 vx, vy = vx * scale, vy * scale
                                 rb.vx, rb.vy = vx, vy
-                        depth0 = _depth(p, g, s, rb.x, rb.y) if held else 0.0
+                        depth0 = depth_at(p, g, s, rb.x, rb.y) if held else 0.0
                         _integrate(rb, vx, vy, p)
                         check = hit  # the sweep met a surface: ask Chipmunk
                         if p.localised:  # the wheels turned (a hold slides them; below)
@@ -213,10 +214,10 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
                         elif clear:
                             pass
                         elif not hit and (held or 1e-12 < ln < 1e-5):  # where a sweep is
-                            check = _new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, False)
+                            check = new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, False)
                         elif not hit and ln > 1e-12 and g.boxes.shape[0] and (  # blind
                                 abs(rb.x - rb.px) < 1e-5 or abs(rb.y - rb.py) < 1e-5):
-                            check = _new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, True)
+                            check = new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, True)
                     else:
                         check = _step(rb, p)
                     if rb.ntraj < traj.shape[1]:
@@ -232,7 +233,7 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
                     rb.cmd = k + 1
                     rb.sub = 0
                     if p.localised:
-                        _odometry(rb, p)
+                        odometry(rb, p)
             if rb.status == Status.RUNNING:
                 _finish_leg(rb, p)
 
@@ -279,7 +280,7 @@ def _cast_guard(rb, p, g, s):
     cx, cy = (rb.cell_x + 0.5) * p.cell_m, (rb.cell_y + 0.5) * p.cell_m
     on_centre = abs(rb.x - cx) <= CENTRE_TOL_M and abs(rb.y - cy) <= CENTRE_TOL_M
     x0, y0 = (cx, cy) if on_centre else (rb.x, rb.y)
-    alpha = _sweep(p, g, s, x0, y0, rb.tx, rb.ty)
+    alpha = sweep_step(p, g, s, x0, y0, rb.tx, rb.ty)
     free = math.inf if alpha == math.inf else alpha * math.hypot(rb.tx - x0, rb.ty - y0)
     s.counters[1] += 1
     if on_centre:
@@ -317,7 +318,7 @@ def _rest(rb, p, g, s, depth0):
     (:func:`_held`), and on a drive it presses the bumper; at ``bumper_travel_m`` the robot
     stays where it was before the step (True: a bump). A step that leaves it touching
     nothing ends the resting."""
-    depth1 = _depth(p, g, s, rb.x, rb.y)
+    depth1 = depth_at(p, g, s, rb.x, rb.y)
     if depth1 > depth0 + DEEPER_M:
         into = _held(rb, p, g, s)
         if not (rb.nturn > 0 and rb.cmd <= rb.nturn):  # a drive, not a turn in place
@@ -361,8 +362,8 @@ def _held(rb, p, g, s):
     how far that was [m] (the bumper's press). As :meth:`PhysicsWorld.hold`."""
     h = HOLD_STEP_M
     x, y = rb.x, rb.y
-    gx = _depth(p, g, s, x + h, y) - _depth(p, g, s, x - h, y)  # grows into the surface
-    gy = _depth(p, g, s, x, y + h) - _depth(p, g, s, x, y - h)
+    gx = depth_at(p, g, s, x + h, y) - depth_at(p, g, s, x - h, y)  # grows into the surface
+    gy = depth_at(p, g, s, x, y + h) - depth_at(p, g, s, x, y - h)
     g = math.hypot(gx, gy)
     if g == 0.0:
         return 0.0
@@ -403,14 +404,14 @@ def _bump(rb, p, g, s):
     rb.bumped = True
     rb.forced = False
     if p.localised:  # the travel of the period the contact ended
-        _odometry(rb, p)
+        odometry(rb, p)
     if p.carried:
         rb.resting = True
     else:
         rb.x = (rb.cell_x + 0.5) * p.cell_m
         rb.y = (rb.cell_y + 0.5) * p.cell_m
         rb.resting = ((p.wheel_noise > 0.0 or p.biased or p.open_loop)
-                      and _depth(p, g, s, rb.x, rb.y) > 0.0)
+                      and depth_at(p, g, s, rb.x, rb.y) > 0.0)
     _done(rb, p, reached=False)
 
 
@@ -434,119 +435,3 @@ def _done(rb, p, reached):
         rb.bth = rb.head
     rb.state = iy * p.nx + ix
     rb.status = Status.DONE
-
-
-@njit(cache=True)
-def _odometry(rb, p):
-    """Dead reckoning over the control period that just ended (:mod:`sim.physics.fidelity`,
-    ``localisation``). The body's travel ``odo_d`` [m] and yaw ``odo_th`` [rad] as its wheels
-    drove them (a slide along a surface that holds the disc turns no wheel; wheels that
-    push against it do turn), as each wheel's encoder reads it through the nominal
-    geometry (the per-run bias shows as UMBmark's systematic drift), split into
-    rotate-translate-rotate with the odometry motion model's noise (the period's normals
-    o1..o3), composed onto the estimate."""
-    half = 0.5 * rb.odo_th * p.wheel_base_m * rb.base_k  # half the wheels' travel difference
-    d_l, d_r = (rb.odo_d - half) / rb.gain_l, (rb.odo_d + half) / rb.gain_r  # the encoders
-    trans = 0.5 * (d_l + d_r)
-    rot = 0.5 * (d_r - d_l) / p.wheel_base_m  # half the rotation: before and after
-    s_rot = math.sqrt(p.odo_a1 * rot * rot + p.odo_a2 * trans * trans)
-    s_trans = math.sqrt(p.odo_a3 * trans * trans + p.odo_a4 * 2.0 * rot * rot)
-    r1 = rot + s_rot * rb.o1
-    t = trans + s_trans * rb.o2
-    r2 = rot + s_rot * rb.o3
-    rb.bx += t * math.cos(rb.bth + r1)
-    rb.by += t * math.sin(rb.bth + r1)
-    rb.bth += r1 + r2
-    rb.odo_d = rb.odo_th = 0.0
-
-
-@njit(cache=True, inline="always")
-def _in_clear_ball(rb, x1, y1):
-    """Whether the step from the pose to (x1, y1) lies in the robot's clear ball."""
-    return (math.hypot(rb.x - rb.clear_x, rb.y - rb.clear_y) < rb.clear_r
-            and math.hypot(x1 - rb.clear_x, y1 - rb.clear_y) < rb.clear_r)
-
-
-@njit(cache=True)
-def _new_clear_ball(rb, p, g, s):
-    """The robot's clear ball from its pose: every centre within ``clear_r`` of it leaves the
-    disc at least CLEAR_MARGIN_M from every static shape (its clearance there, up to one
-    cell, less the margin). A step whose start and end lie in it sweeps a segment in it
-    (a ball is convex): the sweep finds no surface (alpha = inf) and no touch check can
-    fire (they look within 1e-6 m), so skipping both changes nothing; above ``exact``
-    most steps run in free space, and one point query per ball replaces a sweep per step.
-    """
-    s.counters[0] += 1
-    reach = p.radius_m + p.cell_m  # the query looks this far: shapes beyond it are beyond
-    c = _fold_shapes(_clear_wall, _clear_item, reach, g.circles, g.walls, g.boxes, p.cell_m,
-                     p.nx, p.ny, g.grid_start, g.grid_items, s.seen, s.counters[0],
-                     reach, rb.x, rb.y, rb.x, rb.y)
-    rb.clear_x, rb.clear_y = rb.x, rb.y
-    rb.clear_r = c - p.radius_m - CLEAR_MARGIN_M
-
-
-@njit(cache=True, inline="always")
-def _clear_wall(walls, k, _radius, x, y, _bx, _by, nearest):
-    """The nearest surface [m] from the centre (x, y), folding in wall ``k``."""
-    d = _segment_distance(x, y, walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3]) - walls[k, 4]
-    return d if d < nearest else nearest
-
-
-@njit(cache=True, inline="always")
-def _clear_item(circles, boxes, k, _radius, x, y, _bx, _by, nearest):
-    n_circles = circles.shape[0]
-    if k < n_circles:
-        d = math.hypot(x - circles[k, 0], y - circles[k, 1]) - circles[k, 2]
-    else:
-        m = k - n_circles
-        d = _box_distance(x, y, boxes[m, 0], boxes[m, 1], boxes[m, 2], boxes[m, 3])
-    return d if d < nearest else nearest
-
-
-@njit(cache=True, inline="always")
-def _new_touch(p, g, s, x0, y0, x1, y1, boxes_only):
-    """Whether the disc at (x1, y1) comes within CHECK_MARGIN_M of a shape (or a box) it did
-    not overlap at (x0, y0) (point-query distances), for steps whose sweep cannot tell."""
-    r, m = p.radius_m, CHECK_MARGIN_M
-    for k in range(0 if boxes_only else g.walls.shape[0]):
-        w = g.walls[k]
-        if (_segment_distance(x1, y1, w[0], w[1], w[2], w[3]) - w[4] - r < m
-                and _segment_distance(x0, y0, w[0], w[1], w[2], w[3]) - w[4] - r > -m):
-            return True
-    s.counters[0] += 1
-    ix0, iy0 = cell_of(x1 - r - m, y1 - r - m, p.cell_m, p.nx, p.ny)
-    ix1, iy1 = cell_of(x1 + r + m, y1 + r + m, p.cell_m, p.nx, p.ny)
-    for gy in range(iy0, iy1 + 1):
-        for gx in range(ix0, ix1 + 1):
-            cell = gy * p.nx + gx
-            for q in range(g.grid_start[cell], g.grid_start[cell + 1]):
-                k = g.grid_items[q]
-                if s.seen[k] != s.counters[0] and (k >= g.circles.shape[0] or not boxes_only):
-                    s.seen[k] = s.counters[0]
-                    if _clear(p, g, k, x1, y1) < m and _clear(p, g, k, x0, y0) > -m:
-                        return True
-    return False
-
-
-@njit(cache=True, inline="always")
-def _clear(p, g, k, x, y):
-    """Clearance [m] of the disc at (x, y) from grid item ``k`` (circles, then boxes)."""
-    if k < g.circles.shape[0]:
-        c = g.circles[k]
-        return math.hypot(x - c[0], y - c[1]) - c[2] - p.radius_m
-    b = g.boxes[k - g.circles.shape[0]]
-    return _box_distance(x, y, b[0], b[1], b[2], b[3]) - p.radius_m
-
-
-@njit(cache=True, inline="always")
-def _sweep(p, g, s, ax, ay, bx, by):
-    s.counters[0] += 1
-    return sweep_fraction(g.circles, g.walls, g.boxes, p.cell_m, p.nx, p.ny, g.grid_start,
-                          g.grid_items, s.seen, s.counters[0], p.radius_m, ax, ay, bx, by)
-
-
-@njit(cache=True, inline="always")
-def _depth(p, g, s, x, y):
-    s.counters[0] += 1
-    return overlap_depth(g.circles, g.walls, g.boxes, p.cell_m, p.nx, p.ny, g.grid_start,
-                         g.grid_items, s.seen, s.counters[0], p.radius_m, x, y)

@@ -3,7 +3,7 @@
 Each robot is a record of :data:`ROBOT` (in compiled code ``rb = robots[i]``, a reference:
 ``rb.x``; in Python :func:`by_name` gives a :class:`Robots` of 1-D views, ``r.x[i]``). A
 batch's constants are one :class:`Params` (numbers only), its tables
-:class:`sim.physics.controller.Profiles` and :class:`Geometry`, its caches :class:`Scratch`.
+:class:`sim.physics.drive_profiles.Profiles` and :class:`Geometry`, its caches :class:`Scratch`.
 
 Not a NamedTuple of arrays for the robots: numba types a NamedTuple argument by its slow path
 on every call (10-14 us for fifty arrays, measured; a record array 0.4 us), and a batch of one
@@ -69,7 +69,8 @@ ROBOT = np.dtype([
     ("o1", _F), ("o2", _F), ("o3", _F), ("f1", _F), ("f2", _F), ("f3", _F),
     ("nfix", _I), ("tstate", _I), ("fresh", _B),
     # a ball the disc's centre may roam without coming near any static shape (above exact:
-    # steps inside it need no sweep; sim.physics.kernel._new_clear_ball) [m]; radius <= 0: none
+    # steps inside it need no sweep; sim.physics.kernel_queries.new_clear_ball) [m];
+    # radius <= 0: none
     ("clear_x", _F), ("clear_y", _F), ("clear_r", _F),
 ], align=True)
 

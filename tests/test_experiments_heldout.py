@@ -37,3 +37,24 @@ def test_a_bad_artifact_name_is_refused_before_any_run(tmp_path):
     with pytest.raises(SystemExit) as exc:
         heldout.main(["--out", str(tmp_path / "h"), "--artifact", "Not A Name"])
     assert exc.value.code == 2 and not (tmp_path / "h").exists()
+
+
+def test_the_diagnosis_says_where_an_untrained_test_from_s_hits_a_wall(tmp_path):
+    """After one episode from elsewhere the test from S walks cells never acted in and
+    stops at the first wall the model did not know: the diagnosis names the cell, says
+    nothing of the walk was acted in, and that the move taken was a wall."""
+    import numpy as np
+
+    from learning import RNHQLPlus, train_tabular
+    from scenarios.experiments.test_from_s import describe, where_it_stops
+    from scenarios.runs.spec import load
+
+    assert where_it_stops([5, 4, 3, 3], np.array([0, 0, 0, 1, 2, 3])) == 2
+    toml, route, _ = heldout.write_problem("rooms-64", 0.0, 7, 0.0, tmp_path)
+    _, model = load(str(toml), rewards="goal-only", s_starts=0.0)
+    r = train_tabular(RNHQLPlus(), model, 1, np.random.default_rng(0))
+    line = describe(0, r, model, r.state)
+    assert f"(optimum {route})" in line and "test no G" in line, line
+    assert "a cell never acted in" in line and "the test's move a wall" in line, line
+    walked = int(line.split("stops ")[1].split(" moves")[0]) + 1
+    assert f"0/{walked} cells of the walk acted in" in line, line

@@ -326,6 +326,12 @@ def heldout(d: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+@renderer("test-from-s")
+def test_from_s(d: dict[str, Any]) -> str:
+    """Where the greedy test from S stops, a line per seed (issue 37's diagnosis)."""
+    return "```text\n" + "\n".join(d["lines"]) + "\n```\n"
+
+
 @renderer("paper-claims")
 def paper_claims(d: dict[str, Any]) -> str:
     """The paper's claims, one by one: whether each holds here and what was measured."""

@@ -58,3 +58,10 @@ def test_the_diagnosis_says_where_an_untrained_test_from_s_hits_a_wall(tmp_path)
     assert "a cell never acted in" in line and "the test's move a wall" in line, line
     walked = int(line.split("stops ")[1].split(" moves")[0]) + 1
     assert f"0/{walked} cells of the walk acted in" in line, line
+
+
+def test_the_diagnosis_renders_its_lines_as_one_block():
+    from scenarios.artifact_tables import RENDERERS
+
+    text = RENDERERS["test-from-s"]({"lines": ["rooms-64@uniform ...", "seed 0: test 92"]})
+    assert text == "```text\nrooms-64@uniform ...\nseed 0: test 92\n```\n"

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.experiments.args import arg, parse
+from scenarios.experiments.args import arg, parse, parser_of
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,8 @@ class Args:
     map_seed: int = arg(7, "generator seed of the map (7: the tuning set's)")
     braid: float = arg(0.02, "share of a generated maze's inner walls knocked out")
     maps: str = arg("results/test-from-s", "folder for the generated map and scenario")
+    artifact: str | None = arg(None, "also write docs/results/test-from-s.NAME.json (a docs "
+                                     "block, rendered by scenarios.artifacts)", metavar="NAME")
 
 
 def acted_cells(state) -> np.ndarray | None:
@@ -84,6 +86,10 @@ def describe(seed: int, result, model, state) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse(Args, __doc__, argv)
+    if args.artifact:
+        from scenarios.artifacts import check_artifact_name
+
+        check_artifact_name(parser_of(Args, __doc__), args.artifact)
     from learning.streams import streams
     from learning.train import train_tabular
     from scenarios.experiments.heldout import method_of, share_of, write_problem
@@ -95,13 +101,23 @@ def main(argv: list[str] | None = None) -> int:
                                           Path(args.maps))
     _, model = load(str(toml), rewards="goal-only", s_starts=share)
     method, overrides = method_of(args.method)
-    print(f"{args.problem}, map seed {args.map_seed}: optimum {route} moves, {episodes} "
-          f"episodes, {args.method}")
+    lines = [f"{args.problem}, map seed {args.map_seed}: optimum {route} moves, {episodes} "
+             f"episodes, {args.method}"]
+    print(lines[0])
     for seed in range(args.seeds):
         rs = streams(seed)
         result = train_tabular(make_config(method, overrides), model, episodes, rs.learner,
                                test_every=10, start_rng=rs.starts)
-        print(describe(seed, result, model, result.state), flush=True)
+        lines.append(describe(seed, result, model, result.state))
+        print(lines[-1], flush=True)
+    if args.artifact:
+        from scenarios.artifacts import write_artifact
+
+        command = "python -m scenarios.experiments.test_from_s " + " ".join(
+            f"--{k.replace('_', '-')} '{v}'" for k, v in vars(args).items()
+            if v is not None and k not in ("artifact", "maps"))
+        write_artifact(f"test-from-s.{args.artifact}", f"{command} --artifact {args.artifact}",
+                       ["grid"], {"lines": lines}, study=__file__)
     return 0
 
 

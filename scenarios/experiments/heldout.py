@@ -175,10 +175,12 @@ def main(argv: list[str] | None = None) -> int:
     text = heldout(data)
     atomic_write_text(out / "heldout.md", text)
     if args.artifact:
+        from shlex import quote  # a method's overrides hold ';': the command must paste
+
         from scenarios.artifacts import write_artifact
 
         command = "python -m scenarios.experiments.heldout " + " ".join(
-            f"--{k.replace('_', '-')} {v}" for k, v in vars(args).items()
+            f"--{k.replace('_', '-')} {quote(str(v))}" for k, v in vars(args).items()
             if v not in (None, False) and k not in ("artifact", "resume", "jobs"))
         write_artifact(f"heldout.{args.artifact}", f"{command} --artifact {args.artifact}",
                        ["grid"], data, study=__file__)

@@ -111,10 +111,12 @@ def main(argv: list[str] | None = None) -> int:
         lines.append(describe(seed, result, model, result.state))
         print(lines[-1], flush=True)
     if args.artifact:
+        from shlex import quote
+
         from scenarios.artifacts import write_artifact
 
         command = "python -m scenarios.experiments.test_from_s " + " ".join(
-            f"--{k.replace('_', '-')} '{v}'" for k, v in vars(args).items()
+            f"--{k.replace('_', '-')} {quote(str(v))}" for k, v in vars(args).items()
             if v is not None and k not in ("artifact", "maps"))
         write_artifact(f"test-from-s.{args.artifact}", f"{command} --artifact {args.artifact}",
                        ["grid"], {"lines": lines}, study=__file__)

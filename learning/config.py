@@ -43,6 +43,11 @@ _VALID = {
     "lookahead": (lambda v: v in (0, 1), "0 or 1"),
     "n_fit": (lambda v: v >= 0, ">= 0"),
     "explored": (lambda v: v in (0, 1), "0 or 1"),
+    "known_route": (lambda v: v in (0, 1), "0 or 1"),
+    "sweeping": (lambda v: v in (0, 1), "0 or 1"),
+    "model_acting": (lambda v: v in (0, 1), "0 or 1"),
+    "model_test": (lambda v: v in (0, 1), "0 or 1"),
+    "explore_steps": (lambda v: v >= 0, ">= 0 [steps per episode]"),
 }
 
 

@@ -376,3 +376,10 @@ def test_the_coverage_walk_tries_a_move_in_every_free_cell_and_then_ends(paper50
     a = train_tabular(RNHQLPlus(explore_steps=50), m, 30, np.random.default_rng(1))
     b = train_tabular(RNHQLPlus(), m, 30, np.random.default_rng(1))
     assert not np.array_equal(a.steps, b.steps)
+
+
+@pytest.mark.parametrize("field, value", [("explore_steps", -1), ("model_test", 2),
+                                          ("model_acting", 3), ("known_route", -1)])
+def test_the_issue_37_options_refuse_values_they_do_not_have(field, value):
+    with pytest.raises(ValueError, match=rf"RNHQLPlus\.{field} = {value} must be"):
+        RNHQLPlus(**{field: value})

@@ -55,7 +55,11 @@ def test_the_ablation_at_its_defaults_runs_as_rnh_ql_plus(paper50_model, fields)
         np.testing.assert_array_equal(a.test_route_length, b.test_route_length)
         shared = dict(arrays(b.state))
         for name, x in arrays(a.state):  # every array rnh-ql+ has, the ablation has alike
+            if name.startswith("coverage."):  # the coverage walk, rnh-ql+'s own option:
+                continue  # untouched at explore_steps = 0 (test_learning_plus)
             assert np.array_equal(x, shared[name]), name
+        assert (a.state.coverage.distance == -1).all() and a.state.coverage.left[0] == 0
+        assert not a.state.coverage.done[0] and a.state.coverage.searches[0] == 0
 
 
 def test_config_from_fields_drops_the_switches_at_rnh_ql_plus_values_only():

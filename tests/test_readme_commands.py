@@ -33,13 +33,32 @@ PLACEHOLDERS = {"N": "3", "K": "3", "DIR": "out", "FILE": "x", "MAP": "x.map",
                 "ADDRESS": "auto", "PATH": "x"}
 
 
+def split_outside_quotes(line: str) -> list[str]:
+    """``line`` split at && ; | that stand outside quotes (a method's overrides are quoted
+    because they hold ';')."""
+    parts, start, quote, i = [], 0, "", 0
+    while i < len(line):
+        c = line[i]
+        if quote:
+            quote = "" if c == quote else quote
+        elif c in "'\"":
+            quote = c
+        elif line.startswith("&&", i) or c in ";|":
+            parts.append(line[start:i])
+            i += 2 if c == "&" else 1
+            start = i
+            continue
+        i += 1
+    return [*parts, line[start:]]
+
+
 def segments(text: str) -> list[str]:
     """The commands of one shell snippet: continuation lines joined, split at && ; |."""
     text = re.sub(r"\\\n\s*", " ", text)
     out = []
     for line in text.splitlines():
         line = line.split(" #", 1)[0].strip()
-        for part in re.split(r"&&|;|\|", line):
+        for part in split_outside_quotes(line):
             part = part.strip()
             part = re.sub(r"^(\S+=\S+\s+)+", "", part)  # VAR=value prefixes
             part = re.sub(r"^(\S*/)?(\.venv/bin/)", "", part)

@@ -31,7 +31,13 @@ import numpy as np
 from numba import njit
 
 from learning.config import MethodConfig
-from learning.free_space import FreeSpace, bfs_distances, new_free_space
+from learning.free_space import (
+    FreeSpace,
+    bfs_distances,
+    distances_change,
+    new_free_space,
+    repair_distances,
+)
 from learning.geometry import Geometry
 from learning.move_reading import MoveReading, new_move_reading, read_move
 from learning.tabular import q_learning, row_max
@@ -158,6 +164,45 @@ def rederive(pi_h, nb, blocked, bal, dist, queue, goal):
             pi_h[s] = best
 
 
+@njit(cache=True)
+def rederive_after_wall(pi_h, nb, blocked, bal, dist, queue, goal, s, a):
+    """pi_H after s's move a was newly blocked, equal to :func:`rederive`'s but in
+    O(the states whose distance changed): only s (its own move) and the neighbours of a
+    state whose distance changed can point another way. Distances are repaired
+    (:func:`learning.free_space.repair_distances`), or left alone when the wall was not s's
+    only move towards G. Where a state has no route of unblocked moves (before or after),
+    the whole of :func:`rederive` runs: the least-bumped routes depend on every count.
+
+    A full re-derivation at every new wall cost O(walls x states): on a 512² map, hours
+    a run (see BENCHMARKS.md)."""
+    if any_cut(dist):
+        rederive(pi_h, nb, blocked, bal, dist, queue, goal)
+        return
+    if not distances_change(nb, dist, blocked, s, a):
+        pi_h[s] = nearest_move(nb, blocked, dist, s)
+        return
+    changed = repair_distances(nb, blocked, dist, queue, goal, s)
+    if changed[0] < 0:  # a state lost its last route (the distances are a full BFS's now)
+        rederive(pi_h, nb, blocked, bal, dist, queue, goal)
+        return
+    pi_h[s] = nearest_move(nb, blocked, dist, s)
+    for i in range(changed.shape[0]):
+        v = changed[i]
+        for b in range(nb.shape[1]):
+            u = nb[v, b]  # on the grid's symmetric moves, u has a move into v
+            if u >= 0:
+                pi_h[u] = nearest_move(nb, blocked, dist, u)
+
+
+@njit(cache=True)
+def any_cut(dist):
+    """Whether some state has no route of unblocked moves to G (distance -1)."""
+    for s in range(dist.shape[0]):
+        if dist[s] < 0:
+            return True
+    return False
+
+
 @njit(cache=True, inline="always")
 def step_cost(bal, s, a, n_s):
     """A move's cost in :func:`least_bumped_costs`: its excess of bumps over arrivals, in
@@ -266,7 +311,10 @@ def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, cle
     now = bal[s, a] > 0
     if now != blocked[s, a]:
         blocked[s, a] = now
-        rederive(pi_h, nb, blocked, bal, dist, queue, goal)
+        if now:  # a new wall: repair what it changed
+            rederive_after_wall(pi_h, nb, blocked, bal, dist, queue, goal, s, a)
+        else:  # a wall that moved after all (noisy worlds): distances may fall anywhere
+            rederive(pi_h, nb, blocked, bal, dist, queue, goal)
     elif now and dist[s] < 0 and pi_h[s] == a:
         # cut off, and the least-bumped route's first move bumped again: its cost rose, so
         # the heuristic may now point another way (else it pushes one wall for ever)

@@ -24,7 +24,7 @@ from learning.q_learning import STQL, QOpt
 from learning.registry import METHODS, config_from_fields
 from learning.rn_ql import RNQL
 from learning.rnh_ql import RNHQL
-from learning.rnh_ql_plus import RNHQLPlus
+from learning.rnh_ql_plus import RNHQLPlus, RNHQLPlusExplore
 from learning.rnh_ql_plus_ablation import RNHQLPlusAblation
 from learning.sarsa_rs import SarsaRS
 from learning.state import copy_state, init_state
@@ -35,7 +35,7 @@ drop_stale_cache()  # numba reads its cache at a function's first call, which is
 __all__ = [
     "HAQL", "METHODS", "PFHRL", "RNHQL", "RNQL", "STQL", "Checkpoint", "CheckpointError",
     "DynaQ", "EpisodeLog", "Geometry", "MethodConfig", "QLambda", "QOpt", "RNHQLPlus",
-    "RNHQLPlusAblation", "SarsaRS", "StepAgent", "TabularMDP", "TrainResult",
+    "RNHQLPlusAblation", "RNHQLPlusExplore", "SarsaRS", "StepAgent", "TabularMDP", "TrainResult",
     "config_from_fields", "copy_state", "geometry_of", "greedy_test", "init_state",
     "load_checkpoint", "make_agent", "run_env_episodes", "save_checkpoint", "train_tabular",
 ]

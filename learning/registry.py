@@ -47,7 +47,7 @@ from learning.q_lambda import QLambda
 from learning.q_learning import STQL, QOpt
 from learning.rn_ql import RNQL
 from learning.rnh_ql import RNHQL
-from learning.rnh_ql_plus import RNHQLPlus
+from learning.rnh_ql_plus import RNHQLPlus, RNHQLPlusExplore
 from learning.rnh_ql_plus_ablation import RNHQLPlusAblation
 from learning.sarsa_rs import SarsaRS
 
@@ -65,6 +65,8 @@ _TABLE: tuple[tuple[type[MethodConfig], ModuleType, bool], ...] = (
     (DynaQ, dyna_q, True),
     # rnh-ql+ with the ablation's switches (run for run rnh-ql+ at its defaults)
     (RNHQLPlusAblation, rnh_ql_plus_ablation, False),
+    # rnh-ql+ with the held-out maps' options on (issue 37), named: run on request
+    (RNHQLPlusExplore, rnh_ql_plus, False),
 )
 HOOKS = ("State", "init_state", "act", "update", "begin", "exploit")
 

@@ -18,6 +18,7 @@ from learning import (
 )
 from learning.geometry import geometry_of
 from learning.named_state import arrays
+from learning.registry import family_of
 from learning.train import EPISODE_FIELDS
 from sim.grid import build_model
 from sim.scenario_io import resolve_scenario
@@ -25,13 +26,16 @@ from sim.scenario_io import resolve_scenario
 RESUME_CONFIGS = [c() for c in METHODS.values()] + [RNHQL(warmup_episodes=25)]
 
 
-def assert_same_state(a, b):
-    """Every named array of two learner states equal (and the parameters)."""
+def assert_same_state(a, b, derived=()):
+    """Every named array of two learner states equal (and the parameters), but the
+    ``derived`` ones: a method's scratch that a load rebuilds (a search's marks and queue)
+    need not hold what the uninterrupted run left there, so long as the run goes on alike
+    (its episodes and tests are compared too)."""
     assert a.par == b.par
     left, right = dict(arrays(a)), dict(arrays(b))
     assert left.keys() == right.keys()
     for name, x in left.items():
-        assert np.array_equal(x, right[name]), name
+        assert name in derived or np.array_equal(x, right[name]), name
 
 
 @pytest.mark.parametrize("cfg", RESUME_CONFIGS, ids=lambda c: c.cli)
@@ -44,7 +48,7 @@ def test_resume_equals_uninterrupted(tmp_path, paper50_model, cfg):
     ckpt = load_checkpoint(path, method=cfg.cli, n_states=m.n_states, geometry=geometry_of(m))
     assert ckpt.episodes == 30
     rest = train_tabular(cfg, m, 50, np.random.default_rng(999), test_every=10, resume=ckpt)
-    assert_same_state(full.state, rest.state)
+    assert_same_state(full.state, rest.state, getattr(family_of(cfg), "DERIVED", ()))
     for f in EPISODE_FIELDS:
         if f != "wall_time_s":
             np.testing.assert_array_equal(getattr(full, f), getattr(rest, f), err_msg=f)

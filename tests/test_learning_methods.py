@@ -14,8 +14,9 @@ from learning.registry import FAMILY_OF_CONFIG, comparison_methods
 
 def test_registry_names():
     assert list(METHODS) == ["rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql",
-                             "q-opt", "q-lambda", "dyna-q", "rnh-ql+ablation"]
-    assert comparison_methods() == tuple(METHODS)[:-1]  # all but the ablation's method
+                             "q-opt", "q-lambda", "dyna-q", "rnh-ql+ablation", "rnh-ql+explore"]
+    # all but the ablation's method and rnh-ql+'s named variant
+    assert comparison_methods() == tuple(METHODS)[:-2]
     assert METHODS["rnh-ql"].name == "RNH-QL" and METHODS["st-ql"].name == "ST-QL"
     for cli, cls in METHODS.items():
         assert cls.cli == cli and cls in FAMILY_OF_CONFIG

@@ -383,3 +383,44 @@ def test_the_coverage_walk_tries_a_move_in_every_free_cell_and_then_ends(paper50
 def test_the_issue_37_options_refuse_values_they_do_not_have(field, value):
     with pytest.raises(ValueError, match=rf"RNHQLPlus\.{field} = {value} must be"):
         RNHQLPlus(**{field: value})
+
+
+def test_rnh_ql_plus_explore_is_rnh_ql_plus_with_the_issue_37_options(paper50_model):
+    """The named variant is rnh-ql+ with explore_steps=1000, model_acting, model_test on
+    and no planned updates, run for run; its record lists the options and round-trips."""
+    from learning import RNHQLPlusExplore, config_from_fields
+
+    named = RNHQLPlusExplore()
+    spelled = RNHQLPlus(explore_steps=1000, model_acting=1, model_test=1, n_planning=0)
+    assert METHODS["rnh-ql+explore"] is RNHQLPlusExplore
+    assert config_from_fields("rnh-ql+explore", named.record_fields()) == named
+    listed = named.record_fields()
+    assert (listed["explore_steps"], listed["model_acting"], listed["model_test"],
+            listed["n_planning"]) == (1000, 1, 1, 0)
+    a = train_tabular(named, paper50_model, 40, np.random.default_rng(2))
+    b = train_tabular(spelled, paper50_model, 40, np.random.default_rng(2))
+    np.testing.assert_array_equal(a.steps, b.steps)
+    np.testing.assert_array_equal(a.state.q, b.state.q)
+    assert a.final_route_length == a.optimal_length
+
+
+def test_rnh_ql_plus_explore_chooses_nothing_by_q(paper50_model):
+    """Why it runs no planned updates (its docstring): with model_acting and model_test the
+    behaviour and the greedy test read the optimistic model and the moves seen to work,
+    never Q. Q scrambled, every greedy move and every behaviour move (same draws) stays."""
+    from learning import RNHQLPlusExplore, copy_state, greedy_test, make_agent
+
+    m = paper50_model
+    trained = train_tabular(RNHQLPlusExplore(), m, 20, np.random.default_rng(4)).state
+    agents = []
+    for q in (trained.q.copy(), np.random.default_rng(9).normal(size=trained.q.shape) * 1e3):
+        agent = make_agent(RNHQLPlusExplore(), geometry_of(m), np.random.default_rng(7))
+        agent.state = copy_state(trained)._replace(q=q)  # each its own arrays
+        agents.append(agent)
+    routes = [greedy_test(agent.state, m)[1] for agent in agents]
+    assert routes[0] == routes[1] and len(routes[0]) > 1
+    for agent in agents:
+        agent.begin_episode(int(m.start))  # the coverage walk is over or not: both alike
+    for s in range(0, m.n_states, 7):
+        assert agents[0].greedy_action(s) == agents[1].greedy_action(s)
+        assert agents[0].act(s) == agents[1].act(s)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from learning.rnh_ql_plus.config import Params, RNHQLPlus
+from learning.rnh_ql_plus.config import Params, RNHQLPlus, RNHQLPlusExplore
 from learning.rnh_ql_plus.rules import act, begin, exploit, potential_table, update
 from learning.rnh_ql_plus.state import ADDED, DERIVED, State, init_state
 
@@ -22,5 +22,5 @@ def potential(st: State) -> np.ndarray:
     return out
 
 
-__all__ = ["ADDED", "DERIVED", "Params", "RNHQLPlus", "State", "act", "begin", "exploit",
-           "init_state", "potential", "update"]
+__all__ = ["ADDED", "DERIVED", "Params", "RNHQLPlus", "RNHQLPlusExplore", "State", "act",
+           "begin", "exploit", "init_state", "potential", "update"]

@@ -34,13 +34,18 @@ class State(NamedTuple):
     coverage: Coverage  # the coverage walk's field and scratch (explore_steps)
 
 
+# The coverage walk's scratch is derived; its field (``coverage.distance``) is stored: the
+# walk goes down it while it is fresh, and a rebuilt field can send a resumed walk along
+# another of the equally short ways (a resumed run would not be the uninterrupted one).
+# ``coverage.done`` re-derives itself at the walk's next step, drawing no random number.
 DERIVED = ("known.distance", "known.queue", "known.stale", "free.neighbour",
-           "coverage.distance", "coverage.queue", "coverage.mark", "coverage.first",
-           "coverage.searches", "coverage.left", "coverage.done")
+           "coverage.queue", "coverage.mark", "coverage.first", "coverage.searches",
+           "coverage.left", "coverage.done")
 # Added to the state after checkpoints were written: a file without them loads the fresh
 # values (no reward seen), and the agent relearns both at its next stay and clean arrival;
-# until then every arrival counts as clean, the rule the file was trained under.
-ADDED = ("reading.r_stay", "reading.r_clean")
+# until then every arrival counts as clean, the rule the file was trained under. A file
+# without the coverage field was written without the walk, or before the field was stored.
+ADDED = ("reading.r_stay", "reading.r_clean", "coverage.distance")
 
 
 def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> State:

@@ -107,3 +107,27 @@ def test_diffdrive_vector_env_sub_env_equals_single_env():
             contacts += inf["contacts"]
         ended = term | trunc
     assert contacts > 0  # the robots did touch walls or obstacles
+
+
+def test_primitive_metres_is_each_sub_envs_trajectory_length():
+    """The graded drives' metres come from one call over every robot: the sum of the steps'
+    lengths of each sub-env's trajectory, bumps and robots at rest included."""
+    from sim.physics.fidelity import parse_fidelity
+
+    env = PhysicsRouteVectorEnv(5, "paper-40", fidelity=parse_fidelity("noisy"),
+                                trajectories=True)
+    for k in range(5):
+        env.set_noise_rng(k, np.random.default_rng(k))
+    env.reset(seed=3, options={"start": "random"})
+    rng = np.random.default_rng(1)
+    moved = 0.0
+    for _ in range(40):
+        env.step(rng.integers(0, 4, 5))
+        got = env.primitive_metres()
+        for i in range(5):
+            traj = env.trajectory(i)
+            want = float(np.hypot(*np.diff(traj[:, :2], axis=0).T).sum())
+            assert got[i] == pytest.approx(want, rel=1e-12, abs=1e-15)
+        moved += got.sum()
+    assert moved > 1.0
+    env.close()

@@ -148,14 +148,11 @@ def drive_policy(sc: Scenario, policy: np.ndarray | Callable[[np.ndarray], np.nd
         prims += running
         contacts += info["contacts"]
         bumps += info["bumped"]
-        if measure_metres or keep_path:
-            for i in np.flatnonzero(running):
-                traj = env.trajectory(int(i))
-                if measure_metres:
-                    metres[i] += float(np.hypot(*np.diff(traj[:, :2], axis=0).T).sum())
-                if keep_path and i == 0:
-                    path.append(traj)
-                    poses.append(info["pose"][0].copy())
+        if measure_metres:
+            metres += np.where(running, env.primitive_metres(), 0.0)
+        if keep_path and running[0]:
+            path.append(env.trajectory(0))
+            poses.append(info["pose"][0].copy())
         if keep_routes:
             for i in np.flatnonzero(running):
                 routes[i].append(int(s2[i]))

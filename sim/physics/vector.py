@@ -280,6 +280,11 @@ class PhysicsRouteVectorEnv(VectorEnv):
         physics step of it (needs ``trajectories=True``)."""
         return self.batch.trajectory(int(i))
 
+    def primitive_metres(self) -> np.ndarray:
+        """float64[num_envs]: each sub-env's path length over its last primitive [m] (needs
+        ``trajectories=True``)."""
+        return self.batch.primitive_metres()
+
     def contact_records(self, i: int) -> list[Any]:
         """Sub-env ``i``'s contacts (:class:`sim.physics.Contact`) since its last reset."""
         return self.batch.contacts[int(i)]

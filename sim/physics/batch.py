@@ -31,6 +31,7 @@ import time
 
 import numpy as np
 import pymunk
+from numba import njit
 
 from sim.grid.discretiser import Discretiser
 from sim.physics import kernel as K
@@ -230,12 +231,9 @@ class RouteBatch:
         """float64[n_robots]: the path length of each robot's last primitive [m], the sum of
         its steps' lengths (:meth:`trajectory`'s), for every robot in one call: a loop over
         robots in Python was most of a graded drive's time."""
-        n = self.r.ntraj
-        pts = np.concatenate([self._traj_start[:, None, :2], self._traj[:, :, :2]], axis=1)
-        step = np.diff(pts, axis=1)
-        length = np.hypot(step[:, :, 0], step[:, :, 1])
-        length[np.arange(length.shape[1])[None, :] >= n[:, None]] = 0.0
-        return length.sum(axis=1)
+        out = np.zeros(self._traj_start.shape[0])
+        _path_lengths(self._traj_start, self._traj, self.r.ntraj, out)
+        return out
 
     def sync_body(self, i: int) -> pymunk.Body:
         """Robot ``i``'s body in the Space, moved to the robot's pose (for queries, drawing)."""
@@ -340,6 +338,17 @@ class RouteBatch:
             self.contact_counts[i][c.kind] += 1
         r.ncontact[i] += len(found)
         r.status[i] = _CONTACT  # the kernel ends the primitive in a bump
+
+
+@njit(cache=True)
+def _path_lengths(start, traj, ntraj, out):
+    """out[i] = the length of robot i's polyline start[i], traj[i, :ntraj[i]] [m]."""
+    for i in range(out.shape[0]):
+        x, y, total = start[i, 0], start[i, 1], 0.0
+        for k in range(ntraj[i]):
+            total += math.hypot(traj[i, k, 0] - x, traj[i, k, 1] - y)
+            x, y = traj[i, k, 0], traj[i, k, 1]
+        out[i] = total
 
 
 class RobotView:

@@ -37,12 +37,15 @@ from learning.batch_agent import BatchAgent
 from learning.generator_handle import handles
 from learning.geometry import geometry_of
 from learning.metrics import episodes_to_first_optimal
+from learning.readout import greedy_actions
 from scenarios.runs.physics_grading import Grader
 from scenarios.runs.work import add_episodes
 from scenarios.signals import sigint_handled_by
 from sim.grid import TabularModel
 from sim.physics.vector import PhysicsRouteVectorEnv
 from sim.scenario import Scenario
+
+TEST_BATCH = 16  # periodic tests above exact driven together, one env [tests]
 
 
 @dataclass(frozen=True)
@@ -203,6 +206,18 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                 env.arm(i, r.plan.wants(int(done[i])))
         env.reset(options={"reset_mask": which, "starts": s})
 
+    pending: list[tuple[int, np.ndarray, int]] = []  # tests due: (run, policy, episode)
+
+    def run_tests(count: int) -> None:
+        """The first ``count`` tests due, driven together (Grader.tests)."""
+        batch = pending[:count]
+        del pending[:count]
+        out = grader.tests([table for _, table, _ in batch],
+                           [grading_seeds[i] for i, _, _ in batch], [e for _, _, e in batch])
+        for (i, _, e), (length, _) in zip(batch, out, strict=True):
+            logs.tests_e[i].append(e)
+            logs.tests_l[i].append(length)
+
     clock = time.perf_counter
     t_learn = t_world = t_ep = 0.0
     t_start = clock()
@@ -250,19 +265,31 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                         if i in recorded:
                             env.log_to(i, recorded[i].recorder, e)
                         if done[i] % test_every == 0 or done[i] == n_episodes:
-                            length, route = grader.test(ag.state(int(k)),
-                                                        grading_seeds[i], int(done[i]))
-                            logs.tests_e[i].append(int(done[i]))
-                            logs.tests_l[i].append(length)
-                            if i in views:
-                                views[i].after_chunk(int(done[i]), logs.arrays(i, done[i]),
-                                                     ag.state(int(k)), route)
+                            if grader.in_rollouts and i not in views:
+                                # the policy now; driven with other runs' tests, below
+                                pending.append((i, greedy_actions(ag.state(int(k))),
+                                                int(done[i])))
+                            else:
+                                length, route = grader.test(ag.state(int(k)),
+                                                            grading_seeds[i], int(done[i]))
+                                logs.tests_e[i].append(int(done[i]))
+                                logs.tests_l[i].append(length)
+                                if i in views:
+                                    views[i].after_chunk(int(done[i]),
+                                                         logs.arrays(i, done[i]),
+                                                         ag.state(int(k)), route)
                         if done[i] == n_episodes:
                             active[i] = False
+                while len(pending) >= TEST_BATCH:
+                    run_tests(TEST_BATCH)
                 start_episodes(ended & active)
                 t_ep += clock() - t4
             if stop.requested:
                 raise KeyboardInterrupt
+        t5 = clock()
+        if pending:
+            run_tests(len(pending))
+        t_ep += clock() - t5
     t_loop = clock() - t_start
     results: list[list[PhysicsTrainResult]] = []
     for ag, (b0, b1) in zip(agents, bounds, strict=True):

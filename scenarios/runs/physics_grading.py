@@ -37,7 +37,7 @@ from learning.readout import greedy_actions
 from learning.train import epsilon_route_lengths, greedy_test, shortest_fraction
 from sim.physics.fidelity import Fidelity
 from sim.physics.model import physics_model
-from sim.physics.rollouts import Rollouts, drive_policy, rollout_env
+from sim.physics.rollouts import Rollouts, drive_policies, drive_policy, rollout_env
 from sim.scenario import Scenario
 
 TEST_ROLLOUTS = 10  # drives per periodic greedy test above exact
@@ -105,11 +105,21 @@ class Grader:
         """(route length or -1, cells of the route shown) of a periodic greedy test."""
         if not self.in_rollouts:
             return greedy_test(st, self.exact)
+        return self.tests([greedy_actions(st)], [seed], [episode])[0]
+
+    def tests(self, tables: list[np.ndarray], seeds: list[int], episodes: list[int]
+              ) -> list[tuple[int, list[int]]]:
+        """:meth:`test` above ``exact`` of several greedy policies (``int[nS]`` each, the
+        policy when its test fell due) at once: one env, one compiled call per primitive
+        for all their drives (:func:`sim.physics.rollouts.drive_policies`), each test's
+        drives the same as alone."""
         opt = max(self.exact.optimal_route_length, 0)
         budget = min(self.scenario.steps_per_episode,
                      TEST_BUDGET_FACTOR * opt + TEST_BUDGET_SLACK)
-        r = self.drive(st, TEST_ROLLOUTS, seed, episode, keep_routes=True, max_steps=budget)
-        return median_length(r), r.routes[0]
+        env = self._env(len(tables) * TEST_ROLLOUTS, False)
+        rs = drive_policies(self.scenario, tables, self.fidelity, TEST_ROLLOUTS, seeds,
+                            episodes, budget, keep_routes=True, env=env)
+        return [(median_length(r), r.routes[0]) for r in rs]
 
     def final(self, st, seed: int) -> FinalGrade:
         frac = shortest_fraction(st, self.exact)

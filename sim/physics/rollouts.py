@@ -120,17 +120,64 @@ def drive_policy(sc: Scenario, policy: np.ndarray | Callable[[np.ndarray], np.nd
     n = int(n)
     if n < 1:
         raise ValueError(f"n must be >= 1, got {n}")
-    limit = int(max_steps or sc.steps_per_episode)
     if env is None:
         env = rollout_env(sc, n, fidelity, config, trajectories=measure_metres or keep_path)
     elif env.num_envs != n or ((measure_metres or keep_path)
                                and not env.batch.records_trajectories):
         raise ValueError("the env to reuse must have n sub-envs (and trajectories if "
                          "metres or the path are wanted)")
+    if callable(policy):
+        act = policy
+    else:
+        table = np.asarray(policy, dtype=np.int64)
+
+        def act(s: np.ndarray) -> np.ndarray:
+            return table[s]
+    return _drive(env, act, rollout_rngs(seed, tag, n), int(max_steps or sc.steps_per_episode),
+                  measure_metres, keep_routes, keep_path)
+
+
+def drive_policies(sc: Scenario, tables: list[np.ndarray], fidelity: Fidelity, n: int,
+                   seeds: list[int], tags: list[int], max_steps: int | None = None, *,
+                   keep_routes: bool = False, env: PhysicsRouteVectorEnv | None = None
+                   ) -> list[Rollouts]:
+    """:func:`drive_policy` of several policies (``tables[j]``, ``int[nS]``) at once, in one
+    env of ``len(tables) x n`` robots: policy j's rollouts are robots ``j*n ..``, each with
+    the noise stream :func:`drive_policy` would give it (``seeds[j]``, ``tags[j]``), so each
+    policy's Rollouts equal its own drive's (robots in one Space do not meet). The periodic
+    greedy tests of many runs share one compiled call per primitive this way, instead of
+    one per run."""
+    m, n = len(tables), int(n)
+    if m < 1 or n < 1:
+        raise ValueError(f"need at least one policy and n >= 1, got {m} and {n}")
+    if env is None:
+        env = rollout_env(sc, m * n, fidelity)
+    elif env.num_envs != m * n:
+        raise ValueError("the env to reuse must have len(tables) x n sub-envs")
+    stacked = np.stack([np.asarray(t, dtype=np.int64) for t in tables])
+    owner = np.repeat(np.arange(m), n)
+
+    def act(s: np.ndarray) -> np.ndarray:
+        return stacked[owner, s]
+    rngs = [r for j in range(m) for r in rollout_rngs(seeds[j], tags[j], n)]
+    r = _drive(env, act, rngs, int(max_steps or sc.steps_per_episode), False, keep_routes,
+               False)
+    empty = np.zeros((0, 3))
+    return [Rollouts(r.reached[j * n:(j + 1) * n], r.primitives[j * n:(j + 1) * n],
+                     r.contacts[j * n:(j + 1) * n], r.bumps[j * n:(j + 1) * n],
+                     r.sim_time_s[j * n:(j + 1) * n], r.metres[j * n:(j + 1) * n],
+                     r.routes[j * n:(j + 1) * n], empty, empty) for j in range(m)]
+
+
+def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
+           rngs: list[np.random.Generator], limit: int, measure_metres: bool,
+           keep_routes: bool, keep_path: bool) -> Rollouts:
+    """Every sub-env of ``env`` driven from S with its noise stream ``rngs[k]``, actions
+    ``act(states)``, for at most ``limit`` primitives."""
+    n = env.num_envs
     env.max_episode_steps = limit
-    for k, rng in enumerate(rollout_rngs(seed, tag, n)):
+    for k, rng in enumerate(rngs):
         env.set_noise_rng(k, rng)
-    table = None if callable(policy) else np.asarray(policy, dtype=np.int64)
     s, info = env.reset(options={"start": "S"})
     path: list[np.ndarray] = [info["pose"][:1].copy()] if keep_path else []
     poses: list[np.ndarray] = [info["pose"][0].copy()] if keep_path else []
@@ -143,7 +190,7 @@ def drive_policy(sc: Scenario, policy: np.ndarray | Callable[[np.ndarray], np.nd
     metres = np.zeros(n) if measure_metres else np.full(n, np.nan)
     routes = [[int(x)] for x in s] if keep_routes else []
     while running.any():
-        a = table[s] if table is not None else np.asarray(policy(s), dtype=np.int64)
+        a = np.asarray(act(s), dtype=np.int64)
         s2, _, term, trunc, info = env.step(np.where(running, a, 0))
         prims += running
         contacts += info["contacts"]

@@ -87,7 +87,7 @@ def measure_aliasing(sc: Scenario, model: TabularModel, fid: Fidelity, repeats: 
     next_states = np.zeros(pairs.size, dtype=np.int64)
     bumped = np.zeros(pairs.size, dtype=bool)
     t0 = time.perf_counter()
-    batch = RouteBatch(sc, min(BATCH, pairs.size), cfg, fidelity=fid)
+    batch = RouteBatch(sc, min(BATCH, pairs.size), cfg, fidelity=fid, contact_records=False)
     active = np.zeros(batch.n, dtype=bool)
     actions = np.zeros(batch.n, dtype=np.int64)
     for lo in range(0, pairs.size, batch.n):

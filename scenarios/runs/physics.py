@@ -38,7 +38,7 @@ from learning.generator_handle import handles
 from learning.geometry import geometry_of
 from learning.metrics import episodes_to_first_optimal
 from learning.readout import greedy_actions
-from scenarios.runs.physics_grading import Grader
+from scenarios.runs.physics_grading import FinalGrade, Grader
 from scenarios.runs.work import add_episodes
 from scenarios.signals import sigint_handled_by
 from sim.grid import TabularModel
@@ -174,7 +174,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     start_h = handles([r for g in groups for r in g.start_rngs])
     world = PhysicsRouteVectorEnv(n, sc, max_episode_steps=sc.steps_per_episode,
                                   fidelity=fidelity, autoreset_mode=AutoresetMode.DISABLED,
-                                  trajectories=bool(recorded))
+                                  trajectories=bool(recorded), contact_records=bool(recorded))
     noise = [r for g in groups for r in (g.noise_rngs or [None] * len(g.learner_rngs))]
     for i, r in enumerate(noise):
         if r is not None:
@@ -224,9 +224,12 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     stop = StopFlag()
     with sigint_to(stop):
         start_episodes(active)
+        # groups with a run still training (a finished group's calls would do nothing: in a
+        # sweep's long tail, most groups are done); renewed when a run finishes
+        live = [(ag, b0, b1) for ag, (b0, b1) in zip(agents, bounds, strict=True)]
         while active.any():
             t0 = clock()
-            for ag, (b0, b1) in zip(agents, bounds, strict=True):
+            for ag, b0, b1 in live:
                 a[b0:b1] = ag.act(active[b0:b1], s[b0:b1])
             t1 = clock()
             s2, r, term, trunc, info = env.step(a)
@@ -235,7 +238,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
             ret += r
             contacts += info["contacts"]
             t3 = clock()
-            for ag, (b0, b1) in zip(agents, bounds, strict=True):
+            for ag, b0, b1 in live:
                 ag.update(active[b0:b1], s[b0:b1], a[b0:b1], r[b0:b1], s2[b0:b1],
                           term[b0:b1], trunc[b0:b1])
             t4 = clock()
@@ -280,6 +283,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                                                          ag.state(int(k)), route)
                         if done[i] == n_episodes:
                             active[i] = False
+                            live = [(g, b0, b1) for g, b0, b1 in live if active[b0:b1].any()]
                 while len(pending) >= TEST_BATCH:
                     run_tests(TEST_BATCH)
                 start_episodes(ended & active)
@@ -291,10 +295,14 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
             run_tests(len(pending))
         t_ep += clock() - t5
     t_loop = clock() - t_start
+    runs = [(ag.step_agent(k), b0 + k) for ag, (b0, b1) in zip(agents, bounds, strict=True)
+            for k in range(b1 - b0)]
+    finals = iter(grader.finals([agent.state for agent, _ in runs],
+                                [grading_seeds[i] for _, i in runs]))
     results: list[list[PhysicsTrainResult]] = []
-    for ag, (b0, b1) in zip(agents, bounds, strict=True):
-        results.append([_result(ag, k, b0 + k, logs, grader, model, grading_seeds[b0 + k])
-                        for k in range(b1 - b0)])
+    for b0, b1 in bounds:
+        results.append([_result(agent, next(finals), i, logs, grader, model)
+                        for agent, i in runs[b0:b1]])
     if split is not None:
         b = world.batch
         split.update(learner=t_learn, kernel=b.kernel_s, chipmunk=b.chipmunk_s,
@@ -304,10 +312,8 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     return results
 
 
-def _result(ag: BatchAgent, k: int, i: int, logs: _Logs, grader: Grader,
-            model: TabularModel, grading_seed: int) -> PhysicsTrainResult:
-    agent = ag.step_agent(k)
-    final = grader.final(agent.state, grading_seed)
+def _result(agent: StepAgent, final: FinalGrade, i: int, logs: _Logs, grader: Grader,
+            model: TabularModel) -> PhysicsTrainResult:
     extras = {"grid_optimal_route_length": model.optimal_route_length,
               "physics_optimal_route_length": grader.exact.optimal_route_length,
               "continuous_optimal_route_m": continuous_optimum_rounded(grader.scenario),

@@ -44,6 +44,7 @@ TEST_ROLLOUTS = 10  # drives per periodic greedy test above exact
 TEST_BUDGET_FACTOR = 3  # a periodic test's drive ends after this x the exact optimum ...
 TEST_BUDGET_SLACK = 20  # ... + this many primitives (at most the episode length)
 FINAL_ROLLOUTS = 50  # drives of the final policy above exact
+FINAL_BATCH = 16  # final policies above exact driven together, one env [policies]
 FINAL_TAG = 1 << 40  # the final policy's rollout streams (periodic tests use the episode)
 EPSILON_TAG = (1 << 40) + 1  # the epsilon-greedy test's rollout streams
 EPSILON_ROLLOUTS = 20  # as learning.train.epsilon_route_lengths
@@ -130,9 +131,29 @@ class Grader:
                               {**route_extras(r), "final_policy": r.summary()}, r)
         r = self.drive(st, FINAL_ROLLOUTS, seed, FINAL_TAG, measure_metres=True,
                        keep_routes=True, keep_path=True)
+        return self._graded(st, r)
+
+    def finals(self, states: list[Any], seeds: list[int]) -> list[FinalGrade]:
+        """:meth:`final` of several runs' learner states; above ``exact`` their rollouts are
+        driven :data:`FINAL_BATCH` policies at a time in one env (each policy's drives
+        equal to its own: :func:`sim.physics.rollouts.drive_policies`)."""
+        if not self.in_rollouts:
+            return [self.final(st, seed) for st, seed in zip(states, seeds, strict=True)]
+        out: list[FinalGrade] = []
+        for b in range(0, len(states), FINAL_BATCH):
+            sts, sds = states[b:b + FINAL_BATCH], seeds[b:b + FINAL_BATCH]
+            env = self._env(len(sts) * FINAL_ROLLOUTS, True)
+            rs = drive_policies(self.scenario, [greedy_actions(st) for st in sts],
+                                self.fidelity, FINAL_ROLLOUTS, list(sds), [FINAL_TAG] * len(sts),
+                                measure_metres=True, keep_routes=True, keep_path=True, env=env)
+            out += [self._graded(st, r) for st, r in zip(sts, rs, strict=True)]
+        return out
+
+    def _graded(self, st: Any, r: Rollouts) -> FinalGrade:
+        """The final grade of a policy from its rollouts (above ``exact``)."""
         length = median_length(r)
         shown = next((k for k in range(r.n) if r.reached[k]), 0)
-        return FinalGrade(length, r.routes[shown], frac,
+        return FinalGrade(length, r.routes[shown], shortest_fraction(st, self.exact),
                           {**route_extras(r), "final_policy": r.summary()}, r)
 
     def epsilon_routes(self, st, eps: float, rng: np.random.Generator) -> np.ndarray:

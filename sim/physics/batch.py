@@ -10,11 +10,13 @@ compiled call (:func:`sim.physics.kernel.advance`: free motion integrated as Chi
 integrates it, see that module for why it is the same physics). Swept-disc guards are
 cast in that call too, with Chipmunk's segment-query formulas over the static shapes as
 arrays (:mod:`sim.physics.sweep`); at ``exact`` a leg that starts on its cell centre has a
-fixed answer per (cell, action), cached in :attr:`RouteBatch.guards`. Chipmunk itself is
-asked only at ``CHECK``: a step that ends at or past a guard's surface (or presses the
-bumper home); the robot's own shape is put at the new pose and Chipmunk's collision
-detection (``shape_query``, the narrow phase ``cpSpaceStep`` runs) says whether a contact
-began and where; if so the primitive ends as in the reference world.
+fixed answer per (cell, action), cached in :attr:`RouteBatch.guards`. Where a step ends at
+or past a guard's surface (or presses the bumper home), Chipmunk's narrow phase (the
+collision detection ``cpSpaceStep`` and ``shape_query`` run), written out in compiled code
+(:mod:`sim.physics.narrow_phase`), says whether a contact began and where; if so the
+primitive ends as in the reference world. Chipmunk itself is asked (``CHECK``,
+:meth:`RouteBatch._check`) only where that code cannot be sure of Chipmunk's answer: a box
+within rounding of touching.
 
 A robot in a batch is the reference world (:class:`sim.physics.world.PhysicsWorld` driven
 by :class:`sim.physics.controller.PrimitiveController`) at every fidelity: the same cells,
@@ -40,6 +42,7 @@ from sim.physics.controller import PrimitiveOutcome
 from sim.physics.drive_profiles import DriveLimits, profiles
 from sim.physics.fidelity import Fidelity
 from sim.physics.kernel_state import ROBOT, Geometry, Params, Scratch, Status, by_name
+from sim.physics.narrow_phase import contact_buffer
 from sim.physics.static import (
     STATIC_CATEGORY,
     CollisionType,
@@ -53,8 +56,10 @@ from sim.physics.static import (
 from sim.physics.sweep import static_geometry
 from sim.scenario import Scenario
 
-NOISE_BLOCK = 4096  # normals drawn per refill of a robot's wheel-noise buffer
+NOISE_BLOCK = 4096  # normals drawn per refill of a robot's wheel-noise buffer (at most)
+FIRST_NOISE_BLOCK = 256  # ... the first refill of a new stream (then doubling)
 _BLANK = np.zeros((), ROBOT)
+_KIND_OF = {int(k): k for k in CollisionType}
 _DONE, _NOISE, _CHECK, _CONTACT = (int(c) for c in (Status.DONE, Status.NOISE, Status.CHECK,
                                                      Status.CONTACT))
 
@@ -67,12 +72,15 @@ class RouteBatch:
     (``r.x[i]``). ``guards`` may be shared between batches of one
     scenario and config (a pure function of the static geometry). ``trajectories=True``
     keeps the pose after every physics step of the last primitive (:meth:`trajectory`), as
-    the env's ``info`` wants.
+    the env's ``info`` wants. ``contact_records=False`` keeps no :attr:`contacts` (each
+    robot's list stays empty; ``contact_counts`` stay zero) but still counts each
+    primitive's contacts in its outcome: a batch that only needs the counts (rollouts,
+    training) builds no record per contact.
     """
 
     def __init__(self, scenario: Scenario, n_robots: int, config: PhysicsConfig | None = None,
                  *, trajectories: bool = False, guards: np.ndarray | None = None,
-                 fidelity: Fidelity | None = None) -> None:
+                 fidelity: Fidelity | None = None, contact_records: bool = True) -> None:
         if not (isinstance(n_robots, int) and n_robots >= 1):
             raise ValueError(f"n_robots must be an int >= 1, got {n_robots!r}")
         self.scenario = sc = scenario
@@ -134,6 +142,9 @@ class RouteBatch:
         self._all = np.ones(n_robots, dtype=np.bool_)
         self.contacts: list[list[Contact]] = [[] for _ in range(n_robots)]
         self.contact_counts = [dict.fromkeys(CollisionType, 0) for _ in range(n_robots)]
+        self._booked_rows = contact_buffer(n_robots)  # contacts the kernel found ...
+        self._booked = np.zeros(n_robots, np.int64)  # ... how many, per robot
+        self.contact_records = contact_records
         self.checks = 0  # Chipmunk contact checks so far (benchmark figures)
         self.kernel_s = 0.0  # wall time in the compiled kernel so far [s]
         self.chipmunk_s = 0.0  # wall time in Chipmunk contact checks so far [s]
@@ -141,6 +152,7 @@ class RouteBatch:
         self._noise = np.zeros((n_robots, NOISE_BLOCK if fid.wheel_noise > 0
                                               or fid.localisation else 2))
         self._npos = np.full(n_robots, self._noise.shape[1], dtype=np.int64)
+        self._nblock = np.full(n_robots, FIRST_NOISE_BLOCK, dtype=np.int64)
         self._noise_rngs: list[np.random.Generator | None] = [None] * n_robots
         sigint.install(RouteBatch._check)
 
@@ -171,9 +183,8 @@ class RouteBatch:
         r.resting[i] = resting
         self.contacts[i] = []
         self.contact_counts[i] = dict.fromkeys(CollisionType, 0)
-        body = self.bodies[i]
-        body.position, body.angle = (x_m, y_m), heading_rad
-        body.velocity, body.angular_velocity = (0.0, 0.0), 0.0
+        self._booked[i] = 0
+        # (the robot's pymunk body is moved only when Chipmunk is asked: sync_body)
 
     def _blank(self, i: int, x_m: float, y_m: float, heading_rad: float) -> None:
         """Robot ``i``'s record all new at a pose, which it knows (its estimate is the pose:
@@ -264,12 +275,15 @@ class RouteBatch:
         clock = time.perf_counter
         while True:
             t0 = clock()
-            K.advance(rb, self._noise, self._npos, self._traj, *self._args, act)
+            K.advance(rb, self._noise, self._npos, self._traj, self._booked_rows, self._booked,
+                      *self._args, act)
             t1 = clock()
             self.kernel_s += t1 - t0
             status = r.status
             waiting = np.flatnonzero(act & (status != _DONE))
             if waiting.size == 0:
+                if self.contact_records and self._booked.any():
+                    self._book()  # (without records, the counts are the outcome's)
                 break
             for i in waiting:
                 if status[i] == _NOISE:
@@ -278,10 +292,7 @@ class RouteBatch:
                     self._check(int(i))
             self.chipmunk_s += clock() - t1
             sigint.raise_if_deferred()
-        return PrimitiveOutcome(
-            state=np.where(act, r.state, 0), bumped=act & r.bumped, reached=act & r.reached,
-            timeout=act & r.timeout, steps=np.where(act, r.steps - r.steps0, 0),
-            contacts=np.where(act, r.ncontact, 0), cell=np.where(act, r.tstate, 0))
+        return PrimitiveOutcome(*_outcome(rb, act))
 
     @property
     def casts(self) -> int:
@@ -294,6 +305,7 @@ class RouteBatch:
         drawn first, two normals of ``rng``: a new robot."""
         self._noise_rngs[i] = rng
         self._npos[i] = self._noise.shape[1]
+        self._nblock[i] = FIRST_NOISE_BLOCK
         fid = self.fidelity
         if fid.biased:
             e_d, e_b = rng.standard_normal(2)
@@ -308,8 +320,24 @@ class RouteBatch:
         if rng is None:
             raise RuntimeError(f"robot {i} has wheel noise but no generator: call "
                                "set_noise_rng(i, rng) first")
-        self._noise[i] = rng.standard_normal(self._noise.shape[1])
-        self._npos[i] = 0
+        # a new stream's first refills are short (a graded drive often ends within a few
+        # hundred normals), then double; the normals are the stream's next ones whatever the
+        # block (a Generator draws them one by one), so the block never changes a run
+        width = self._noise.shape[1]
+        k = int(min(self._nblock[i], width))
+        rng.standard_normal(out=self._noise[i, width - k:])
+        self._npos[i] = width - k
+        self._nblock[i] = 2 * k
+
+    def _book(self) -> None:
+        """The contacts the kernel's narrow phase found, into each robot's records."""
+        rows = self._booked_rows
+        for i in np.flatnonzero(self._booked):
+            for c in rows[i, :self._booked[i]].tolist():
+                contact = Contact(int(c[0]), _KIND_OF[int(c[1])], *c[2:])
+                self.contacts[i].append(contact)
+                self.contact_counts[i][contact.kind] += 1
+        self._booked[:] = 0
 
     def _check(self, i: int) -> None:
         """Did a contact begin in robot ``i``'s last step? Chipmunk's narrow phase decides: a
@@ -332,12 +360,30 @@ class RouteBatch:
         if not found and not forced:
             return  # still CHECK: the kernel finishes the step
         step = int(r.steps[i])
-        for info in found:
+        for info in found if self.contact_records else ():
             c = contact_of(step, info.shape.collision_type, info.contact_point_set)
             self.contacts[i].append(c)
             self.contact_counts[i][c.kind] += 1
         r.ncontact[i] += len(found)
         r.status[i] = _CONTACT  # the kernel ends the primitive in a bump
+
+
+@njit(cache=True)
+def _outcome(robots, active):
+    """The fields of :class:`PrimitiveOutcome` (zero / False for robots not ``active``): one
+    compiled pass instead of seven array expressions a step."""
+    n = robots.shape[0]
+    state, cell = np.zeros(n, np.int64), np.zeros(n, np.int64)
+    steps, contacts = np.zeros(n, np.int64), np.zeros(n, np.int64)
+    bumped, reached = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
+    timeout = np.zeros(n, np.bool_)
+    for i in range(n):
+        if active[i]:
+            rb = robots[i]
+            state[i], bumped[i], reached[i], timeout[i] = rb.state, rb.bumped, rb.reached, \
+                rb.timeout
+            steps[i], contacts[i], cell[i] = rb.steps - rb.steps0, rb.ncontact, rb.tstate
+    return state, bumped, reached, timeout, steps, contacts, cell
 
 
 @njit(cache=True)

@@ -1,5 +1,5 @@
 """Motion primitives for many robots at once, in compiled code: Chipmunk's own integration
-where nothing can touch, Chipmunk itself (through :mod:`sim.physics.batch`) where something might.
+where nothing can touch, Chipmunk's collision formulas where something might.
 
 Why this is the physics of the reference world (:class:`sim.physics.world.PhysicsWorld`
 driven by :class:`sim.physics.controller.PrimitiveController`). The robot is pulled by a
@@ -20,8 +20,9 @@ Chipmunk's segment-query formulas, :mod:`sim.physics.sweep`; cached per (cell, a
 legs from a cell centre) says the step ends at its surface; above ``exact`` where the step's
 own sweep meets a surface or, where a sweep can be blind (a step along a box face within
 10 um of parallel, a hold), the disc ends within 1 um of a shape it did not overlap before.
-Such a step is handed back (``CHECK``) and the caller asks Chipmunk's narrow phase
-(``cpSpaceShapeQuery``) whether a contact began. The controller is the controller
+Such a step asks Chipmunk's narrow phase (``cpSpaceShapeQuery``'s collision formulas,
+compiled: :mod:`sim.physics.narrow_phase`) whether a contact began; where that cannot be
+sure of Chipmunk's answer the step is handed back (``CHECK``) and the caller asks Chipmunk. The controller is the controller
 module's compiled functions (:func:`sim.physics.controller.plan_leg`, ``leg_command``,
 ``wheel_twist``, ``at_target``, ``cell_of``), the geometry's answers
 :mod:`sim.physics.kernel_queries`; the fidelity knobs follow the reference's
@@ -60,6 +61,7 @@ from sim.physics.kernel_queries import (
     sweep_step,
 )
 from sim.physics.kernel_state import Geometry, Params, Phase, Scratch, Status
+from sim.physics.narrow_phase import contacts_began
 from sim.physics.static import DEEPER_M, HOLD_STEP_M
 
 CENTRE_TOL_M = 1e-9  # a leg starting this close to its cell centre uses the cached guard [m]
@@ -95,14 +97,18 @@ def begin_all(robots, actions, active, cell_m, nx, ny, localised):
 
 
 @njit(cache=True)
-def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
+def advance(robots, noise, npos, traj, contacts, booked, pt, prof_t, geo_t, st, active):
     """Run every ``active`` robot's primitive until it is DONE or needs the caller.
 
     ``noise[i, npos[i]:]``: robot ``i``'s unused normals (wheel noise); ``traj[i]`` receives
     the pose after every step when ``traj.shape[1] > 0``; ``pt``, ``prof_t``, ``geo_t``,
     ``st``: ``tuple`` of a :class:`Params`, :class:`Profiles`, :class:`Geometry`,
-    :class:`Scratch`. A robot left at ``NOISE`` wants its normals refilled, one at ``CHECK``
-    wants to know whether the disc at its pose touches a shape it did not touch before the
+    :class:`Scratch`. Where a step may have begun a contact, Chipmunk's narrow phase in
+    compiled code (:func:`sim.physics.narrow_phase.contacts_began`) decides: the contacts
+    it finds go to ``contacts[i]`` (``booked[i]`` of them, for the caller to book) and the
+    primitive ends in a bump. A robot left at ``NOISE`` wants its normals refilled, one at
+    ``CHECK`` a check the compiled phase leaves to Chipmunk (a box within rounding of
+    touching): whether the disc at its pose touches a shape it did not touch before the
     step (the caller sets ``CONTACT`` if so); then call again. Per leg: :func:`_plan`,
     :func:`_guard_leg`, its commands (each a control period of physics steps: :func:`_step`
     at exact; above it the step's own sweep, :func:`_integrate`, :func:`_rest` and, where a
@@ -225,8 +231,15 @@ def advance(robots, noise, npos, traj, pt, prof_t, geo_t, st, active):
                         traj[i, rb.ntraj, 2] = rb.th
                         rb.ntraj += 1
                     if check:
-                        rb.status = Status.CHECK
-                        break
+                        found = contacts_began(rb, p, g, s, contacts[i])
+                        if found < 0:  # Chipmunk decides (the caller's check)
+                            rb.status = Status.CHECK
+                            break
+                        if found > 0 or rb.forced:
+                            rb.ncontact += found
+                            booked[i] = found
+                            _bump(rb, p, g, s)
+                            break
                     _solve(rb, p)
                     rb.sub += 1
                 if rb.status == Status.RUNNING:

@@ -54,8 +54,12 @@ def odometry(rb, p):
 @njit(cache=True, inline="always")
 def in_clear_ball(rb, x1, y1):
     """Whether the step from the pose to (x1, y1) lies in the robot's clear ball."""
-    return (math.hypot(rb.x - rb.clear_x, rb.y - rb.clear_y) < rb.clear_r
-            and math.hypot(x1 - rb.clear_x, y1 - rb.clear_y) < rb.clear_r)
+    # squared distances (no hypot): the ball keeps CLEAR_MARGIN_M from every shape, so a
+    # rounding-level difference at its rim only decides whether a sweep that finds nothing
+    # is run
+    r2 = rb.clear_r * rb.clear_r
+    dx0, dy0, dx1, dy1 = rb.x - rb.clear_x, rb.y - rb.clear_y, x1 - rb.clear_x, y1 - rb.clear_y
+    return rb.clear_r > 0.0 and dx0 * dx0 + dy0 * dy0 < r2 and dx1 * dx1 + dy1 * dy1 < r2
 
 
 @njit(cache=True)

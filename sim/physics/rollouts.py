@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from gymnasium.vector import AutoresetMode
@@ -98,7 +98,7 @@ def rollout_env(sc: Scenario, n: int, fidelity: Fidelity, config: PhysicsConfig 
     """A vector env of ``n`` robots for :func:`drive_policy` to reuse."""
     return PhysicsRouteVectorEnv(n, sc, config=config, fidelity=fidelity,
                                  autoreset_mode=AutoresetMode.DISABLED,
-                                 trajectories=trajectories)
+                                 trajectories=trajectories, contact_records=False)
 
 
 def rollout_rngs(seed: int, tag: int, n: int) -> list[np.random.Generator]:
@@ -133,54 +133,65 @@ def drive_policy(sc: Scenario, policy: np.ndarray | Callable[[np.ndarray], np.nd
 
         def act(s: np.ndarray) -> np.ndarray:
             return table[s]
-    return _drive(env, act, rollout_rngs(seed, tag, n), int(max_steps or sc.steps_per_episode),
-                  measure_metres, keep_routes, keep_path)
+    r, path, poses = _drive(env, act, rollout_rngs(seed, tag, n),
+                            int(max_steps or sc.steps_per_episode), measure_metres, keep_routes,
+                            [0] if keep_path else [])
+    empty = np.zeros((0, 3))
+    return replace(r, path=path.get(0, empty), poses=poses.get(0, empty))
 
 
 def drive_policies(sc: Scenario, tables: list[np.ndarray], fidelity: Fidelity, n: int,
                    seeds: list[int], tags: list[int], max_steps: int | None = None, *,
-                   keep_routes: bool = False, env: PhysicsRouteVectorEnv | None = None
+                   measure_metres: bool = False, keep_routes: bool = False,
+                   keep_path: bool = False, env: PhysicsRouteVectorEnv | None = None
                    ) -> list[Rollouts]:
     """:func:`drive_policy` of several policies (``tables[j]``, ``int[nS]``) at once, in one
     env of ``len(tables) x n`` robots: policy j's rollouts are robots ``j*n ..``, each with
     the noise stream :func:`drive_policy` would give it (``seeds[j]``, ``tags[j]``), so each
-    policy's Rollouts equal its own drive's (robots in one Space do not meet). The periodic
-    greedy tests of many runs share one compiled call per primitive this way, instead of
-    one per run."""
+    policy's Rollouts equal its own drive's (robots in one Space do not meet; ``keep_path``:
+    each policy's rollout 0). The periodic greedy tests and the final gradings of many runs
+    share one compiled call per primitive this way, instead of one per run."""
     m, n = len(tables), int(n)
     if m < 1 or n < 1:
         raise ValueError(f"need at least one policy and n >= 1, got {m} and {n}")
     if env is None:
-        env = rollout_env(sc, m * n, fidelity)
-    elif env.num_envs != m * n:
-        raise ValueError("the env to reuse must have len(tables) x n sub-envs")
+        env = rollout_env(sc, m * n, fidelity, trajectories=measure_metres or keep_path)
+    elif env.num_envs != m * n or ((measure_metres or keep_path)
+                                   and not env.batch.records_trajectories):
+        raise ValueError("the env to reuse must have len(tables) x n sub-envs (and "
+                         "trajectories if metres or the path are wanted)")
     stacked = np.stack([np.asarray(t, dtype=np.int64) for t in tables])
     owner = np.repeat(np.arange(m), n)
 
     def act(s: np.ndarray) -> np.ndarray:
         return stacked[owner, s]
     rngs = [r for j in range(m) for r in rollout_rngs(seeds[j], tags[j], n)]
-    r = _drive(env, act, rngs, int(max_steps or sc.steps_per_episode), False, keep_routes,
-               False)
+    shown = [j * n for j in range(m)] if keep_path else []
+    r, paths, poses = _drive(env, act, rngs, int(max_steps or sc.steps_per_episode),
+                             measure_metres, keep_routes, shown)
     empty = np.zeros((0, 3))
     return [Rollouts(r.reached[j * n:(j + 1) * n], r.primitives[j * n:(j + 1) * n],
                      r.contacts[j * n:(j + 1) * n], r.bumps[j * n:(j + 1) * n],
                      r.sim_time_s[j * n:(j + 1) * n], r.metres[j * n:(j + 1) * n],
-                     r.routes[j * n:(j + 1) * n], empty, empty) for j in range(m)]
+                     r.routes[j * n:(j + 1) * n], paths.get(j * n, empty),
+                     poses.get(j * n, empty)) for j in range(m)]
 
 
 def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
            rngs: list[np.random.Generator], limit: int, measure_metres: bool,
-           keep_routes: bool, keep_path: bool) -> Rollouts:
+           keep_routes: bool, shown: list[int]
+           ) -> tuple[Rollouts, dict[int, np.ndarray], dict[int, np.ndarray]]:
     """Every sub-env of ``env`` driven from S with its noise stream ``rngs[k]``, actions
-    ``act(states)``, for at most ``limit`` primitives."""
+    ``act(states)``, for at most ``limit`` primitives; with the path and the poses after
+    each primitive of the robots ``shown`` (the Rollouts' own ``path`` and ``poses`` are
+    left empty)."""
     n = env.num_envs
     env.max_episode_steps = limit
     for k, rng in enumerate(rngs):
         env.set_noise_rng(k, rng)
     s, info = env.reset(options={"start": "S"})
-    path: list[np.ndarray] = [info["pose"][:1].copy()] if keep_path else []
-    poses: list[np.ndarray] = [info["pose"][0].copy()] if keep_path else []
+    path = {k: [info["pose"][k:k + 1].copy()] for k in shown}
+    poses = {k: [info["pose"][k].copy()] for k in shown}
     running = np.ones(n, bool)
     reached = np.zeros(n, bool)
     prims = np.zeros(n, np.int64)
@@ -188,7 +199,7 @@ def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
     bumps = np.zeros(n, np.int64)
     sim_t = np.zeros(n)
     metres = np.zeros(n) if measure_metres else np.full(n, np.nan)
-    routes = [[int(x)] for x in s] if keep_routes else []
+    states = [s.copy()]  # every robot's cell after each primitive (routes)
     while running.any():
         a = np.asarray(act(s), dtype=np.int64)
         s2, _, term, trunc, info = env.step(np.where(running, a, 0))
@@ -197,17 +208,22 @@ def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
         bumps += info["bumped"]
         if measure_metres:
             metres += np.where(running, env.primitive_metres(), 0.0)
-        if keep_path and running[0]:
-            path.append(env.trajectory(0))
-            poses.append(info["pose"][0].copy())
+        for k in shown:
+            if running[k]:
+                path[k].append(env.trajectory(k))
+                poses[k].append(info["pose"][k].copy())
         if keep_routes:
-            for i in np.flatnonzero(running):
-                routes[i].append(int(s2[i]))
+            states.append(s2.copy())
         reached |= term
         ended = term | trunc
         sim_t = np.where(ended, info["time_s"], sim_t)
         running &= ~ended
         s = s2
-    return Rollouts(reached, prims, contacts, bumps, sim_t, metres, routes,
-                    np.concatenate(path) if path else np.zeros((0, 3)),
-                    np.asarray(poses) if poses else np.zeros((0, 3)))
+    routes: list[list[int]] = []
+    if keep_routes:
+        visited = np.stack(states)
+        routes = [visited[:prims[i] + 1, i].tolist() for i in range(n)]
+    empty = np.zeros((0, 3))
+    return (Rollouts(reached, prims, contacts, bumps, sim_t, metres, routes, empty, empty),
+            {k: np.concatenate(v) for k, v in path.items()},
+            {k: np.asarray(v) for k, v in poses.items()})

@@ -90,7 +90,7 @@ class _Builder:
         seq = np.random.SeedSequence(sampling.seed)
         pose_seq, noise_seq = seq.spawn(2)
         self.rng = np.random.default_rng(pose_seq)
-        self.batch = RouteBatch(sc, BATCH, config, fidelity=fid)
+        self.batch = RouteBatch(sc, BATCH, config, fidelity=fid, contact_records=False)
         for i, child in enumerate(noise_seq.spawn(BATCH)):
             self.batch.set_noise_rng(i, np.random.default_rng(child))
         self.rows: list[tuple[np.ndarray, ...]] = []  # src_sa, family (-1: G), steps, end

@@ -116,7 +116,7 @@ def _drive(sc: Scenario, fidelity: Fidelity | None, choose: Chooser, n: int, see
     primitives = np.full(n, -1, dtype=np.int64)  # -1: G not reached within the budget
     contacts = np.zeros(n, dtype=np.int64)
     off = 0
-    world = RouteBatch(sc, min(BATCH, n), config, fidelity=fid)
+    world = RouteBatch(sc, min(BATCH, n), config, fidelity=fid, contact_records=False)
     for lo in range(0, n, world.n):
         m = min(world.n, n - lo)
         for i in range(m):

@@ -56,6 +56,10 @@ from sim.physics.world import SharedSpace
 from sim.scenario import Rewards, Scenario
 
 
+INFO_KEYS = ("state", "bumped", "reached", "timeout", "steps", "contacts", "pose", "time_s")
+MASK_KEYS = tuple(f"_{k}" for k in INFO_KEYS)
+
+
 def autoreset_mode_arg(mode: AutoresetMode | str) -> AutoresetMode:
     """One of gymnasium's :class:`AutoresetMode` (or its value, ``"NextStep"``, ...)."""
     try:
@@ -133,8 +137,10 @@ class PhysicsRouteVectorEnv(VectorEnv):
     (``"S"``, ``"random"`` or a state, for every reset sub-env), ``starts`` (``int[N]``, a
     start state per sub-env; only masked entries are read), ``reset_mask`` (``bool[N]``).
     ``trajectories=True`` keeps every physics step's pose of the last primitive
-    (:meth:`trajectory`) for recordings. ``rewards``, ``fidelity``: as the single env
-    (``make_vec`` passes the id's ``goal-only``; built directly, the scenario's scheme).
+    (:meth:`trajectory`) for recordings; ``contact_records=False`` keeps no contact records
+    (:meth:`contact_records` stays empty; ``info["contacts"]`` still counts them).
+    ``rewards``, ``fidelity``: as the single env (``make_vec`` passes the id's
+    ``goal-only``; built directly, the scenario's scheme).
     ``max_episode_steps`` (or ``steps_per_episode``): default the scenario's. ``start``:
     where a reset without a ``start`` option (an autoreset too) begins, as the single env.
 
@@ -151,7 +157,8 @@ class PhysicsRouteVectorEnv(VectorEnv):
                  fidelity: Fidelity | str | None = None,
                  autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
                  trajectories: bool = False, rewards: str | Rewards = SCENARIO_REWARDS,
-                 steps_per_episode: int | None = None, start: str | int = "S") -> None:
+                 steps_per_episode: int | None = None, start: str | int = "S",
+                 contact_records: bool = True) -> None:
         if render_mode is not None:
             raise ValueError("PhysicsRouteVectorEnv does not render; use the single env")
         if not (isinstance(num_envs, int) and num_envs >= 1):
@@ -172,7 +179,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
                                                "max_episode_steps")
         self.autoreset_options = autoreset_options
         self.batch = RouteBatch(self.scenario, num_envs, self.config, fidelity=self.fidelity,
-                                trajectories=trajectories)
+                                trajectories=trajectories, contact_records=contact_records)
         self.single_observation_space = spaces.Discrete(self.model.n_states)
         self.single_action_space = spaces.Discrete(4)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
@@ -293,8 +300,12 @@ class PhysicsRouteVectorEnv(VectorEnv):
         """The single env's keys over sub-envs; ``fresh`` sub-envs were just reset (their
         entries are a reset's: not bumped, reached, no steps, no contacts)."""
         b, n = self.batch, self.num_envs
-        pose = b.poses()
-        pose[:, 2] = (pose[:, 2] + np.pi) % (2.0 * np.pi) - np.pi  # as wrap_angle
+        r = b.r
+        pose = np.empty((n, 3))
+        pose[:, 0], pose[:, 1] = r.x, r.y
+        np.add(r.th, np.pi, out=pose[:, 2])  # as wrap_angle
+        np.remainder(pose[:, 2], 2.0 * np.pi, out=pose[:, 2])
+        pose[:, 2] -= np.pi
         if out is None:
             bumped, timeout = np.zeros(n, bool), np.zeros(n, bool)
             reached, steps, contacts = np.ones(n, bool), np.zeros(n, np.int64), \
@@ -305,14 +316,11 @@ class PhysicsRouteVectorEnv(VectorEnv):
             reached = np.where(keep, out.reached, True)
             steps = np.where(keep, out.steps, 0).astype(np.int64)
             contacts = np.where(keep, out.contacts, 0).astype(np.int64)
-        infos: dict[str, Any] = {
-            "state": self._obs.copy(), "bumped": bumped, "reached": reached,
-            "timeout": timeout, "steps": steps, "contacts": contacts, "pose": pose,
-            "time_s": b.r.steps * self.config.dt_s,
-        }
-        for k in list(infos):
-            infos[f"_{k}"] = mask.copy()
-        return infos
+        masks = np.repeat(mask[None], len(INFO_KEYS), axis=0)  # one array each, one alloc
+        return {**dict(zip(INFO_KEYS, (self._obs.copy(), bumped, reached, timeout, steps,
+                                       contacts, pose, r.steps * self.config.dt_s),
+                           strict=True)),
+                **dict(zip(MASK_KEYS, masks, strict=True))}
 
 
 class DiffDriveVectorEnv(VectorEnv):

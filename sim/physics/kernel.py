@@ -22,9 +22,10 @@ own sweep meets a surface or, where a sweep can be blind (a step along a box fac
 10 um of parallel, a hold), the disc ends within 1 um of a shape it did not overlap before.
 Such a step asks Chipmunk's narrow phase (``cpSpaceShapeQuery``'s collision formulas,
 compiled: :mod:`sim.physics.narrow_phase`) whether a contact began; where that cannot be
-sure of Chipmunk's answer the step is handed back (``CHECK``) and the caller asks Chipmunk. The controller is the controller
-module's compiled functions (:func:`sim.physics.controller.plan_leg`, ``leg_command``,
-``wheel_twist``, ``at_target``, ``cell_of``), the geometry's answers
+sure of Chipmunk's answer the step is handed back (``CHECK``) and the caller asks Chipmunk.
+The controller is the controller module's compiled functions
+(:func:`sim.physics.controller.plan_leg`, ``leg_command``, ``wheel_twist``, ``at_target``,
+``cell_of``), the geometry's answers
 :mod:`sim.physics.kernel_queries`; the fidelity knobs follow the reference's
 rules (:meth:`PrimitiveController.run`), tested field by field at ``exact``, wheel noise
 only and ``noisy``.

@@ -208,9 +208,8 @@ class _Builder:
         acts = np.zeros(BATCH, dtype=np.int64)
         for lo in range(0, n_jobs, BATCH):
             n = min(BATCH, n_jobs - lo)
-            for i in range(n):
-                x, y, th, touching = poses[lo + i]
-                batch.place(i, x, y, th, resting=touching > 0)
+            p = poses[lo:lo + n]
+            batch.place_many(np.arange(n), p[:, 0], p[:, 1], p[:, 2], p[:, 3] > 0)
             act[:] = False
             act[:n] = True
             acts[:n] = actions[lo:lo + n]

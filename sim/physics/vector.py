@@ -55,7 +55,6 @@ from sim.physics.static import PhysicsConfig
 from sim.physics.world import SharedSpace
 from sim.scenario import Rewards, Scenario
 
-
 INFO_KEYS = ("state", "bumped", "reached", "timeout", "steps", "contacts", "pose", "time_s")
 MASK_KEYS = tuple(f"_{k}" for k in INFO_KEYS)
 

@@ -286,7 +286,8 @@ def ladder_data(cells: list[dict[str, Any]], args: argparse.Namespace) -> dict[s
 def ladder_command(args: argparse.Namespace) -> str:
     return (f"python -m scenarios.experiments.continuous_vs_grid --maps {args.maps} "
             f"--methods {args.methods} --rungs {args.rungs} --seeds {args.seeds} "
-            f"--episodes {args.episodes} --rewards {args.rewards} --map-seed {args.map_seed}")
+            f"--episodes {args.episodes} --rewards {args.rewards} --map-seed {args.map_seed} "
+            f"--repeats {args.repeats}")
 
 
 def ladder_report(cells: list[dict[str, Any]], args: argparse.Namespace) -> str:

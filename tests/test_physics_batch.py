@@ -140,3 +140,53 @@ def test_a_reused_rollout_env_must_record_trajectories_when_a_path_is_wanted():
     with pytest.raises(ValueError, match="trajectories"):
         drive_policy(sc, policy, fid, 2, keep_path=True, env=plain)
     assert rollout_env(sc, 2, fid, trajectories=True).batch.records_trajectories
+
+
+def test_place_many_equals_place_robot_by_robot():
+    """The V* builder's array placement leaves every record as place() does (bias kept)."""
+    sc = resolve_scenario("paper-40")
+    fid = parse_fidelity("uncalibrated")
+    one, many = (RouteBatch(sc, 6, fidelity=fid) for _ in range(2))
+    rng = np.random.default_rng(2)
+    actions = rng.integers(0, 4, 6)
+    for b in (one, many):
+        for i in range(6):
+            b.set_noise_rng(i, np.random.default_rng(i))  # draws each robot's bias
+        b.step(actions)  # records full of a primitive's state
+    idx = np.array([4, 1, 3])
+    xs, ys, ths = rng.uniform(1, 9, 3), rng.uniform(1, 9, 3), rng.uniform(-3, 3, 3)
+    resting = np.array([True, False, True])
+    for k, i in enumerate(idx):
+        one.place(int(i), xs[k], ys[k], ths[k], resting=bool(resting[k]))
+    many.place_many(idx, xs, ys, ths, resting)
+    assert one.robots.tobytes() == many.robots.tobytes()
+    assert [len(c) for c in one.contacts] == [len(c) for c in many.contacts]
+
+
+@pytest.mark.parametrize("fid", ["localised", "noisy"])
+def test_the_noise_buffer_s_chunking_never_changes_a_run(fid, monkeypatch):
+    """Normals are drawn in chunks that start short and double within each block of
+    NOISE_BLOCK; a primitive that needs more than its block has left starts the next block.
+    Drawing each block whole (the first chunk NOISE_BLOCK long) gives the same run, with
+    5 normals a period (localised: wheels and odometry) as with 2."""
+    import sim.physics.batch as batch_module
+
+    sc = resolve_scenario("maze-1")
+    starts = build_model(sc).start_states
+
+    def run() -> bytes:
+        b = RouteBatch(sc, 3, fidelity=parse_fidelity(fid))
+        rng = np.random.default_rng(4)
+        for i in range(3):
+            b.set_noise_rng(i, np.random.default_rng(50 + i))
+        out = []
+        for k in range(600):
+            if k % 200 == 0:
+                for i, s0 in enumerate(rng.choice(starts, 3)):
+                    b.place(i, *b.disc.state_centre(int(s0)), 0.0)
+            out.append(b.step(rng.integers(0, 4, 3)).state.tobytes() + b.robots.tobytes())
+        return b"".join(out)
+
+    short = run()
+    monkeypatch.setattr(batch_module, "FIRST_NOISE_BLOCK", batch_module.NOISE_BLOCK)
+    assert run() == short

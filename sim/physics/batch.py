@@ -151,7 +151,8 @@ class RouteBatch:
         # each robot's normals for wheel noise, drawn in blocks from its own generator
         self._noise = np.zeros((n_robots, NOISE_BLOCK if fid.wheel_noise > 0
                                               or fid.localisation else 2))
-        self._npos = np.full(n_robots, self._noise.shape[1], dtype=np.int64)
+        self._npos = np.full(n_robots, self._noise.shape[1], dtype=np.int64)  # next normal
+        self._nend = self._npos.copy()  # end of the normals drawn so far in the block
         self._nblock = np.full(n_robots, FIRST_NOISE_BLOCK, dtype=np.int64)
         self._noise_rngs: list[np.random.Generator | None] = [None] * n_robots
         sigint.install(RouteBatch._check)
@@ -294,17 +295,16 @@ class RouteBatch:
         clock = time.perf_counter
         while True:
             t0 = clock()
-            K.advance(rb, self._noise, self._npos, self._traj, self._booked_rows, self._booked,
-                      *self._args, act)
+            n_waiting = K.advance(rb, self._noise, self._npos, self._nend, self._traj,
+                                  self._booked_rows, self._booked, *self._args, act)
             t1 = clock()
             self.kernel_s += t1 - t0
-            status = r.status
-            waiting = np.flatnonzero(act & (status != _DONE))
-            if waiting.size == 0:
+            if n_waiting == 0:
                 if self.contact_records and self._booked.any():
                     self._book()  # (without records, the counts are the outcome's)
                 break
-            for i in waiting:
+            status = r.status
+            for i in np.flatnonzero(act & (status != _DONE)):
                 if status[i] == _NOISE:
                     self._refill(int(i))
                 elif status[i] == _CHECK:
@@ -323,7 +323,7 @@ class RouteBatch:
         new run. With a per-run bias (:attr:`Fidelity.biased`) the robot's E_d and E_b are
         drawn first, two normals of ``rng``: a new robot."""
         self._noise_rngs[i] = rng
-        self._npos[i] = self._noise.shape[1]
+        self._npos[i] = self._nend[i] = self._noise.shape[1]
         self._nblock[i] = FIRST_NOISE_BLOCK
         fid = self.fidelity
         if fid.biased:
@@ -339,13 +339,21 @@ class RouteBatch:
         if rng is None:
             raise RuntimeError(f"robot {i} has wheel noise but no generator: call "
                                "set_noise_rng(i, rng) first")
-        # a new stream's first refills are short (a graded drive often ends within a few
-        # hundred normals), then double; the normals are the stream's next ones whatever the
-        # block (a Generator draws them one by one), so the block never changes a run
-        width = self._noise.shape[1]
-        k = int(min(self._nblock[i], width))
-        rng.standard_normal(out=self._noise[i, width - k:])
-        self._npos[i] = width - k
+        # The stream is read in blocks of NOISE_BLOCK normals, and a primitive that needs more
+        # normals than its block has left starts the next block (the rest is never used):
+        # which normals a run uses depends on that layout, so it stays as it always was.
+        # Within a block, normals are drawn as they are needed, FIRST_NOISE_BLOCK first, then
+        # doubling (a graded drive often ends within a few hundred, and a Generator's normals
+        # are the same drawn in any chunks): the block's next chunk joins its drawn part.
+        width, end = self._noise.shape[1], int(self._nend[i])
+        if end < width:  # the block goes on
+            k = int(min(self._nblock[i], width - end))
+            rng.standard_normal(out=self._noise[i, end:end + k])
+            self._nend[i] = end + k
+        else:  # a new block
+            k = int(min(self._nblock[i], width))
+            rng.standard_normal(out=self._noise[i, :k])
+            self._npos[i], self._nend[i] = 0, k
         self._nblock[i] = 2 * k
 
     def _book(self) -> None:

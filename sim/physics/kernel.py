@@ -98,10 +98,12 @@ def begin_all(robots, actions, active, cell_m, nx, ny, localised):
 
 
 @njit(cache=True)
-def advance(robots, noise, npos, traj, contacts, booked, pt, prof_t, geo_t, st, active):
+def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t, st,
+            active):
     """Run every ``active`` robot's primitive until it is DONE or needs the caller.
 
-    ``noise[i, npos[i]:]``: robot ``i``'s unused normals (wheel noise); ``traj[i]`` receives
+    ``noise[i, npos[i]:nend[i]]``: robot ``i``'s unused normals (wheel noise, odometry, fixes);
+    ``traj[i]`` receives
     the pose after every step when ``traj.shape[1] > 0``; ``pt``, ``prof_t``, ``geo_t``,
     ``st``: ``tuple`` of a :class:`Params`, :class:`Profiles`, :class:`Geometry`,
     :class:`Scratch`. Where a step may have begun a contact, Chipmunk's narrow phase in
@@ -110,7 +112,8 @@ def advance(robots, noise, npos, traj, contacts, booked, pt, prof_t, geo_t, st, 
     primitive ends in a bump. A robot left at ``NOISE`` wants its normals refilled, one at
     ``CHECK`` a check the compiled phase leaves to Chipmunk (a box within rounding of
     touching): whether the disc at its pose touches a shape it did not touch before the
-    step (the caller sets ``CONTACT`` if so); then call again. Per leg: :func:`_plan`,
+    step (the caller sets ``CONTACT`` if so); then call again. Returns how many active robots
+    wait for the caller (0: every primitive is DONE). Per leg: :func:`_plan`,
     :func:`_guard_leg`, its commands (each a control period of physics steps: :func:`_step`
     at exact; above it the step's own sweep, :func:`_integrate`, :func:`_rest` and, where a
     sweep can be blind, :func:`new_touch`; then :func:`_solve`), :func:`_finish_leg`.
@@ -140,7 +143,7 @@ def advance(robots, noise, npos, traj, contacts, booked, pt, prof_t, geo_t, st, 
             if rb.fresh:  # the primitive's first call: the fix's normals, when one is due
                 if fixes and rb.nfix + 1 >= p.fix_every:
                     j = npos[i]
-                    if j + 3 > noise.shape[1]:
+                    if j + 3 > nend[i]:
                         rb.status = Status.NOISE
                         break
                     rb.f1, rb.f2, rb.f3 = noise[i, j], noise[i, j + 1], noise[i, j + 2]
@@ -168,7 +171,7 @@ def advance(robots, noise, npos, traj, contacts, booked, pt, prof_t, geo_t, st, 
                         e_left = e_right = 0.0
                         if normals:
                             j = npos[i]
-                            if j + normals > noise.shape[1]:
+                            if j + normals > nend[i]:
                                 rb.status = Status.NOISE
                                 break
                             if p.wheel_noise > 0.0:
@@ -250,6 +253,11 @@ def advance(robots, noise, npos, traj, contacts, booked, pt, prof_t, geo_t, st, 
                         odometry(rb, p)
             if rb.status == Status.RUNNING:
                 _finish_leg(rb, p)
+    waiting = 0  # active robots that need the caller (NOISE, CHECK)
+    for i in range(robots.shape[0]):
+        if active[i] and robots[i].status != Status.DONE:
+            waiting += 1
+    return waiting
 
 
 @njit(cache=True)

@@ -33,6 +33,7 @@ from numba import njit
 from learning.config import MethodConfig
 from learning.free_space import (
     FreeSpace,
+    back_move,
     bfs_distances,
     distances_change,
     new_free_space,
@@ -148,8 +149,15 @@ def rederive(pi_h, nb, blocked, bal, dist, queue, goal):
             pi_h[s] = nearest_move(nb, blocked, dist, s)
         else:
             cut = True
-    if not cut:
-        return
+    if cut:
+        rederive_cut(pi_h, nb, bal, dist, goal)
+
+
+@njit(cache=True)
+def rederive_cut(pi_h, nb, bal, dist, goal):
+    """The second half of :func:`rederive`: pi_H of the states without a route of unblocked
+    moves (distance -1), from the least-bumped routes; on its own where only the counts
+    changed (the distances, and so every other state's move, are as they were)."""
     cost = least_bumped_costs(nb, bal, goal)
     for s in range(pi_h.shape[0]):
         if dist[s] < 0:
@@ -195,6 +203,44 @@ def rederive_after_wall(pi_h, nb, blocked, bal, dist, queue, goal, s, a):
 
 
 @njit(cache=True)
+def rederive_after_unblock(pi_h, nb, blocked, bal, dist, queue, goal, s, a):
+    """pi_H after s's move a was unblocked (a wall that moved after all, in a noisy world),
+    equal to :func:`rederive`'s: distances can only fall, and only through s; they are
+    lowered by a BFS from s over the moves into it (each state at most once: the first visit
+    is the fewest moves through s), then s and the neighbours of every lowered state take
+    their nearest move again. Where a state has no route (before), the whole of
+    :func:`rederive` runs (a cut-off state may have got one back)."""
+    if any_cut(dist):
+        rederive(pi_h, nb, blocked, bal, dist, queue, goal)
+        return
+    t = nb[s, a]
+    if dist[t] + 1 >= dist[s]:  # no distance falls: only s's own move may change
+        pi_h[s] = nearest_move(nb, blocked, dist, s)
+        return
+    lowered = np.empty(dist.shape[0], np.int32)  # (queue keeps the reachable states)
+    dist[s] = dist[t] + 1
+    lowered[0] = s
+    head, tail = 0, 1
+    while head < tail:
+        v = lowered[head]
+        head += 1
+        for b in range(nb.shape[1]):
+            u = nb[v, b]  # v's neighbour; u reaches v by the opposite move
+            if u < 0 or blocked[u, back_move(b)] or dist[v] + 1 >= dist[u]:
+                continue
+            dist[u] = dist[v] + 1
+            lowered[tail] = u
+            tail += 1
+    pi_h[s] = nearest_move(nb, blocked, dist, s)
+    for i in range(tail):
+        v = lowered[i]
+        for b in range(nb.shape[1]):
+            u = nb[v, b]
+            if u >= 0:
+                pi_h[u] = nearest_move(nb, blocked, dist, u)
+
+
+@njit(cache=True)
 def any_cut(dist):
     """Whether some state has no route of unblocked moves to G (distance -1)."""
     for s in range(dist.shape[0]):
@@ -214,28 +260,13 @@ def step_cost(bal, s, a, n_s):
 def least_bumped_costs(nb, bal, goal):
     """cost[s]: the least (excess bumps x (nS + 1) + moves) of a route from s to G over
     every arena move (-1: none); Dijkstra from G over the moves reversed, with a binary
-    heap that may hold a state more than once (stale entries are skipped). Allocates its
-    arrays: it runs only when a route was cut, not on a step."""
+    heap that may hold a state more than once (stale entries are skipped; the costs, the
+    least ones, do not depend on the order moves are relaxed in). Allocates its arrays: it
+    runs only when a route was cut, not on a step."""
     n_s, n_a = nb.shape
     cost = np.full(n_s, -1, np.int64)
-    into_start = np.zeros(n_s + 1, np.int64)  # the moves into each state, grouped by state
-    for u in range(n_s):
-        for a in range(n_a):
-            v = nb[u, a]
-            if v >= 0:
-                into_start[v + 1] += 1
-    for v in range(n_s):
-        into_start[v + 1] += into_start[v]
-    into = np.empty(into_start[n_s], np.int64)
-    fill = into_start[:-1].copy()
-    for u in range(n_s):
-        for a in range(n_a):
-            v = nb[u, a]
-            if v >= 0:
-                into[fill[v]] = u * n_a + a
-                fill[v] += 1
-    keys = np.empty(into.shape[0] + 1, np.int64)
-    vals = np.empty(into.shape[0] + 1, np.int64)
+    keys = np.empty(n_s * n_a + 1, np.int64)  # a push per move at most, and G
+    vals = np.empty(n_s * n_a + 1, np.int64)
     cost[goal] = 0
     keys[0], vals[0] = 0, goal
     size = 1
@@ -259,10 +290,11 @@ def least_bumped_costs(nb, bal, goal):
         if done[v]:
             continue
         done[v] = True
-        for k in range(into_start[v], into_start[v + 1]):
-            u, a = into[k] // n_a, into[k] % n_a
-            if done[u]:
+        for b in range(n_a):  # the moves into v: its neighbours' opposite moves (the
+            u = nb[v, b]  # arena's moves are symmetric); any order gives the same costs
+            if u < 0 or done[u]:
                 continue
+            a = back_move(b)
             cu = c + step_cost(bal, u, a, n_s)
             if cost[u] < 0 or cu < cost[u]:
                 cost[u] = cu
@@ -313,12 +345,13 @@ def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, cle
         blocked[s, a] = now
         if now:  # a new wall: repair what it changed
             rederive_after_wall(pi_h, nb, blocked, bal, dist, queue, goal, s, a)
-        else:  # a wall that moved after all (noisy worlds): distances may fall anywhere
-            rederive(pi_h, nb, blocked, bal, dist, queue, goal)
+        else:  # a wall that moved after all (noisy worlds): distances may fall
+            rederive_after_unblock(pi_h, nb, blocked, bal, dist, queue, goal, s, a)
     elif now and dist[s] < 0 and pi_h[s] == a:
         # cut off, and the least-bumped route's first move bumped again: its cost rose, so
-        # the heuristic may now point another way (else it pushes one wall for ever)
-        rederive(pi_h, nb, blocked, bal, dist, queue, goal)
+        # the heuristic may now point another way (else it pushes one wall for ever); no
+        # move was blocked or unblocked, so only the cut-off states' moves can change
+        rederive_cut(pi_h, nb, bal, dist, goal)
 
 
 @njit(cache=True)

@@ -33,11 +33,11 @@ import time
 
 import numpy as np
 import pymunk
-from numba import njit
 
 from sim.grid.discretiser import Discretiser
 from sim.physics import kernel as K
 from sim.physics import sigint
+from sim.physics.batch_readouts import outcome, path_lengths
 from sim.physics.controller import PrimitiveOutcome
 from sim.physics.drive_profiles import DriveLimits, profiles
 from sim.physics.fidelity import Fidelity
@@ -263,7 +263,7 @@ class RouteBatch:
         its steps' lengths (:meth:`trajectory`'s), for every robot in one call: a loop over
         robots in Python was most of a graded drive's time."""
         out = np.zeros(self._traj_start.shape[0])
-        _path_lengths(self._traj_start, self._traj, self.r.ntraj, out)
+        path_lengths(self._traj_start, self._traj, self.r.ntraj, out)
         return out
 
     def sync_body(self, i: int) -> pymunk.Body:
@@ -311,7 +311,7 @@ class RouteBatch:
                     self._check(int(i))
             self.chipmunk_s += clock() - t1
             sigint.raise_if_deferred()
-        return PrimitiveOutcome(*_outcome(rb, act))
+        return PrimitiveOutcome(*outcome(rb, act))
 
     @property
     def casts(self) -> int:
@@ -393,35 +393,6 @@ class RouteBatch:
             self.contact_counts[i][c.kind] += 1
         r.ncontact[i] += len(found)
         r.status[i] = _CONTACT  # the kernel ends the primitive in a bump
-
-
-@njit(cache=True)
-def _outcome(robots, active):
-    """The fields of :class:`PrimitiveOutcome` (zero / False for robots not ``active``): one
-    compiled pass instead of seven array expressions a step."""
-    n = robots.shape[0]
-    state, cell = np.zeros(n, np.int64), np.zeros(n, np.int64)
-    steps, contacts = np.zeros(n, np.int64), np.zeros(n, np.int64)
-    bumped, reached = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
-    timeout = np.zeros(n, np.bool_)
-    for i in range(n):
-        if active[i]:
-            rb = robots[i]
-            state[i], bumped[i], reached[i], timeout[i] = rb.state, rb.bumped, rb.reached, \
-                rb.timeout
-            steps[i], contacts[i], cell[i] = rb.steps - rb.steps0, rb.ncontact, rb.tstate
-    return state, bumped, reached, timeout, steps, contacts, cell
-
-
-@njit(cache=True)
-def _path_lengths(start, traj, ntraj, out):
-    """out[i] = the length of robot i's polyline start[i], traj[i, :ntraj[i]] [m]."""
-    for i in range(out.shape[0]):
-        x, y, total = start[i, 0], start[i, 1], 0.0
-        for k in range(ntraj[i]):
-            total += math.hypot(traj[i, k, 0] - x, traj[i, k, 1] - y)
-            x, y = traj[i, k, 0], traj[i, k, 1]
-        out[i] = total
 
 
 class RobotView:

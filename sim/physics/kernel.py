@@ -52,8 +52,8 @@ from sim.physics.controller import (
     wheel_twist,
 )
 from sim.physics.drive_profiles import Profiles
+from sim.physics.kernel_exact import cast_guard, guard_leg, integrate, step_exact
 from sim.physics.kernel_queries import (
-    CHECK_MARGIN_M,
     depth_at,
     in_clear_ball,
     new_clear_ball,
@@ -65,7 +65,6 @@ from sim.physics.kernel_state import Geometry, Params, Phase, Scratch, Status
 from sim.physics.narrow_phase import contacts_began
 from sim.physics.static import DEEPER_M, HOLD_STEP_M
 
-CENTRE_TOL_M = 1e-9  # a leg starting this close to its cell centre uses the cached guard [m]
 _DELTAS = np.array(ACTION_DELTAS, dtype=np.int64)
 _HEADINGS = np.array(ACTION_HEADINGS, dtype=np.float64)
 
@@ -113,10 +112,11 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
     ``CHECK`` a check the compiled phase leaves to Chipmunk (a box within rounding of
     touching): whether the disc at its pose touches a shape it did not touch before the
     step (the caller sets ``CONTACT`` if so); then call again. Returns how many active robots
-    wait for the caller (0: every primitive is DONE). Per leg: :func:`_plan`,
-    :func:`_guard_leg`, its commands (each a control period of physics steps: :func:`_step`
-    at exact; above it the step's own sweep, :func:`_integrate`, :func:`_rest` and, where a
-    sweep can be blind, :func:`new_touch`; then :func:`_solve`), :func:`_finish_leg`.
+    wait for the caller (0: every primitive is DONE). Per leg: :func:`_plan`, the guard
+    (:mod:`sim.physics.kernel_exact`), its commands (each a control period of physics steps:
+    ``step_exact`` at exact; above it the step's own sweep, ``integrate``, :func:`_rest`
+    and, where a sweep can be blind, :func:`new_touch`; then :func:`_solve`),
+    :func:`_finish_leg`.
 
     Where a step's sweep can be blind: the hold moved the disc off it; a step shorter than
     10 um loses precision; Munk2D skips a box face (all are axis-aligned) that the disc moves
@@ -156,8 +156,8 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
                 rb.phase = Phase.GUARD
             if rb.phase == Phase.GUARD:
                 rb.limit = math.inf
-                if rb.ndrive > 0 and not noisy and not _guard_leg(rb, p, s.guards):
-                    _cast_guard(rb, p, g, s)
+                if rb.ndrive > 0 and not noisy and not guard_leg(rb, p, s.guards):
+                    cast_guard(rb, p, g, s)
                 rb.phase = Phase.DRIVE
             leg = Leg(rb.nturn, rb.tsign, rb.tscale, rb.ndrive, rb.dscale, rb.ex, rb.ey,
                       rb.dist)
@@ -210,7 +210,7 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
                                 vx, vy = vx * scale, vy * scale
                                 rb.vx, rb.vy = vx, vy
                         depth0 = depth_at(p, g, s, rb.x, rb.y) if held else 0.0
-                        _integrate(rb, vx, vy, p)
+                        integrate(rb, vx, vy, p)
                         check = hit  # the sweep met a surface: ask Chipmunk
                         if p.localised:  # the wheels turned (a hold slides them; below)
                             moved, yaw = math.hypot(vx, vy) * p.dt, rb.th - rb.pth
@@ -229,7 +229,7 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
                                 abs(rb.x - rb.px) < 1e-5 or abs(rb.y - rb.py) < 1e-5):
                             check = new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, True)
                     else:
-                        check = _step(rb, p)
+                        check = step_exact(rb, p)
                     if rb.ntraj < traj.shape[1]:
                         traj[i, rb.ntraj, 0], traj[i, rb.ntraj, 1] = rb.x, rb.y
                         traj[i, rb.ntraj, 2] = rb.th
@@ -281,60 +281,6 @@ def _plan(rb, p, turn_sums, drive_sums):
 
 
 @njit(cache=True, inline="always")
-def _guard_leg(rb, p, guards):
-    """At ``exact``, a drive leg's guard (how far the disc may go from the leg's start) when
-    the cache holds it: for legs that start on their cell centre, per (cell, action). False:
-    cast it (:func:`_cast_guard`). Above ``exact`` every step has its own guard."""
-    cx, cy = (rb.cell_x + 0.5) * p.cell_m, (rb.cell_y + 0.5) * p.cell_m
-    if not (abs(rb.x - cx) <= CENTRE_TOL_M and abs(rb.y - cy) <= CENTRE_TOL_M):
-        return False
-    free = guards[rb.cell_y * p.nx + rb.cell_x, rb.action]
-    if math.isnan(free):
-        return False
-    _set_guard(rb, p, free)
-    return True
-
-
-@njit(cache=True)
-def _cast_guard(rb, p, g, s):
-    """Cast the leg's guard: from the exact cell centre when on it (then cached), else from
-    the pose."""
-    cx, cy = (rb.cell_x + 0.5) * p.cell_m, (rb.cell_y + 0.5) * p.cell_m
-    on_centre = abs(rb.x - cx) <= CENTRE_TOL_M and abs(rb.y - cy) <= CENTRE_TOL_M
-    x0, y0 = (cx, cy) if on_centre else (rb.x, rb.y)
-    alpha = sweep_step(p, g, s, x0, y0, rb.tx, rb.ty)
-    free = math.inf if alpha == math.inf else alpha * math.hypot(rb.tx - x0, rb.ty - y0)
-    s.counters[1] += 1
-    if on_centre:
-        s.guards[rb.cell_y * p.nx + rb.cell_x, rb.action] = free
-    _set_guard(rb, p, free)
-
-
-@njit(cache=True, inline="always")
-def _set_guard(rb, p, free):
-    rb.free = free
-    rb.gx, rb.gy = rb.x, rb.y
-    rb.limit = math.inf if free == math.inf else free + p.depth_m
-
-
-@njit(cache=True)
-def _step(rb, p):
-    """One physics step at ``exact``: the leg's guard, integrate; True when Chipmunk must say
-    whether a contact began (the step ended at the guard's surface)."""
-    vx, vy = rb.vx, rb.vy
-    if rb.limit < math.inf:
-        done = (rb.x - rb.gx) * rb.ex + (rb.y - rb.gy) * rb.ey
-        if done + p.dt * (vx * rb.ex + vy * rb.ey) > rb.limit:
-            u = max(rb.limit - done, 0.0) / p.dt
-            vx, vy = u * rb.ex, u * rb.ey
-            rb.vx, rb.vy = vx, vy
-    _integrate(rb, vx, vy, p)
-    if rb.limit < math.inf:
-        return (rb.x - rb.gx) * rb.ex + (rb.y - rb.gy) * rb.ey > rb.free - CHECK_MARGIN_M
-    return False
-
-
-@njit(cache=True, inline="always")
 def _rest(rb, p, g, s, depth0):
     """After a step of a resting robot: a step that went deeper into what it rests on is held
     (:func:`_held`), and on a drive it presses the bumper; at ``bumper_travel_m`` the robot
@@ -352,16 +298,6 @@ def _rest(rb, p, g, s, depth0):
     elif depth1 <= 0.0:
         rb.resting = False
     return False
-
-
-@njit(cache=True, inline="always")
-def _integrate(rb, vx, vy, p):
-    """Position integrates first, with the velocity the last solve left (or the guard's)."""
-    rb.px, rb.py, rb.pth = rb.x, rb.y, rb.th
-    rb.x = rb.px + vx * p.dt
-    rb.y = rb.py + vy * p.dt
-    rb.th = rb.pth + rb.w * p.dt
-    rb.steps += 1
 
 
 @njit(cache=True, inline="always")

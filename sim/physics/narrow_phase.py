@@ -47,32 +47,12 @@ def contact_buffer(n_robots: int) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def _circle(x, y, r, cx, cy, cr, out, row):
-    """``CircleToCircle(robot, obstacle)``: touch, clear or ambiguous (coincident centres);
-    on a touch with ``row >= 0`` the contact's point, normal and depth go to out[row]."""
-    mindist = r + cr
-    dx, dy = cx - x, cy - y
-    distsq = dx * dx + dy * dy
-    if not distsq < mindist * mindist:
-        return _CLEAR
-    dist = math.sqrt(distsq)
-    if dist == 0.0:
-        return _AMBIGUOUS
-    if row >= 0:
-        inv = 1.0 / dist
-        nx, ny = dx * inv, dy * inv
-        _write(out, row, x + nx * r, y + ny * r, cx + nx * -cr, cy + ny * -cr, nx, ny)
-    return _TOUCH
-
-
-@njit(cache=True, inline="always")
-def _segment(x, y, r, ax, ay, bx, by, sr, out, row):
-    """``CircleToSegment(robot, wall)`` (no tangents set: no endcap rejection)."""
-    sdx, sdy = bx - ax, by - ay
-    t = (sdx * (x - ax) + sdy * (y - ay)) / (sdx * sdx + sdy * sdy)
-    t = min(max(t, 0.0), 1.0)
-    qx, qy = ax + sdx * t, ay + sdy * t
-    mindist = r + sr
+def _round(x, y, r, qx, qy, qr, out, row):
+    """The robot's disc against a round shape of radius ``qr`` about (qx, qy):
+    ``CircleToCircle`` (a circle's centre) and the tail of ``CircleToSegment`` (the segment's
+    closest point): touch, clear or ambiguous (coincident centres); on a touch with
+    ``row >= 0`` the contact's point, normal and depth go to out[row]."""
+    mindist = r + qr
     dx, dy = qx - x, qy - y
     distsq = dx * dx + dy * dy
     if not distsq < mindist * mindist:
@@ -83,8 +63,17 @@ def _segment(x, y, r, ax, ay, bx, by, sr, out, row):
     if row >= 0:
         inv = 1.0 / dist
         nx, ny = dx * inv, dy * inv
-        _write(out, row, x + nx * r, y + ny * r, qx + nx * -sr, qy + ny * -sr, nx, ny)
+        _write(out, row, x + nx * r, y + ny * r, qx + nx * -qr, qy + ny * -qr, nx, ny)
     return _TOUCH
+
+
+@njit(cache=True, inline="always")
+def _segment(x, y, r, ax, ay, bx, by, sr, out, row):
+    """``CircleToSegment(robot, wall)`` (no tangents set: no endcap rejection)."""
+    sdx, sdy = bx - ax, by - ay
+    t = (sdx * (x - ax) + sdy * (y - ay)) / (sdx * sdx + sdy * sdy)
+    t = min(max(t, 0.0), 1.0)
+    return _round(x, y, r, ax + sdx * t, ay + sdy * t, sr, out, row)
 
 
 @njit(cache=True, inline="always")
@@ -117,7 +106,7 @@ def _touches(g, k, x, y, r, out, row):
     n_circles = g.circles.shape[0]
     if k < n_circles:
         c = g.circles[k]
-        return _circle(x, y, r, c[0], c[1], c[2], out, row)
+        return _round(x, y, r, c[0], c[1], c[2], out, row)
     b = g.boxes[k - n_circles]
     return _box(x, y, r, b[0], b[1], b[2], b[3], out, row)
 

@@ -90,3 +90,49 @@ def kernels_cached(package: Path = PACKAGE) -> bool:
     numba may have put them counts (a glob over ``NUMBA_CACHE_DIR`` alone missed the
     fallback, and the notice then printed on every run)."""
     return any(any(d.glob("kernels.*.nbi")) for d in kernel_cache_dirs(package))
+
+
+# ---------------------------------------------------------------- methods from outside
+
+# State classes of methods registered from outside this package (learning.registry.register)
+FOREIGN_STATES: set[type] = set()
+_GUARDED = "_rnhql_foreign_guard"
+
+
+def mentions(ty: object, classes: set[type], depth: int = 0) -> bool:
+    """Whether the numba type ``ty`` is, or holds, a named tuple of one of ``classes``
+    (through tuples, named tuples and struct references such as the state box)."""
+    if getattr(ty, "instance_class", None) in classes:
+        return True
+    if depth > 8:
+        return False
+    inner = getattr(ty, "types", None)
+    subs = list(inner) if isinstance(inner, tuple | list) else []
+    fields = getattr(ty, "field_dict", None)
+    if isinstance(fields, dict):
+        subs += list(fields.values())
+    return any(mentions(t, classes, depth + 1) for t in subs)
+
+
+def guard_cache() -> None:
+    """Keep kernels compiled for :data:`FOREIGN_STATES` out of numba's on-disk cache.
+
+    numba's cache index of a function pickles the types of every signature it holds. A
+    kernel compiled for a state class from a user's module would put that class in the
+    index of, say, :mod:`learning.kernels`, and every later process that reads the index
+    (any ``rnhql`` command, without the user's module on its path) would fail to import
+    it. Such kernels are compiled afresh in each process instead; the package's own stay
+    cached. Installed once, when the first such method is registered."""
+    from numba.core import caching
+
+    save = caching.Cache.save_overload
+    if getattr(save, _GUARDED, False):
+        return
+
+    def save_overload(self, sig, data):
+        if FOREIGN_STATES and any(mentions(t, FOREIGN_STATES) for t in sig):
+            return None
+        return save(self, sig, data)
+
+    setattr(save_overload, _GUARDED, True)
+    caching.Cache.save_overload = save_overload

@@ -87,21 +87,26 @@ def run_episodes(st, model, n_episodes: int, rng: np.random.Generator,
                     rng if start_rng is None else start_rng, out, trace))
 
 
-ROUTE, SHORTEST, ROLLOUTS = 0, 1, 2  # what :func:`_read_policy` reads
+ROUTE, SHORTEST, ROLLOUTS, POLICY = 0, 1, 2, 3  # what :func:`_read_policy` reads
 
 
 @njit(cache=True)
 def _read_policy(st, what, next_state, terminal, distance, states, start, max_steps, eps, n,
                  rng, route):
-    """The method's exploitation policy read one of three ways (``what``): the greedy route
+    """The method's exploitation policy read one of four ways (``what``): the greedy route
     from ``start`` (:func:`greedy_route`), the share of ``states`` whose action is a BFS step
-    toward G (:func:`on_shortest_fraction`), or ``n`` epsilon-greedy rollouts
-    (:func:`epsilon_rollouts`). One compiled entry point per method, not three: each entry
+    toward G (:func:`on_shortest_fraction`), ``n`` epsilon-greedy rollouts
+    (:func:`epsilon_rollouts`), or the action of every state written to ``route``
+    (:func:`policy_table`). One compiled entry point per method, not four: each entry
     costs a method ~1-3 s of compilation on a cold cache whatever its size (the state's
     unboxing, numba's passes), so the three loops share one. Returns (length, states
     written, fraction, rollout lengths), the fields ``what`` does not read left 0 / empty.
     """
     out = np.full(n if what == ROLLOUTS else 0, -1, dtype=np.int64)
+    if what == POLICY:
+        for s in range(route.shape[0]):
+            route[s] = exploit_call(st, s)
+        return 0, route.shape[0], 0.0, out
     if what == ROUTE:
         seen = np.zeros(next_state.shape[0], dtype=np.bool_)
         s = start
@@ -149,6 +154,8 @@ def _unused(dtype: type, read_only: bool) -> np.ndarray:
 
 
 _NO_STATES, _NO_TERMINAL = _unused(np.int32, True), _unused(np.bool_, True)
+_NO_ROUTE_NEXT = np.zeros((0, 4), dtype=np.int32)  # next_state's type, for a policy read
+_NO_ROUTE_NEXT.setflags(write=False)
 _NO_ROUTE = _unused(np.int32, False)
 _IDLE_RNG = np.random.default_rng(0)  # never drawn from: the reads that draw take the caller's
 
@@ -164,6 +171,14 @@ def greedy_route(st, next_state, terminal, start, max_steps, route):
     length, written, _, _ = _read_policy(st, ROUTE, next_state, terminal, _NO_STATES,
                                          _NO_STATES, start, max_steps, 0.0, 0, _IDLE_RNG, route)
     return length, written
+
+
+def policy_table(st, n_states: int) -> np.ndarray:
+    """int64[n_states]: the exploitation action of every state (ties to the lowest index)."""
+    table = np.zeros(int(n_states), dtype=np.int32)
+    _read_policy(st, POLICY, _NO_ROUTE_NEXT, _NO_TERMINAL, _NO_STATES, _NO_STATES, 0, 0, 0.0, 0,
+                 _IDLE_RNG, table)
+    return table.astype(np.int64)
 
 
 def on_shortest_fraction(st, next_state, distance, states):

@@ -8,23 +8,15 @@ every state, and the shaping potential of the methods that learn one.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from learning import hooks
+from learning.kernels import policy_table
 from learning.registry import family_of_state, n_states_of
 
 
-@njit(cache=True)
-def _greedy_all(st, out):
-    for s in range(out.shape[0]):
-        out[s] = hooks.exploit_call(st, s)
-
-
 def greedy_actions(st) -> np.ndarray:
-    """int64[nS]: the method's exploitation action in every state (ties: lowest index)."""
-    out = np.zeros(n_states_of(st), dtype=np.int64)
-    _greedy_all(st, out)
-    return out
+    """int64[nS]: the method's exploitation action in every state (ties: lowest index); read
+    through the kernels' one policy-reading entry point (no compilation of its own)."""
+    return policy_table(st, n_states_of(st))
 
 
 def q_table(st) -> np.ndarray:

@@ -25,12 +25,15 @@ throwaway method: ``tests/test_new_method.py``).
 
 from __future__ import annotations
 
+import importlib
+import inspect
 from types import ModuleType
 
 from learning import (
     dyna_q,
     haql,
     pfh_rl,
+    policy_state,
     q_lambda,
     q_learning,
     rn_ql,
@@ -69,28 +72,63 @@ _TABLE: tuple[tuple[type[MethodConfig], ModuleType, bool], ...] = (
     (RNHQLPlusExplore, rnh_ql_plus, False),
 )
 HOOKS = ("State", "init_state", "act", "update", "begin", "exploit")
+# each compiled hook's parameters, as learning.hooks calls it
+HOOK_PARAMETERS = {"act": ("st", "s", "rng"),
+                   "update": ("st", "s", "a", "r", "s2", "terminated", "rng"),
+                   "begin": ("st", "s0"), "exploit": ("st", "s")}
 
 FAMILY_OF_CONFIG: dict[type[MethodConfig], ModuleType] = {}
 METHODS: dict[str, type[MethodConfig]] = {}  # by CLI name
 FAMILY_OF_STATE: dict[type, ModuleType] = {}
 _COMPARED: list[str] = []
+# methods registered from outside the package: CLI name -> ("module:Config", compared), what
+# a worker process re-registers (restore_external) when it did not inherit the registry
+EXTERNAL: dict[str, tuple[str, bool]] = {}
+
+
+def check_method_module(module: ModuleType) -> None:
+    """Refuse a method module whose parts the compiled loops could not use, saying which
+    part and how to mend it (at :func:`register`, not inside a worker later)."""
+    name = module.__name__
+    missing = [h for h in HOOKS if not hasattr(module, h)]
+    if missing:
+        raise ValueError(f"{name} has no {', '.join(missing)}: a method module "
+                         "declares State, init_state and the hooks act, update, begin, exploit")
+    if tuple(getattr(module.State, "_fields", ())[:2]) != ("par", "tally"):
+        raise ValueError(f"{name}.State is not a named tuple whose first fields "
+                         "are par and tally")
+    for hook, params in HOOK_PARAMETERS.items():
+        fn = getattr(module, hook)
+        if not hasattr(fn, "py_func"):
+            raise ValueError(f"{name}.{hook} is a plain Python function: the compiled loops "
+                             f"inline it, so decorate it with @numba.njit(cache=True, "
+                             f"inline='always'); or write a plain-Python learner (a class "
+                             f"with act, update and greedy: docs/python-api.md), which needs "
+                             f"no numba")
+        got = tuple(inspect.signature(fn.py_func).parameters)
+        if len(got) != len(params):
+            raise ValueError(f"{name}.{hook} takes ({', '.join(got)}), but the loops call it "
+                             f"as {hook}({', '.join(params)}): give it {len(params)} "
+                             "parameters")
+    if not callable(module.init_state):
+        raise ValueError(f"{name}.init_state is not callable: define "
+                         "init_state(cfg, geom, rng) -> State")
+    if len(inspect.signature(module.init_state).parameters) != 3:
+        raise ValueError(f"{name}.init_state must take (cfg, geom, rng)")
 
 
 def register(config: type[MethodConfig], module: ModuleType, compared: bool = True) -> None:
     """Add a method: its config class and the module with its ``State`` and hooks.
 
     ``compared``: in :func:`comparison_methods` (after the methods already there).
-    Compiled code that already ran is not affected; a new ``State`` compiles anew. The
-    module must be importable in every process that reads numba's on-disk cache (a
-    module of a package, not a script): the cached kernels name its ``State`` class.
+    Compiled code that already ran is not affected; a new ``State`` compiles anew. A method
+    from outside the package is remembered (:data:`EXTERNAL`) so that a sweep's worker
+    processes register it too, and its kernels are kept out of numba's on-disk cache.
     """
-    missing = [h for h in HOOKS if not hasattr(module, h)]
-    if missing:
-        raise ValueError(f"{module.__name__} has no {', '.join(missing)}: a method module "
-                         "declares State, init_state and the hooks act, update, begin, exploit")
-    if tuple(getattr(module.State, "_fields", ())[:2]) != ("par", "tally"):
-        raise ValueError(f"{module.__name__}.State is not a named tuple whose first fields "
-                         "are par and tally")
+    check_method_module(module)
+    if not (isinstance(config, type) and issubclass(config, MethodConfig)):
+        raise ValueError(f"{config!r} is not a MethodConfig subclass: a method's config is a "
+                         "frozen dataclass subclassing learning.config.MethodConfig")
     if config.cli in METHODS:
         raise ValueError(f"a method named {config.cli!r} is registered already "
                          f"({METHODS[config.cli].__name__})")
@@ -102,6 +140,12 @@ def register(config: type[MethodConfig], module: ModuleType, compared: bool = Tr
     FAMILY_OF_STATE[module.State] = module
     if compared:
         _COMPARED.append(config.cli)
+    if not module.__name__.startswith(f"{__package__}."):
+        from learning.jitcache import FOREIGN_STATES, guard_cache
+
+        guard_cache()
+        FOREIGN_STATES.add(module.State)
+        EXTERNAL[config.cli] = (f"{config.__module__}:{config.__qualname__}", compared)
 
 
 def unregister(cli: str) -> None:
@@ -112,6 +156,59 @@ def unregister(cli: str) -> None:
         del FAMILY_OF_STATE[module.State]
     if cli in _COMPARED:
         _COMPARED.remove(cli)
+    EXTERNAL.pop(cli, None)
+
+
+def restore_external(external: dict[str, tuple[str, bool]]) -> None:
+    """Register, in this process, the methods another process registered from outside the
+    package (a worker started by spawn or forkserver has only the built-in ones)."""
+    for cli, (where, compared) in external.items():
+        if cli not in METHODS:
+            config = import_attribute(where, "--methods")
+            register(config, importlib.import_module(config.__module__), compared)
+
+
+def import_attribute(where: str, flag: str = "method"):
+    """The object named ``"package.module:Attribute"`` (``Attribute`` may be dotted)."""
+    module_name, _, attr = where.partition(":")
+    if not module_name or not attr:
+        raise ValueError(f"{flag} {where!r} is not module:Attribute; write e.g. "
+                         "mypkg.mymodule:MyLearner")
+    try:
+        obj: object = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise ValueError(f"{flag} {where!r}: cannot import {module_name} ({exc}); put its "
+                         "folder on PYTHONPATH or install its package") from None
+    for part in attr.split("."):
+        if not hasattr(obj, part):
+            raise ValueError(f"{flag} {where!r}: {module_name} has no {attr!r}; name a class "
+                             "defined in that module")
+        obj = getattr(obj, part)
+    return obj
+
+
+def is_located(method: str) -> bool:
+    """Whether ``method`` names a learner by where it lives (``module:Attribute``)."""
+    return ":" in method
+
+
+def config_class(method: str) -> type:
+    """The config class of ``method``: a registered CLI name, or ``module:Attribute`` naming a
+    compiled method's config (registered here on first use, left out of ``rnhql compare``'s
+    default list) or a plain-Python learner class (:func:`learning.plain.plain_config`)."""
+    if method in METHODS:
+        return METHODS[method]
+    if not is_located(method):
+        raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}, or "
+                         "module:Class for a learner of your own")
+    from learning.plain import known_class, plain_config
+
+    obj = known_class(method) or import_attribute(method)
+    if isinstance(obj, type) and issubclass(obj, MethodConfig):
+        if METHODS.get(obj.cli) is not obj:
+            register(obj, importlib.import_module(obj.__module__), compared=False)
+        return obj
+    return plain_config(obj, method)
 
 
 def comparison_methods() -> tuple[str, ...]:
@@ -122,6 +219,7 @@ def comparison_methods() -> tuple[str, ...]:
 
 for _config, _module, _compared in _TABLE:
     register(_config, _module, _compared)
+FAMILY_OF_STATE[policy_state.State] = policy_state  # graded policies: no method, no name
 
 
 def family_of(cfg: MethodConfig) -> ModuleType:
@@ -145,6 +243,6 @@ def n_states_of(st) -> int:
 
 def config_from_fields(cli: str, fields: dict[str, object]) -> MethodConfig:
     """Rebuild a config from its CLI name and field values (e.g. from a checkpoint)."""
-    if cli not in METHODS:
+    if cli not in METHODS and not is_located(cli):
         raise ValueError(f"unknown method {cli!r}; known: {', '.join(METHODS)}")
-    return METHODS[cli].from_fields(fields)
+    return config_class(cli).from_fields(fields)

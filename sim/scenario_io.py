@@ -296,8 +296,23 @@ def named_scenario_path(name: str) -> Path | None:
     return None
 
 
-def resolve_scenario(spec: str, start: Cell | None = None, goal: Cell | None = None) -> Scenario:
-    """A built-in name, a ``.toml`` path, or a ``.map`` path with start/goal (Moving AI frame)."""
+def resolve_scenario(spec: str | Path | Scenario, start: Cell | None = None,
+                     goal: Cell | None = None) -> Scenario:
+    """A built-in name, a ``.toml`` path, a ``.map`` path with start/goal (Moving AI frame), or a
+    :class:`Scenario` built in Python (checked as a file's would be)."""
+    if isinstance(spec, Scenario):
+        if start is not None or goal is not None:
+            raise ScenarioError(spec.source, "start/goal", "only apply to a .map file",
+                                "set start and goal in the Scenario (dataclasses.replace)")
+        validate_shape(spec)
+        validate(spec)
+        return spec
+    if isinstance(spec, Path):
+        spec = str(spec)
+    if not isinstance(spec, str):
+        raise ScenarioError("<python>", "scenario", f"is a {type(spec).__name__}, not a "
+                            "scenario", "pass a built-in name, a .toml or .map path, or a "
+                            "sim.scenario.Scenario")
     if spec.endswith(".map"):
         if start is None or goal is None:
             raise ScenarioError(spec, "--start/--goal", "a .map needs a start and a goal",

@@ -37,6 +37,7 @@ from learning.batch_agent import BatchAgent
 from learning.generator_handle import handles
 from learning.geometry import geometry_of
 from learning.metrics import episodes_to_first_optimal
+from learning.plain import PlainBatchAgent, is_plain
 from learning.readout import greedy_actions
 from scenarios.runs.physics_grading import FinalGrade, Grader
 from scenarios.runs.work import add_episodes
@@ -167,7 +168,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     agents, bounds = [], []
     lo = 0
     for g in groups:
-        agents.append(BatchAgent(g.cfg, geom, list(g.learner_rngs)))
+        agents.append(batch_agent(g.cfg, geom, list(g.learner_rngs), list(g.start_rngs)))
         bounds.append((lo, lo + len(g.learner_rngs)))
         lo += len(g.learner_rngs)
     n = lo
@@ -310,6 +311,15 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                      world_python=t_world - b.kernel_s - b.chipmunk_s,
                      final=clock() - t_start - t_loop, primitives=float(logs.steps.sum()))
     return results
+
+
+def batch_agent(cfg: Any, geom: Any, learner_rngs: list[np.random.Generator],
+                start_rngs: list[np.random.Generator]) -> Any:
+    """The learners of one group: compiled rows (:class:`BatchAgent`), or plain-Python
+    learners (:class:`learning.plain.PlainBatchAgent`) with the same calls."""
+    if is_plain(cfg):
+        return PlainBatchAgent(cfg, geom, learner_rngs, start_rngs)
+    return BatchAgent(cfg, geom, learner_rngs)
 
 
 def _result(agent: StepAgent, final: FinalGrade, i: int, logs: _Logs, grader: Grader,

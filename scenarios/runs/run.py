@@ -68,6 +68,8 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
 def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder: Any = None,
            plan: Any = None) -> RunOutcome:
     """A grid run (physics runs go through :mod:`scenarios.runs.physics_batch`)."""
+    from learning.plain import is_plain
+    from learning.plain_train import train_plain
     from learning.streams import streams
     from learning.train import epsilon_route_lengths, train_tabular
 
@@ -81,8 +83,9 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
         observer = GridRecorder(recorder, plan)
     from scenarios.runs.work import CountingObserver
 
-    result = train_tabular(cfg, model, spec.episodes, rng, test_every=spec.test_every,
-                           observer=CountingObserver(observer), start_rng=rs.starts)
+    train = train_plain if is_plain(cfg) else train_tabular
+    result = train(cfg, model, spec.episodes, rng, test_every=spec.test_every,
+                   observer=CountingObserver(observer), start_rng=rs.starts)
     # the paper's test, on its own stream so it never changes the training run
     eps_routes = epsilon_route_lengths(result.state, model, cfg.eps, rs.evaluation)
     extras = None

@@ -46,8 +46,8 @@ class RecordOptions:
 class RunSpec:
     """One training run: everything needed to reproduce it."""
 
-    scenario: str  # built-in name, .toml or .map path
-    method: str  # CLI name, e.g. "rnh-ql"
+    scenario: str | Scenario  # built-in name, .toml or .map path, or a Scenario built in Python
+    method: str  # CLI name, e.g. "rnh-ql", or module:Class of a learner of one's own
     seed: int
     episodes: int
     world: str = "grid"
@@ -64,7 +64,13 @@ class RunSpec:
     recording: RecordOptions | None = None  # None: not recorded (never part of the key)
 
     @property
-    def problem(self) -> tuple[str, Cell | None, Cell | None, str | None, float | None]:
+    def scenario_name(self) -> str:
+        """The scenario as a key and a file name see it: its name or path."""
+        return self.scenario if isinstance(self.scenario, str) else self.scenario.name
+
+    @property
+    def problem(self) -> tuple[str | Scenario, Cell | None, Cell | None, str | None,
+                               float | None]:
         """What :func:`load` needs: (scenario, start, goal, rewards, s_starts)."""
         return self.scenario, self.start, self.goal, self.rewards, self.s_starts
 
@@ -81,7 +87,7 @@ class RunSpec:
         cells = "".join(f"|{n}={c[0]},{c[1]}" for n, c in (("S", self.start), ("G", self.goal))
                         if c is not None)
         fid = "" if self.fidelity_spec.is_exact else f"|fid={self.fidelity_spec.label}"
-        return (f"{self.scenario}#{scenario_digest(*self.problem)}"
+        return (f"{self.scenario_name}#{scenario_digest(*self.problem)}"
                 f"{cells}|{self.world}{fid}|{self.method}{extra}|t{self.test_every}"
                 f"|s{self.seed}|e{self.episodes}")
 
@@ -95,7 +101,7 @@ class RunSpec:
 
 
 @lru_cache(maxsize=8)
-def load(scenario: str, start: Cell | None = None, goal: Cell | None = None,
+def load(scenario: str | Scenario, start: Cell | None = None, goal: Cell | None = None,
          rewards: str | None = None, s_starts: float | None = None
          ) -> tuple[Scenario, TabularModel]:
     """The scenario (with ``rewards`` replacing its own scheme and ``s_starts`` its share of
@@ -110,7 +116,7 @@ def load(scenario: str, start: Cell | None = None, goal: Cell | None = None,
 
 
 @lru_cache(maxsize=64)
-def scenario_digest(scenario: str, start: Cell | None = None, goal: Cell | None = None,
+def scenario_digest(scenario: str | Scenario, start: Cell | None = None, goal: Cell | None = None,
                     rewards: str | None = None, s_starts: float | None = None) -> str:
     """12 hex digits of a hash of what the scenario *is*: its resolved content (geometry,
     robot, rewards, episode length, S, G), not the file it came from."""
@@ -127,7 +133,8 @@ def scenario_digest(scenario: str, start: Cell | None = None, goal: Cell | None 
 
 
 @lru_cache(maxsize=64)
-def layout_digest(scenario: str, start: Cell | None = None, goal: Cell | None = None) -> str:
+def layout_digest(scenario: str | Scenario, start: Cell | None = None,
+                  goal: Cell | None = None) -> str:
     """12 hex digits of a hash of the route problem's layout alone: arena, obstacles, robot,
     S, G and episode length; not the rewards or the share of starts at S. What a saved
     agent's greedy route depends on, so what ``rnhql route`` checks a checkpoint against."""
@@ -142,23 +149,40 @@ def layout_digest(scenario: str, start: Cell | None = None, goal: Cell | None = 
     return hashlib.sha256(blob).hexdigest()[:12]
 
 
+def method_class(method: str) -> type:
+    """The config class of ``method``: a registered name, or ``module:Class`` (a compiled
+    method's config or a plain-Python learner: :func:`learning.registry.config_class`)."""
+    from learning.registry import config_class
+
+    try:
+        return config_class(method)
+    except ValueError as exc:
+        raise ExperimentError("command line", "--method", str(exc).removesuffix("."),
+                              "name a method `rnhql methods` lists, or module:Class of a "
+                              "learner of your own (docs/python-api.md)") from None
+
+
+def settable_fields(cls: type) -> list[str]:
+    """The config fields ``--set`` may change (a plain learner's settings are its own)."""
+    own = getattr(cls, "settable", None)
+    return list(own) if own is not None else [f.name for f in dataclasses.fields(cls)]
+
+
 def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
     """The method's frozen config with paper defaults, fields overridden by name."""
     from learning.limits import LIMITS, limit_problem
     from learning.registry import METHODS
 
-    if method not in METHODS:
-        raise ExperimentError("command line", "--method", f"unknown method {method!r}",
-                              f"use one of: {', '.join(METHODS)}")
-    cls = METHODS[method]
-    names = {f.name: f for f in dataclasses.fields(cls)}
+    cls = method_class(method)
+    names = {f.name: f for f in dataclasses.fields(cls) if f.name in settable_fields(cls)}
     kwargs: dict[str, Any] = {}
     for k, v in overrides:
         if k not in names:
             wider = [c.cli for c in METHODS.values()  # e.g. rnh-ql+ablation, for rnh-ql+
                      if issubclass(c, cls) and k in {f.name for f in dataclasses.fields(c)}]
             raise ExperimentError("command line", f"--set {k}", f"{method} has no field {k!r}",
-                                  f"use one of: {', '.join(names)}"
+                                  (f"use one of: {', '.join(names)}" if names else
+                                   "it has no settings to --set: set them in its class")
                                   + (f"; or --method {wider[0]}, which has {k}" if wider
                                      else ""))
         problem = limit_problem(k, float(v))
@@ -198,21 +222,25 @@ class RunOutcome:
     optimal_action_fraction: float  # free cells whose greedy move is on a shortest route
     epsilon_route_lengths: np.ndarray  # int[k]; the paper's test: epsilon-greedy rollouts
     world_extras: dict[str, Any]  # world-specific fields of the record (physics, drives)
+    policy: np.ndarray | None = None  # int[nS]; the final greedy action of every cell
 
     @classmethod
     def of(cls, result: Any, epsilon_route_lengths: np.ndarray,
            world_extras: dict[str, Any] | None = None) -> RunOutcome:
         """From a grid :class:`learning.train.TrainResult` or a physics
         :class:`scenarios.runs.physics.PhysicsTrainResult` (which carries its own extras)."""
+        from learning.readout import greedy_actions
+
         extras = dict(getattr(result, "world_extras", {}))
         extras.update(world_extras or {})
+        state = result.state if hasattr(result, "state") else result.agent.state
         return cls(np.asarray(result.steps), np.asarray(result.returns),
                    np.asarray(result.success), np.asarray(result.wall_time_s),
                    np.asarray(result.test_episodes).astype(int),
                    np.asarray(result.test_route_length).astype(int),
                    int(result.optimal_length), [int(s) for s in result.final_route],
                    int(result.final_route_length), float(result.optimal_action_fraction),
-                   np.asarray(epsilon_route_lengths), extras)
+                   np.asarray(epsilon_route_lengths), extras, greedy_actions(state))
 
 
 def run_record(spec: RunSpec, cfg: Any, result: RunOutcome) -> dict[str, Any]:
@@ -267,8 +295,22 @@ def run_record(spec: RunSpec, cfg: Any, result: RunOutcome) -> dict[str, Any]:
         "wall_time_per_episode_s": np.round(np.asarray(result.wall_time_s), 9).tolist(),
         "test_episodes": test_e.tolist(),
         "test_route_length": test_l.tolist(),
+        "greedy_policy": policy_text(result.policy),
         **result.world_extras,
     }
+
+
+def policy_text(policy: np.ndarray | None) -> str | None:
+    """A policy as one digit per cell, state order (``"0"`` up, ``"1"`` down, ``"2"`` left,
+    ``"3"`` right): 1 byte a cell in results.json; :func:`policy_from_text` reads it back."""
+    if policy is None:
+        return None
+    return (np.asarray(policy, dtype=np.uint8) + ord("0")).tobytes().decode("ascii")
+
+
+def policy_from_text(text: str) -> np.ndarray:
+    """int64[nS] from :func:`policy_text`."""
+    return np.frombuffer(text.encode("ascii"), dtype=np.uint8).astype(np.int64) - ord("0")
 
 
 def _median_route(lengths: np.ndarray) -> float | None:

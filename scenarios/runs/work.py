@@ -111,6 +111,12 @@ class CountingObserver:
     def __init__(self, inner: Any = None) -> None:
         self.inner = inner
 
+    @property
+    def wants_state(self) -> bool:
+        """Whether ``after_chunk`` reads the learner's state (a plain learner's costs a
+        greedy call per cell to build)."""
+        return self.inner is not None
+
     def trace_chunk(self, done: int, n: int) -> bool:
         return self.inner is not None and self.inner.trace_chunk(done, n)
 

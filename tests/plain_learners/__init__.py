@@ -1,0 +1,1 @@
+"""Plain-Python learners the tests name as ``module:Class`` (importable by worker processes)."""

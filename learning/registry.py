@@ -117,6 +117,41 @@ def check_method_module(module: ModuleType) -> None:
         raise ValueError(f"{name}.init_state must take (cfg, geom, rng)")
 
 
+_FINGERPRINTS: dict[ModuleType, bytes] = {}
+
+
+def state_fingerprint(config: type[MethodConfig], module: ModuleType) -> bytes:
+    """How numba's dispatcher tells this method's states apart: the fingerprint of a state
+    built on a 3 x 3 arena (a named tuple's is its class's bare name and its fields' types;
+    an array's, its dtype, rank and layout, not its size)."""
+    if module not in _FINGERPRINTS:
+        import numpy as np
+        from numba._dispatcher import compute_fingerprint
+
+        from learning.geometry import Geometry
+
+        xy = np.array([(x + 0.5, y + 0.5) for y in range(3) for x in range(3)])
+        geom = Geometry(xy, 8, (0.0, 0.0, 3.0, 3.0), 9, 4, 1.0, np.arange(8, dtype=np.int32))
+        st = module.init_state(config(), geom, np.random.default_rng(0))
+        _FINGERPRINTS[module] = compute_fingerprint(st)
+    return _FINGERPRINTS[module]
+
+
+def check_state_is_its_own(config: type[MethodConfig], module: ModuleType) -> None:
+    """Refuse a method whose states numba cannot tell from another method's: its dispatcher
+    keys compiled loops on a state's class *name* and field types, so a second ``State``
+    with the same fields would run the first method's compiled rules."""
+    mine = state_fingerprint(config, module)
+    for other_config, other in FAMILY_OF_CONFIG.items():
+        if other is not module and state_fingerprint(other_config, other) == mine:
+            raise ValueError(
+                f"{module.__name__}.State has the class name and the field types of "
+                f"{other.__name__}.State: numba's compiled loops tell states apart by those "
+                f"alone, so {config.cli} would run {other_config.cli}'s compiled rules. Give "
+                f"the class a name of its own (e.g. class {config.__name__}State"
+                "(NamedTuple), then State = that class)")
+
+
 def register(config: type[MethodConfig], module: ModuleType, compared: bool = True) -> None:
     """Add a method: its config class and the module with its ``State`` and hooks.
 
@@ -129,6 +164,8 @@ def register(config: type[MethodConfig], module: ModuleType, compared: bool = Tr
     if not (isinstance(config, type) and issubclass(config, MethodConfig)):
         raise ValueError(f"{config!r} is not a MethodConfig subclass: a method's config is a "
                          "frozen dataclass subclassing learning.config.MethodConfig")
+    if _TABLE_DONE and module not in FAMILY_OF_CONFIG.values():
+        check_state_is_its_own(config, module)
     if config.cli in METHODS:
         raise ValueError(f"a method named {config.cli!r} is registered already "
                          f"({METHODS[config.cli].__name__})")
@@ -217,8 +254,10 @@ def comparison_methods() -> tuple[str, ...]:
     return tuple(_COMPARED)
 
 
+_TABLE_DONE = False  # the package's own methods are distinct by construction (tested)
 for _config, _module, _compared in _TABLE:
     register(_config, _module, _compared)
+_TABLE_DONE = True
 FAMILY_OF_STATE[policy_state.State] = policy_state  # graded policies: no method, no name
 
 

@@ -33,10 +33,13 @@ class Throwaway(MethodConfig):
     q0: float = 1.0  # initial Q for every (s, a) [reward units]
 
 
-class State(NamedTuple):  # its own class: dispatch goes by the state's type
+class ThrowawayState(NamedTuple):  # its own class and name: dispatch goes by them
     par: BaseParams
     tally: Tally
     q: np.ndarray  # float64[nS, nA]
+
+
+State = ThrowawayState
 
 
 def init_state(cfg: Throwaway, geom: Geometry, rng: np.random.Generator) -> State:
@@ -48,20 +51,14 @@ begin, exploit = q_learning.begin, q_learning.exploit
 
 
 @pytest.fixture
-def throwaway(monkeypatch):
-    """The method registered for one test, and gone again after it.
-
-    Kernels compiled for it stay out of numba's on-disk cache: a cache index names the
-    ``State`` classes it holds, and every later process that loads that index (a CLI run
-    without this test module on its path) would fail to import this one.
-    """
+def throwaway():
+    """The method registered for one test, and gone again after it. Its kernels stay out of
+    numba's on-disk cache by themselves (a method from outside the package:
+    :func:`learning.jitcache.guard_cache`)."""
     import sys
-
-    from numba.core import caching
 
     from learning.registry import register, unregister
 
-    monkeypatch.setattr(caching.Cache, "save_overload", lambda self, sig, data: None)
     register(Throwaway, sys.modules[__name__])
     try:
         yield Throwaway.cli

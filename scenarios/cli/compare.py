@@ -23,13 +23,15 @@ from scenarios.cli.args import (
     unique,
 )
 from scenarios.cli.paths import record_path
-from scenarios.runs.spec import ExperimentError, make_config
+from scenarios.runs.spec import make_config
 from sim.errors import InputError
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
+    """Parse, check every flag (errors name the flag), run :func:`scenarios.api.compare`,
+    print its summary."""
     from learning.registry import comparison_methods
-    from scenarios.experiments.compare import SweepRecording, make_specs, run_sweep
+    from scenarios import api
 
     pb = problem_arg(args)  # the scenario checked and loaded before any work
     name, sc = pb.scenario, pb.sc
@@ -38,74 +40,47 @@ def cmd_compare(args: argparse.Namespace) -> int:
     worlds = [check_world(w) for w in unique(parse_list(args.world, "--world"), "--world")]
     physics_budget(sc, worlds)
     overrides = parse_overrides(args.set)
-    per_method = overrides_per_method(methods, overrides)
+    for m in methods:
+        make_config(m, ())  # an unknown method fails here, naming --method
+    api.settings_per_method(methods, overrides)  # a bad --set fails here, naming it
     n_seeds = positive(args.seeds, "--seeds", MAX_SEEDS)
     seed_base = seed_value(args.seed_base, "--seed-base", n_seeds)
-    seeds = list(range(seed_base, seed_base + n_seeds))
     episodes = positive(args.episodes, "--episodes", MAX_EPISODES)
-    specs = make_specs(name, methods, seeds, episodes, worlds, per_method, **pb.spec_fields())
-    execute, kwargs = _backend(args)
-    from scenarios.runs.backends import Progress
-
+    _check_backend(args)
     record = record_path(args, name.rsplit("/", 1)[-1].removesuffix(".toml"), "compare")
-    recording = None
     if record is not None:
-        recording = SweepRecording(
-            record, every=positive(100 if args.record_every is None else args.record_every,
-                                   "--record-every"),
-            values_every=positive(args.record_values_every, "--record-values-every"),
-            detail_seeds=positive(args.record_seeds, "--record-seeds"))
-    print(f"{len(specs)} runs on {sc.name}, rewards {sc.rewards.label()}{rewards_note(args)}"
-          f"{starts_note(sc)}")
+        positive(100 if args.record_every is None else args.record_every, "--record-every")
+        positive(args.record_values_every, "--record-values-every")
+        positive(args.record_seeds, "--record-seeds")
+    print(f"{n_seeds * len(methods) * len(worlds)} runs on {sc.name}, rewards "
+          f"{sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
     compile_notice(len(methods))
     out = Path(args.out)
-    run_sweep(specs, out, execute, resume=args.resume, recording=recording,
-              progress=Progress(len(specs)), **kwargs)
+    cmp = api.compare(name, methods, worlds=worlds, fidelity=pb.fidelity, seeds=n_seeds,
+                      seed_base=seed_base, episodes=episodes,
+                      rewards="scenario" if pb.rewards is None else pb.rewards,
+                      settings=dict(overrides), jobs=args.jobs or os.cpu_count() or 1,
+                      backend=args.backend, address=args.address, out=out,
+                      resume=args.resume, record=record,
+                      record_every=100 if args.record_every is None else args.record_every,
+                      record_values_every=args.record_values_every,
+                      record_seeds=args.record_seeds, s_starts=pb.s_starts, start=pb.start,
+                      goal=pb.goal, progress=True)
     if record is not None:
         print(f"recording: {record}  (open: rnhql view {record})")
-    print((out / "summary.md").read_text())
+    print(cmp.summary())
     print(f"wrote {out / 'results.json'}, summary.md and figures")
     return 0
 
 
-def overrides_per_method(methods: list[str], overrides: tuple[tuple[str, float], ...]
-                         ) -> dict[str, tuple[tuple[str, float], ...]]:
-    """``--set`` applies to every method that has the field; an error only when none has it.
-
-    Every method's config is built here once, so a bad value fails before any run starts.
-    """
-    import dataclasses
-
-    from learning.registry import METHODS
-
-    make_config(methods[0], ())  # an unknown method name fails here, with the list of names
-    out: dict[str, tuple[tuple[str, float], ...]] = {}
-    for m in methods:
-        make_config(m, ())
-        fields = {f.name for f in dataclasses.fields(METHODS[m])}
-        out[m] = tuple((k, v) for k, v in overrides if k in fields)
-        make_config(m, out[m])
-    for k, _ in overrides:
-        if not any(k in dict(o) for o in out.values()):
-            raise ExperimentError("command line", f"--set {k}",
-                                  f"none of the methods ({', '.join(methods)}) has a field "
-                                  f"{k!r}", "use one of their fields: " + ", ".join(sorted(
-                                      {f.name for m in methods
-                                       for f in dataclasses.fields(METHODS[m])})))
-    return out
-
-
-def _backend(args: argparse.Namespace):
-    from scenarios.runs.backends import run_local, run_ray
-
+def _check_backend(args: argparse.Namespace) -> None:
+    """``--jobs``, ``--backend`` and ``--address``, checked (errors name the flag)."""
     if args.jobs is not None:
         positive(args.jobs, "--jobs", 4096)
     if args.backend == "local":
         if args.address is not None:
             raise InputError("command line", "--address", "only applies with --backend ray",
                              "add --backend ray, or drop --address")
-        return run_local, {"jobs": args.jobs or os.cpu_count() or 1}
-    if args.backend == "ray":
-        return run_ray, {"address": args.address, "num_cpus": args.jobs}
-    raise InputError("command line", "--backend", f"unknown backend {args.backend!r}",
-                     "use local or ray")
+    elif args.backend != "ray":
+        raise InputError("command line", "--backend", f"unknown backend {args.backend!r}",
+                         "use local or ray")

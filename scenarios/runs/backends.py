@@ -195,12 +195,19 @@ class _Collector:
         return done
 
 
-def _init_worker(counter: Any = None, parent: int | None = None) -> None:
-    """Pool worker initializer: the signals (:func:`_ignore_sigint`) and the sweep's shared
-    episode counter (:mod:`scenarios.runs.work`). ``parent``: the sweep's pid, to see
-    whether it died before this worker could ask to die with it."""
+def _init_worker(counter: Any = None, parent: int | None = None,
+                 external: dict[str, tuple[str, bool]] | None = None) -> None:
+    """Pool worker initializer: the signals (:func:`_ignore_sigint`), the sweep's shared
+    episode counter (:mod:`scenarios.runs.work`) and the methods the sweep's process
+    registered from outside the package (``external``: a worker started by spawn or
+    forkserver has only the built-in ones). ``parent``: the sweep's pid, to see whether it
+    died before this worker could ask to die with it."""
     _ignore_sigint(parent)
     work.share(counter)
+    if external:
+        from learning.registry import restore_external
+
+        restore_external(external)
 
 
 def disk_full_cause(exc: BaseException, spec: RunSpec) -> OSError | None:
@@ -275,20 +282,24 @@ def _end_workers(pool: ProcessPoolExecutor) -> None:
 
 
 def run_local(specs: Sequence[RunSpec], jobs: int = 1, on_result: OnResult = None,
-              progress: Progress | None = None, keep: Keep = None) -> list[dict[str, Any]]:
-    """Run specs in ``jobs`` worker processes (in this process when ``jobs == 1``).
+              progress: Progress | None = None, keep: Keep = None,
+              start_method: str | None = None) -> list[dict[str, Any]]:
+    """Run specs in ``jobs`` worker processes (in this process when ``jobs == 1``), started
+    by ``start_method`` (``"fork"``, ``"spawn"``, ``"forkserver"``; None: Python's default).
 
     Ctrl-C (``KeyboardInterrupt`` in this process) ends the workers at once and
     propagates; every run finished before it has already gone to ``on_result``.
     """
     try:
-        return _run_local(specs, jobs, _Collector(specs, on_result, progress, keep))
+        return _run_local(specs, jobs, _Collector(specs, on_result, progress, keep),
+                          start_method)
     finally:
         if progress is not None:
             progress.close()
 
 
-def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector) -> list[dict[str, Any]]:
+def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector,
+               start_method: str | None = None) -> list[dict[str, Any]]:
     tasks = plan_tasks(specs, max(jobs, 1))
     if jobs <= 1 or len(tasks) <= 1:
         for task in tasks:
@@ -302,8 +313,16 @@ def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector) -> list[dic
                     col.ok(i, rec)
         return col.result()
     counter = getattr(col.progress, "counter", None)
-    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker,
-                               initargs=(counter, os.getpid()))
+    import multiprocessing
+
+    from learning.registry import EXTERNAL
+
+    context = None if start_method is None else multiprocessing.get_context(start_method)
+    if context is not None and context.get_start_method() != "fork":
+        counter = None  # a lock made for forked workers cannot reach spawned ones: runs
+        #                 finished still count, episodes inside the workers do not
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker, mp_context=context,
+                               initargs=(counter, os.getpid(), dict(EXTERNAL)))
     try:
         with stop_signals_held():  # the workers are forked here (see stop_signals_held)
             futures = {pool.submit(run_task, [specs[i] for i in task]): task for task in tasks}

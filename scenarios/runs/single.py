@@ -1,0 +1,105 @@
+"""One run on its own, with what a single run offers beyond a sweep's: a checkpoint to save or
+resume (compiled methods' grid runs), and a recording of every detail.
+
+:func:`train_single` is what ``rnhql train`` and :func:`scenarios.api.train` run. Its
+record equals the sweep's record of the same spec (the same streams: a run of
+``rnhql compare`` with that seed), so a run here and in a comparison agree.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from learning.streams import streams
+from scenarios.runs.spec import (
+    ExperimentError,
+    RunOutcome,
+    RunSpec,
+    layout_digest,
+    make_config,
+    run_record,
+    scenario_digest,
+)
+from sim.files import atomic_write_bytes
+from sim.grid import TabularModel
+from sim.scenario import Scenario
+
+
+def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
+                 save: str | Path | None = None, resume: str | Path | None = None,
+                 record: str | None = None, record_every: int = 10,
+                 record_values_every: int = 300) -> dict[str, Any]:
+    """Train ``spec`` (its scenario already loaded as ``sc``, ``model``); its record."""
+    from learning.checkpoint import Checkpoint, checkpoint_bytes, load_checkpoint
+    from learning.geometry import geometry_of
+    from learning.plain import is_plain
+    from learning.plain_train import train_plain
+    from learning.train import epsilon_route_lengths, train_tabular
+
+    cfg = make_config(spec.method, spec.overrides)
+    plain = is_plain(cfg)
+    if plain and (save or resume):
+        raise ExperimentError("command line", "--save" if save else "--resume",
+                              f"{spec.method} is a plain-Python learner: its state is its own",
+                              "save it from your own code (api.train returns the policy), "
+                              "or drop the flag")
+    if resume and spec.world != "grid":
+        raise ExperimentError("command line", "--resume", "is only supported for grid runs",
+                              "drop --resume or use --world grid")
+    problem = {"scenario": scenario_digest(*spec.problem), "rewards": sc.rewards.label(),
+               "layout": layout_digest(spec.scenario, spec.start, spec.goal)}
+    rs = streams(spec.seed)  # the same streams as a run of `rnhql compare`
+    rng = rs.learner
+    checkpoint = None
+    if resume:
+        checkpoint = load_checkpoint(resume, spec.method, model.n_states, geometry_of(model))
+        checkpoint.check_problem(problem)
+    recorder = plan = observer = None
+    if record is not None:
+        from scenarios.recording.hooks import GridRecorder, RecordPlan
+        from scenarios.recording.recorder import Recorder
+
+        plan = RecordPlan(spec.episodes, every=record_every, values_every=record_values_every)
+        recorder = Recorder.create(record, sc, model, method=spec.method, config=cfg,
+                                   seed=spec.seed, world=spec.world,
+                                   fidelity=(spec.fidelity_spec.label
+                                             if spec.world == "physics" else None))
+        observer = GridRecorder(recorder, plan)
+    try:
+        if spec.world == "grid":
+            if plain:
+                result = train_plain(cfg, model, spec.episodes, rng, spec.test_every,
+                                     observer=observer, start_rng=rs.starts)
+            else:
+                result = train_tabular(cfg, model, spec.episodes, rng, spec.test_every,
+                                       resume=checkpoint, observer=observer,
+                                       start_rng=rs.starts)
+            if save:
+                ck = Checkpoint.of_result(result, rng, rs.starts)
+                ck.problem = problem
+                atomic_write_bytes(save, checkpoint_bytes(ck))
+        else:
+            from scenarios.runs.physics import log_final, train_physics
+
+            result = train_physics(cfg, sc, model, spec.episodes, rng, spec.test_every,
+                                   recorder=recorder, plan=plan, start_rng=rs.starts,
+                                   fidelity=spec.fidelity_spec, noise_rng=rs.physics,
+                                   grading_seed=spec.seed)
+            if save:
+                ck = Checkpoint.of_agent(result.agent)
+                ck.problem = problem
+                atomic_write_bytes(save, checkpoint_bytes(ck))
+            if recorder is not None:
+                log_final(recorder, result)
+        if recorder is not None and spec.world == "grid":
+            recorder.log_route("final route", result.final_route)
+    finally:
+        if recorder is not None:
+            recorder.close()  # also on Ctrl-C: the recording keeps what was logged
+    # the paper's epsilon-greedy test on the evaluation stream, as `rnhql compare` runs it
+    if spec.world == "grid":
+        eps_routes = epsilon_route_lengths(result.state, model, cfg.eps, rs.evaluation)
+    else:
+        eps_routes = result.grader.epsilon_routes(result.agent.state, cfg.eps, rs.evaluation)
+    return run_record(spec, cfg, RunOutcome.of(result, eps_routes))

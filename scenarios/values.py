@@ -1,0 +1,204 @@
+"""What :mod:`scenarios.api` returns: typed, frozen values, read from the records the tool
+writes (a run's ``results.json`` entry), so a script and the CLI see the same figures.
+
+- :class:`Run`: one trained run (one method, world, seed);
+- :class:`Comparison`: a sweep's runs, its ``results.json`` payload, and how to write it;
+- :class:`Grade`: a policy driven from S at a fidelity, as the tool grades its own;
+- :class:`Optimum`: the yardsticks: the grid's BFS optimum, the physics world's at
+  ``exact``, V* at the fidelity where it is defined, the disc's continuous path.
+
+In a Jupyter notebook a value with a recording shows it inline (:meth:`Run.show`; needs
+the ``rnhql[notebook]`` extra, Rerun's notebook viewer).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from sim.scenario import Scenario
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, copy=True)
+    a.setflags(write=False)
+    return a
+
+
+def _readonly(d: Mapping[str, Any]) -> Mapping[str, Any]:
+    return MappingProxyType(dict(d))
+
+
+def show_recording(path: Path | None, width: int = 1000, height: int = 640) -> Any:
+    """Rerun's notebook viewer on ``path`` (the ``rnhql[notebook]`` extra)."""
+    if path is None:
+        raise ValueError("this value has no recording: pass record=True (or a .rrd path)")
+    try:
+        from rerun.notebook import Viewer
+    except ImportError:
+        raise ImportError("showing a recording in a notebook needs Rerun's notebook viewer: "
+                          "pip install 'rnhql[notebook]'") from None
+    viewer = Viewer(width=width, height=height)
+    viewer._flush_hook(Path(path).read_bytes())  # the viewer's own way in for .rrd bytes
+    return viewer
+
+
+@dataclass(frozen=True, eq=False)
+class Run:
+    """One training run, from its ``results.json`` record (:attr:`record`, read-only)."""
+
+    method: str  # the method's name in the sweep: "rnh-ql+", or "module:Class"
+    method_name: str  # how tables name it
+    world: str  # "grid" or "physics"
+    fidelity: str | None  # the physics world's rung (None: a grid run)
+    seed: int
+    episodes: int
+    final_route_length: int | None  # the final greedy test from S [moves]; None: G missed
+    optimal_route_length: int  # the optimum of the world the run was graded in [moves]
+    episodes_to_stable_optimal: int | None  # None: never stably optimal
+    success_rate: float  # share of training episodes that reached G
+    policy: np.ndarray  # int[n_states]: the final greedy action of every cell (read-only)
+    p_goal: float | None  # physics above exact: P(G) of the final policy's drives
+    p_goal_ci95: tuple[float, float] | None
+    wall_time_s: float  # [s]
+    record: Mapping[str, Any] = field(repr=False)  # the results.json entry
+    recording: Path | None = None  # the .rrd it was recorded to, if it was
+
+    @property
+    def final_route_optimal(self) -> bool:
+        return self.final_route_length == self.optimal_route_length
+
+    @classmethod
+    def from_record(cls, rec: Mapping[str, Any], recording: Path | None = None) -> Run:
+        from scenarios.runs.spec import policy_from_text
+
+        pol = rec.get("final_policy") or {}
+        above = rec.get("world") == "physics" and (rec.get("fidelity") or "exact") != "exact"
+        length = int(rec["final_route_length"])
+        return cls(
+            method=str(rec["method"]), method_name=str(rec["method_name"]),
+            world=str(rec["world"]), fidelity=rec.get("fidelity"), seed=int(rec["seed"]),
+            episodes=len(rec["steps_per_episode"]),
+            final_route_length=None if length < 0 else length,
+            optimal_route_length=int(rec["optimal_route_length"]),
+            episodes_to_stable_optimal=rec.get("episodes_to_stable_optimal"),
+            success_rate=float(rec["success_rate"]),
+            policy=_frozen(policy_from_text(rec["greedy_policy"])),
+            p_goal=float(pol["p_goal"]) if above and pol else None,
+            p_goal_ci95=tuple(pol["p_goal_ci95"]) if above and pol else None,
+            wall_time_s=float(rec["wall_time_s"]), record=_readonly(rec),
+            recording=None if recording is None else Path(recording))
+
+    def show(self, width: int = 1000, height: int = 640) -> Any:
+        """The run's recording in a notebook (Rerun's notebook viewer)."""
+        return show_recording(self.recording, width, height)
+
+    def __str__(self) -> str:
+        where = self.world if self.fidelity is None else f"{self.world} at {self.fidelity}"
+        route = ("G not reached" if self.final_route_length is None
+                 else f"{self.final_route_length} moves")
+        stable = ("never" if self.episodes_to_stable_optimal is None
+                  else f"after {self.episodes_to_stable_optimal} episodes")
+        p = "" if self.p_goal is None else f", P(G) {self.p_goal:.2f}"
+        return (f"{self.method_name} ({where}, seed {self.seed}): final route {route} "
+                f"(optimal {self.optimal_route_length}){p}, stably optimal {stable}")
+
+
+@dataclass(frozen=True, eq=False)
+class Comparison:
+    """A sweep: its runs (spec order) and its ``results.json`` payload (read-only)."""
+
+    scenario: Scenario  # as run (rewards and starts applied)
+    runs: list[Run]
+    results: Mapping[str, Any] = field(repr=False)
+    out: Path | None = None  # where its files were written (None: nowhere yet)
+    recording: Path | None = None
+
+    @property
+    def methods(self) -> list[str]:
+        return list(dict.fromkeys(r.method for r in self.runs))
+
+    def of(self, method: str | type, world: str = "grid") -> list[Run]:
+        """The runs of one method (a name or the learner class given) in one world."""
+        name = method if isinstance(method, str) else _method_key(method)
+        return [r for r in self.runs if r.method == name and r.world == world]
+
+    def summary(self) -> str:
+        """The text of ``summary.md``: medians with quartiles and intervals, the verdict."""
+        from scenarios.runs.results import summary_markdown
+
+        return summary_markdown(dict(self.results), self.methods)
+
+    def save(self, out: str | Path, figures: bool = True) -> Path:
+        """Write ``results.json``, ``summary.md`` and (``figures``) the figures to ``out``, as
+        ``rnhql compare --out`` does; returns the folder."""
+        from scenarios.api import save_comparison
+
+        return save_comparison(self, Path(out), figures)
+
+    def show(self, width: int = 1000, height: int = 640) -> Any:
+        """The comparison's recording in a notebook (Rerun's notebook viewer)."""
+        return show_recording(self.recording, width, height)
+
+    def __str__(self) -> str:
+        return self.summary()
+
+
+def _method_key(cls: type) -> str:
+    from learning.config import MethodConfig
+    from learning.plain import located_name
+
+    return cls.cli if issubclass(cls, MethodConfig) else located_name(cls)
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """The yardsticks of a scenario at a fidelity."""
+
+    fidelity: str
+    grid_route_length: int  # BFS moves S -> G on the grid (-1: none)
+    physics_route_length: int  # the physics world's at exact [primitives] (-1: none)
+    expected_primitives: float | None  # V*(S) at the fidelity (None: not defined there)
+    p_goal_within_budget: float | None  # P(G) within the episode under V*'s policy
+    budget: int  # the episode's primitives
+    continuous_route_m: float | None  # the disc's any-angle path [m]
+
+    def __str__(self) -> str:
+        v = ("undefined (hidden state)" if self.expected_primitives is None
+             else "inf" if math.isinf(self.expected_primitives)
+             else f"{self.expected_primitives:.2f} expected primitives")
+        return (f"optimum at {self.fidelity}: V*(S) {v}; exact physics "
+                f"{self.physics_route_length}, grid {self.grid_route_length} moves")
+
+
+@dataclass(frozen=True)
+class Grade:
+    """A policy driven from S at a fidelity, as the tool grades its own final policies."""
+
+    fidelity: str
+    drives: int  # drives from S (1 at exact: every drive is the same)
+    seed: int  # the drives' noise streams (a run's grading uses its seed)
+    p_goal: float  # share of drives that reached G
+    p_goal_ci95: tuple[float, float]  # Wilson 95 % interval
+    mean_primitives: float | None  # over the drives that reached G
+    median_primitives: float | None  # over all drives, a miss counting as infinite
+    contacts_per_drive: float
+    grid_route_length: int | None  # the policy's greedy walk on the grid (None: G missed)
+    optimum: Optimum | None  # V* and the other yardsticks (None: not asked for)
+    optimal: bool | None  # matches V* within its tolerance (None: V* not defined)
+    record: Mapping[str, Any] = field(repr=False, default_factory=dict)  # final_policy fields
+
+    def __str__(self) -> str:
+        lo, hi = self.p_goal_ci95
+        prims = "—" if self.mean_primitives is None else f"{self.mean_primitives:.1f}"
+        tail = "" if self.optimal is None else (", optimal at this fidelity" if self.optimal
+                                                else ", not optimal at this fidelity")
+        return (f"at {self.fidelity}, {self.drives} drive(s): P(G) {self.p_goal:.2f} "
+                f"[{lo:.2f}, {hi:.2f}], {prims} primitives, {self.contacts_per_drive:.1f} "
+                f"contacts per drive{tail}")

@@ -34,6 +34,10 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
 
 
+# what a single env calls an attribute -> the name a native vector env keeps it under
+SHARED_ALIASES = {"rewards": "_rewards", "steps_per_episode": "max_episode_steps"}
+
+
 def _row(info: dict[str, Any], i: int) -> dict[str, Any]:
     """Sub-env ``i``'s entries of a vector ``info`` (keys whose ``_key`` mask is set)."""
     out: dict[str, Any] = {}
@@ -112,9 +116,22 @@ class SB3VecEnv(VecEnv):
                 for i in self._get_indices(indices)]
 
     def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
+        """Sub-env ``i``'s attribute for each index, as ``DummyVecEnv`` answers it; on a
+        native vector env (one object for every robot) what the robots share, by the
+        single env's names (``scenario``, ``rewards``, ``steps_per_episode``, ...)."""
         if attr_name == "render_mode":
             return [None for _ in self._get_indices(indices)]
-        return [getattr(t, attr_name) for t in self._targets(indices)]
+        out = []
+        for t in self._targets(indices):
+            name = attr_name
+            if not hasattr(t, name) and hasattr(t, SHARED_ALIASES.get(name, "")):
+                name = SHARED_ALIASES[name]
+            if not hasattr(t, name):
+                raise AttributeError(f"{type(t).__name__} has no attribute {attr_name!r}; "
+                                     "it answers scenario, model, config, fidelity, start, "
+                                     f"{', '.join(SHARED_ALIASES)} and its own attributes")
+            out.append(getattr(t, name))
+        return out
 
     def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
         for t in self._targets(indices):
@@ -122,6 +139,20 @@ class SB3VecEnv(VecEnv):
 
     def env_method(self, method_name: str, *method_args: Any, indices: VecEnvIndices = None,
                    **method_kwargs: Any) -> list[Any]:
+        """Call a method of each indexed sub-env. On a native vector env ``reset`` resets
+        only the indexed robots (``reset_mask``) and returns each one's ``(obs, info)``, as
+        the single envs' resets would."""
+        if method_name == "reset" and getattr(self.venv.unwrapped, "envs", None) is None:
+            idx = list(self._get_indices(indices))
+            mask = np.zeros(self.num_envs, bool)
+            mask[idx] = True
+            opts = dict(method_kwargs.pop("options", None) or {})
+            seed = method_kwargs.pop("seed", None)
+            if method_args or method_kwargs:
+                raise TypeError("reset takes only seed= and options=")
+            seeds = None if seed is None else [seed if m else None for m in mask]
+            obs, info = self.venv.reset(seed=seeds, options={**opts, "reset_mask": mask})
+            return [(obs[i], _row(info, i)) for i in idx]
         return [getattr(t, method_name)(*method_args, **method_kwargs)
                 for t in self._targets(indices)]
 

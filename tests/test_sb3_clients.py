@@ -23,10 +23,17 @@ SMALL = Scenario("small", 6.0, 6.0, (1, 1), (4, 4), obstacles=(Circle(3.0, 2.0, 
                  steps_per_episode=15)
 
 
+def _wheel_level(name: str) -> bool:
+    """A rung DiffDrive takes: wheel noise only (it refuses the primitive-level knobs)."""
+    f = PRESETS[name]
+    return not (f.biased or f.open_loop or f.localisation)
+
+
 @pytest.mark.parametrize("rewards", list(REWARD_SCHEMES))
 @pytest.mark.parametrize(("env_id", "fidelity"),
                          [("rnhql/GridRoute-v0", None)]
-                         + [(i, f) for i in IDS[1:] for f in PRESETS])
+                         + [("rnhql/PhysicsRoute-v0", f) for f in PRESETS]
+                         + [("rnhql/DiffDrive-v0", f) for f in PRESETS if _wheel_level(f)])
 def test_sb3_check_env_every_id_fidelity_and_scheme(env_id, fidelity, rewards):
     kw = {} if fidelity is None else {"fidelity": fidelity}
     check_env(gym.make(env_id, scenario="paper-40", rewards=rewards, **kw), warn=True)
@@ -92,6 +99,28 @@ def test_adapter_equals_dummy_vec_env(env_id):
             assert f[3][i]["state"] == s[3][i]["state"]
     assert dones >= 2
     fast.close()
+
+
+def test_adapter_answers_shared_attributes_and_resets_one_robot():
+    """get_attr answers what DummyVecEnv answers; env_method("reset", indices=[i]) on a native
+    vector env resets robot i alone."""
+    from sim.sb3_vec import SB3VecEnv
+
+    native = SB3VecEnv(gym.make_vec("rnhql/PhysicsRoute-v0", 3,
+                                    vectorization_mode="vector_entry_point", scenario=SMALL,
+                                    autoreset_mode="SameStep"))
+    dummy = DummyVecEnv([lambda: gym.make("rnhql/PhysicsRoute-v0", scenario=SMALL)] * 3)
+    for attr in ("scenario", "rewards", "steps_per_episode", "fidelity"):
+        assert native.get_attr(attr) == dummy.get_attr(attr), attr
+    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
+        native.get_attr("nothing")
+    start = native.reset()
+    moved = native.step(np.array([0, 0, 0]))[0]
+    assert (moved != start).all()
+    (obs, info), = native.env_method("reset", indices=[1])
+    now = native.venv.unwrapped._obs
+    assert obs == start[1] and info["state"] == start[1]
+    assert now[1] == start[1] and now[0] == moved[0] and now[2] == moved[2]
 
 
 def test_adapter_refuses_other_autoreset_modes():

@@ -79,6 +79,22 @@ def optimum(d: dict[str, Any]) -> str:
             f"{d['build_s']:.0f} s |\n")
 
 
+@renderer("plain-learner")
+def plain_learner(d: dict[str, Any]) -> str:
+    """A plain-Python learner's cost per step, and the compiled runs' pace beside it."""
+    g, ph = d["grid"], d["physics"]
+    return (f"On `{d['scenario']}` (goal-only): the Python port of ST-QL against the compiled "
+            f"`st-ql`, {d['episodes']} episodes from scratch, best of {d['repeats']}; physics "
+            f"at `exact`, {ph['seeds']} runs of {ph['episodes']} episodes per method, one "
+            "worker, primitives per second of each run's own training time.\n\n"
+            "| | compiled `st-ql` | Python port | compiled `st-ql` in a sweep with the port |\n"
+            "|---|---|---|---|\n"
+            f"| grid env steps/s | {g['st-ql']:,.0f} | {g['python port']:,.0f} "
+            f"({g['slowdown']:.0f}x slower) | |\n"
+            f"| physics primitives/s | {ph['st-ql alone']:,.0f} | {ph['python port']:,.0f} | "
+            f"{ph['st-ql beside the port']:,.0f} |\n")
+
+
 @renderer("memory")
 def memory(d: dict[str, Any]) -> str:
     """Peak RSS and checkpoint size per method and map size."""

@@ -102,7 +102,7 @@ def machine_load() -> dict[str, Any]:
 
 
 TIMED_KINDS = {"scaling", "scaling-maps", "heldout", "physics-batch", "paper-claims", "optimum",
-               "memory"}
+               "memory", "plain-learner"}
 
 
 def busy_note(doc: dict[str, Any]) -> str:

@@ -35,8 +35,8 @@ def same_runs(a: dict, b: dict, ignore: tuple[str, ...] = ()) -> list[str]:
 
 def test_a_python_port_of_st_ql_equals_compiled_st_ql_in_grid_and_physics():
     """The plain learner runs through the same machinery: equal draws, equal runs, figure for
-    figure (grid, physics at exact, physics at noisy, all in one sweep and one physics
-    batch with the compiled method)."""
+    figure (grid, physics at exact, physics at noisy, in one sweep with the compiled
+    method)."""
     cmp = api.compare("paper-40", ["st-ql", PORT], worlds=("grid", "physics"), seeds=2,
                       episodes=20, jobs=1)
     for world in ("grid", "physics"):

@@ -32,14 +32,16 @@ def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
     on a cold numba cache the workers then compile different methods' kernels side by
     side instead of each compiling the same one (measured on the main command: see
     README). Results do not depend on the order: each run has its own seeds, and
-    results.json lists runs in spec order."""
+    results.json lists runs in spec order. Plain-Python learners batch apart from the
+    compiled methods: every batched step waits for its slowest learner, and a compiled
+    method's batch must not run at a Python learner's pace (``scenarios.bench.plain``)."""
     tasks: list[list[int]] = []
     groups: dict[tuple[Any, ...], list[int]] = {}
     singles: list[int] = []
     for i, sp in enumerate(specs):
         if batchable(sp):
-            groups.setdefault((sp.problem, sp.episodes, sp.test_every, sp.fidelity_spec),
-                              []).append(i)
+            groups.setdefault((sp.problem, sp.episodes, sp.test_every, sp.fidelity_spec,
+                               in_python(sp.method)), []).append(i)
         else:
             singles.append(i)
     tasks += [[i] for i in sorted(singles, key=lambda i: (specs[i].seed, i))]
@@ -48,6 +50,15 @@ def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
         n_tasks = max(min(jobs, len(idx)), -(-len(idx) // MAX_BATCH))
         tasks += [t for t in (idx[k::n_tasks] for k in range(n_tasks)) if t]
     return tasks
+
+
+def in_python(method: str) -> bool:
+    """Whether ``method`` is a plain-Python learner (:mod:`learning.plain`)."""
+    from learning.plain import PlainConfig
+    from learning.registry import is_located
+    from scenarios.runs.spec import method_class
+
+    return is_located(method) and issubclass(method_class(method), PlainConfig)
 
 
 def run_physics_batch(specs: Sequence[Any]) -> list[dict[str, Any]]:

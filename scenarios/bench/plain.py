@@ -1,0 +1,119 @@
+"""What a plain-Python learner costs, and that it costs the compiled methods nothing.
+
+Run: ``python -m scenarios.bench.plain [--artifact bench]`` (prints JSON; with
+``--artifact`` also writes ``docs/results/plain-learner.bench.json``, which
+docs/python-api.md renders). On ``paper-50``, goal-only rewards:
+
+* grid: env steps/s of the Python port of ST-QL (``tests/plain_learners/st_ql.py``, the
+  learner every per-run figure of ``st-ql`` is tested against) through
+  :func:`learning.plain_train.train_plain`, and of the compiled ``st-ql`` through the fused
+  kernel, the same ``--episodes`` from scratch, best of ``--repeats``;
+* physics at ``exact``: a sweep of ``--seeds`` compiled ``st-ql`` runs alone, then the
+  same sweep with as many runs of the Python port beside them (one worker): the compiled
+  runs' primitives per second of their own training time in both, and the port's.
+  A sweep batches Python learners apart from compiled ones
+  (:func:`scenarios.runs.physics_batch.plan_tasks`), so the compiled runs keep their pace.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+SCENARIO = "paper-50"
+PORT = "tests.plain_learners.st_ql:STQLPort"
+
+
+def _port_importable() -> None:
+    """The port lives in the source tree's tests (not in the wheel): run from a checkout."""
+    root = Path(__file__).resolve().parents[2]
+    if str(root) not in sys.path:
+        sys.path.insert(0, str(root))
+
+
+def grid_steps_per_s(method: str, episodes: int, repeats: int) -> float:
+    """Best-of-``repeats`` env steps/s of a fresh learner trained ``episodes`` episodes."""
+    from learning.plain import is_plain
+    from learning.plain_train import train_plain
+    from learning.train import train_tabular
+    from scenarios.runs.spec import load, make_config
+
+    _, model = load(SCENARIO, rewards="goal-only")
+    cfg = make_config(method)
+    train = train_plain if is_plain(cfg) else train_tabular
+    train(cfg, model, 1, np.random.default_rng(0))  # compile / import outside the clock
+    best = 0.0
+    for r in range(repeats):
+        t0 = time.perf_counter()
+        res = train(cfg, model, episodes, np.random.default_rng(r))
+        best = max(best, res.env_steps / (time.perf_counter() - t0))
+    return best
+
+
+def physics_rates(seeds: int, episodes: int, with_port: bool) -> dict[str, float]:
+    """Primitives per second of each method's own training time in a physics sweep."""
+    from scenarios.experiments.compare import make_specs
+    from scenarios.runs.backends import run_local
+
+    methods = ["st-ql", PORT] if with_port else ["st-ql"]
+    specs = make_specs(SCENARIO, methods, list(range(seeds)), episodes, ["physics"],
+                       rewards="goal-only")
+    records = run_local(specs, jobs=1)
+    out: dict[str, float] = {}
+    for m in methods:
+        recs = [r for r in records if r["method"] == m]
+        prims = sum(r["env_steps"] for r in recs)
+        out[m] = prims / sum(r["wall_time_s"] for r in recs)
+    return out
+
+
+def measure(episodes: int, repeats: int, seeds: int, physics_episodes: int) -> dict[str, Any]:
+    _port_importable()
+    compiled = grid_steps_per_s("st-ql", episodes, repeats)
+    port = grid_steps_per_s(PORT, episodes, repeats)
+    physics_rates(2, 2, True)  # warm: compile, build the physics model
+    alone = physics_rates(seeds, physics_episodes, False)
+    beside = physics_rates(seeds, physics_episodes, True)
+    return {
+        "scenario": SCENARIO, "episodes": episodes, "repeats": repeats,
+        "grid": {"st-ql": compiled, "python port": port, "slowdown": compiled / port},
+        "physics": {"seeds": seeds, "episodes": physics_episodes,
+                    "st-ql alone": alone["st-ql"], "st-ql beside the port": beside["st-ql"],
+                    "python port": beside[PORT]},
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m scenarios.bench.plain", description=__doc__)
+    p.add_argument("--episodes", type=int, default=3000, help="grid episodes per run")
+    p.add_argument("--repeats", type=int, default=3, help="grid runs, the best kept")
+    p.add_argument("--seeds", type=int, default=4, help="physics runs per method")
+    p.add_argument("--physics-episodes", type=int, default=30, help="physics episodes per run")
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/plain-learner.NAME.json")
+    a = p.parse_args(argv)
+    if a.artifact is not None:
+        from scenarios.artifacts import check_artifact_name
+
+        check_artifact_name(p, a.artifact)
+    data = measure(a.episodes, a.repeats, a.seeds, a.physics_episodes)
+    print(json.dumps(data, indent=1))
+    if a.artifact is not None:
+        from scenarios.artifacts import write_artifact
+
+        cmd = (f"python -m scenarios.bench.plain --episodes {a.episodes} --repeats {a.repeats} "
+               f"--seeds {a.seeds} --physics-episodes {a.physics_episodes} "
+               f"--artifact {a.artifact}")
+        write_artifact(f"plain-learner.{a.artifact}", cmd, ["grid", "physics-exact"], data,
+                       study=__file__)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -33,7 +33,6 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices
 
-
 # what a single env calls an attribute -> the name a native vector env keeps it under
 SHARED_ALIASES = {"rewards": "_rewards", "steps_per_episode": "max_episode_steps"}
 

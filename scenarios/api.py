@@ -236,7 +236,7 @@ def _record(fn: str, record: Any, name: str, rest: str) -> str | None:
 
 def _problem(fn: str, scenario: str | Scenario, start: Cell | None, goal: Cell | None,
              rewards: str | None, s_starts: float | None, worlds: Sequence[str]):
-    from scenarios.cli.args import physics_budget
+    from scenarios.runs.spec import physics_budget
 
     if s_starts is not None and not (isinstance(s_starts, int | float) and
                                      0.0 <= s_starts < 1.0):
@@ -418,28 +418,6 @@ def _out_dir(out: str | Path | None) -> Iterator[Path]:
         return
     with tempfile.TemporaryDirectory(prefix="rnhql-sweep-") as tmp:
         yield Path(tmp)
-
-
-def save_comparison(cmp: Comparison, out: Path, figures: bool = True) -> Path:
-    """:meth:`Comparison.save`: the files ``rnhql compare --out`` writes, each atomically."""
-    from scenarios.runs.outdir import check_out_dir
-    from scenarios.runs.results import write_results
-
-    check_out_dir(out, "out")
-    results = dict(cmp.results)
-    write_results(out, results, cmp.methods)
-    if figures:
-        from scenarios.experiments.compare import ctrl_c_held
-        from scenarios.figures.plots import all_figures
-
-        _, model = load(*_problem_key(cmp))
-        with ctrl_c_held():
-            all_figures(results, cmp.scenario, model, out)
-    return out
-
-
-def _problem_key(cmp: Comparison) -> tuple[Any, ...]:
-    return cmp.scenario, None, None, None, None
 
 
 # ---------------------------------------------------------------- grade, optimum

@@ -138,9 +138,20 @@ class Comparison:
     def save(self, out: str | Path, figures: bool = True) -> Path:
         """Write ``results.json``, ``summary.md`` and (``figures``) the figures to ``out``, as
         ``rnhql compare --out`` does; returns the folder."""
-        from scenarios.api import save_comparison
+        from scenarios.experiments.compare import ctrl_c_held
+        from scenarios.figures.plots import all_figures
+        from scenarios.runs.outdir import check_out_dir
+        from scenarios.runs.results import write_results
+        from scenarios.runs.spec import load
 
-        return save_comparison(self, Path(out), figures)
+        out = check_out_dir(Path(out), "out")
+        results = dict(self.results)
+        write_results(out, results, self.methods)
+        if figures:
+            _, model = load(self.scenario)
+            with ctrl_c_held():
+                all_figures(results, self.scenario, model, out)
+        return out
 
     def show(self, width: int = 1000, height: int = 640) -> Any:
         """The comparison's recording in a notebook (Rerun's notebook viewer)."""

@@ -14,7 +14,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from scenarios.cli.paths import RECORD_DEFAULT
-from scenarios.runs.spec import WORLDS, ExperimentError, load
+from scenarios.runs.spec import (  # noqa: F401  (physics_budget: re-exported)
+    MAX_PHYSICS_STEPS_PER_EPISODE,
+    WORLDS,
+    ExperimentError,
+    load,
+    physics_budget,
+)
 from sim.errors import InputError
 
 if TYPE_CHECKING:
@@ -251,9 +257,6 @@ def check_world(world: str) -> str:
 MAX_EPISODES = 10_000_000
 MAX_SEEDS = 10_000
 MAX_SEED = 2**63 - 1
-# a physics episode drives a primitive per step (milliseconds each): 100,000 steps is
-# minutes per episode, far beyond any arena's longest route (ost003d's budget is 1,704)
-MAX_PHYSICS_STEPS_PER_EPISODE = 100_000
 
 
 def positive(value: int, flag: str, limit: int | None = None) -> int:
@@ -275,16 +278,6 @@ def seed_value(value: int, flag: str, count: int = 1) -> int:
         raise ExperimentError("command line", flag, f"is {value}, beyond the largest seed "
                               f"{MAX_SEED}", f"pass e.g. {flag} 0")
     return value
-
-
-def physics_budget(sc, worlds: list[str] | tuple[str, ...]) -> None:
-    """A physics run's episode length within :data:`MAX_PHYSICS_STEPS_PER_EPISODE` (the
-    grid's own limit is the scenario's, far larger: a grid step is nanoseconds)."""
-    if "physics" in worlds and sc.steps_per_episode > MAX_PHYSICS_STEPS_PER_EPISODE:
-        raise ExperimentError(sc.source, "steps_per_episode", f"{sc.steps_per_episode:,} "
-                              f"steps is more than the limit of "
-                              f"{MAX_PHYSICS_STEPS_PER_EPISODE:,} for a physics run",
-                              f"use at most {MAX_PHYSICS_STEPS_PER_EPISODE:,} (or --world grid)")
 
 
 def unique(items: list[str], flag: str) -> list[str]:

@@ -23,6 +23,9 @@ from sim.scenario import Cell, Scenario, rewards_from_text, validate_shape
 from sim.scenario_io import resolve_scenario
 
 WORLDS = ("grid", "physics")
+# a physics episode drives a primitive per step (milliseconds each): 100,000 steps is
+# minutes per episode, far beyond any arena's longest route (ost003d's budget is 1,704)
+MAX_PHYSICS_STEPS_PER_EPISODE = 100_000
 
 
 class ExperimentError(InputError):
@@ -319,3 +322,13 @@ def _median_route(lengths: np.ndarray) -> float | None:
 
     v = quantile([None if x < 0 else float(x) for x in lengths], 0.5)
     return None if not np.isfinite(v) else v
+
+
+def physics_budget(sc, worlds: list[str] | tuple[str, ...]) -> None:
+    """A physics run's episode length within :data:`MAX_PHYSICS_STEPS_PER_EPISODE` (the
+    grid's own limit is the scenario's, far larger: a grid step is nanoseconds)."""
+    if "physics" in worlds and sc.steps_per_episode > MAX_PHYSICS_STEPS_PER_EPISODE:
+        raise ExperimentError(sc.source, "steps_per_episode", f"{sc.steps_per_episode:,} "
+                              f"steps is more than the limit of "
+                              f"{MAX_PHYSICS_STEPS_PER_EPISODE:,} for a physics run",
+                              f"use at most {MAX_PHYSICS_STEPS_PER_EPISODE:,} (or --world grid)")

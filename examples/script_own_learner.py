@@ -5,8 +5,8 @@ compiled methods (docs/python-api.md).
 The learner here is Q-learning with a count-based exploration bonus (an optimism of
 ``beta / sqrt(n(s, a))`` added to the greedy choice, Strehl & Littman 2008 in spirit):
 some 30 lines. From the command line the same comparison is
-``rnhql compare paper-40 --methods rnh-ql+,st-ql,mymodule:CountBonusQ`` with this class
-in ``mymodule.py`` on ``PYTHONPATH``.
+``rnhql compare paper-40 --methods rnh-ql+,st-ql,mymodule:CountBonusQ --out out/count`` with
+this class in ``mymodule.py`` on ``PYTHONPATH``.
 
 Run as pasted: ``python examples/script_own_learner.py`` (about a minute);
 ``RNHQL_EXAMPLE_SCALE=0.01`` shrinks the budget (CI does).

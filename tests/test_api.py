@@ -235,3 +235,19 @@ def test_a_sweep_with_spawned_workers_runs_plain_and_external_methods():
     port, compiled = cmp.of(PORT)[0], cmp.of("st-ql")[0]
     assert same_runs(dict(port.record), dict(compiled.record), NAMING) == []
     assert cmp.of(mod.Throwaway.cli)[0].method_name == "THROWAWAY-QL"
+
+
+def test_a_plain_learners_run_records_and_shows_in_a_notebook(tmp_path):
+    """A plain learner's run is recorded like any (its q shown as the values); in Jupyter a
+    Run shows its recording inline (Rerun's notebook viewer, the notebook extra)."""
+    from tests.plain_learners.st_ql import STQLPort
+
+    rrd = tmp_path / "port.rrd"
+    run = api.train("paper-40", STQLPort, episodes=20, record=rrd)
+    assert run.recording == rrd and rrd.stat().st_size > 10_000
+    pytest.importorskip("rerun_notebook")
+    viewer = run.show()
+    assert type(viewer).__name__ == "Viewer"
+    bare = api.train("paper-40", "st-ql", episodes=5)
+    with pytest.raises(ValueError, match="no recording: pass record=True"):
+        bare.show()

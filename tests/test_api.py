@@ -251,3 +251,13 @@ def test_a_plain_learners_run_records_and_shows_in_a_notebook(tmp_path):
     bare = api.train("paper-40", "st-ql", episodes=5)
     with pytest.raises(ValueError, match="no recording: pass record=True"):
         bare.show()
+
+
+def test_a_sweep_with_a_plain_learner_resumes(tmp_path, capsys):
+    """--resume keeps a plain learner's finished runs like any (its key names module:Class)."""
+    out = tmp_path / "sweep"
+    first = api.compare("paper-40", ["st-ql", PORT], seeds=2, episodes=10, jobs=1, out=out)
+    again = api.compare("paper-40", ["st-ql", PORT], seeds=2, episodes=10, jobs=1, out=out,
+                        resume=True)
+    assert "4 of 4 runs already finished" in capsys.readouterr().err
+    assert [dict(r.record) for r in again.runs] == [dict(r.record) for r in first.runs]

@@ -83,14 +83,37 @@ class MethodConfig:
     gamma: float = 0.95  # discount per step
 
     params_type: ClassVar[type] = BaseParams  # what params() returns (see params_tuple)
+    # fields a method inherits from the config it extends but whose rules do not read them:
+    # any value but the default is refused (a run must never record a setting it ignored)
+    IGNORED: ClassVar[tuple[str, ...]] = ()
 
     def __post_init__(self) -> None:
+        for name in self.IGNORED:
+            default = next(f.default for f in dataclasses.fields(self) if f.name == name)
+            if getattr(self, name) != default:
+                raise ValueError(f"{type(self).__name__}.{name} = {getattr(self, name)!r}: "
+                                 f"{self.cli}'s rules do not read {name}; leave it at "
+                                 f"{default!r}, or use {self.reader_of(name)}")
         for f in dataclasses.fields(self):
             if f.name in _VALID:
                 ok, what = _VALID[f.name]
                 v = getattr(self, f.name)
                 if v is not None and not ok(v):
                     raise ValueError(f"{type(self).__name__}.{f.name} = {v!r} must be {what}")
+
+    @classmethod
+    def reader_of(cls, name: str) -> str:
+        """The nearest config this one extends whose rules read ``name`` (its CLI name)."""
+        for base in cls.__mro__[1:]:
+            if isinstance(base, type) and issubclass(base, MethodConfig) and \
+                    name not in base.IGNORED and base.cli != "?":
+                return base.cli
+        return "a method that has it"
+
+    @classmethod
+    def settable(cls) -> tuple[str, ...]:
+        """The fields ``--set`` may change: every field but the :attr:`IGNORED` ones."""
+        return tuple(f.name for f in dataclasses.fields(cls) if f.name not in cls.IGNORED)
 
     def params(self) -> NamedTuple:
         """The fields the compiled rules read, as a named tuple of float/int/bool scalars

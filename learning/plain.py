@@ -60,7 +60,10 @@ class PlainConfig(MethodConfig):
     ``--set``: the learner's own settings are the learner's."""
 
     learner: ClassVar[type] = object
-    settable: ClassVar[tuple[str, ...]] = ()
+
+    @classmethod
+    def settable(cls) -> tuple[str, ...]:
+        return ()
 
     def record_fields(self) -> dict[str, object]:
         return {"learner": self.cli, "eps": self.eps}

@@ -59,6 +59,8 @@ class RNHQLPlusAblation(RNHQLPlus):
 
     name: ClassVar[str] = "RNH-QL+ ablation"
     cli: ClassVar[str] = "rnh-ql+ablation"
+    # rnh-ql+'s options its rules do not have (refused at any value but the default)
+    IGNORED: ClassVar[tuple[str, ...]] = ("model_acting", "model_test", "explore_steps")
     spacing: int = 4  # RBF centre spacing [cells]; 0: the paper's k x k lattice over the arena
     k: int = 10  # centres per axis when spacing = 0
     sigma: float = 1.0  # Gaussian width [lattice spacings]
@@ -82,9 +84,6 @@ class RNHQLPlusAblation(RNHQLPlus):
             raise ValueError(f"RNHQLPlusAblation.gamma = {self.gamma!r} must be < 1 with "
                              f"v_target = {self.v_target} (the optimistic model's value "
                              "discounts: use v_target 0-2 for gamma = 1)")
-        if self.model_acting:
-            raise ValueError(f"RNHQLPlusAblation.model_acting = {self.model_acting!r}: the "
-                             "ablation's rules do not have it; use rnh-ql+")
         if self.sweeping and (self.v_target != Potential.OPTIMISTIC or self.rebase):
             raise ValueError(f"RNHQLPlusAblation.sweeping = {self.sweeping!r} needs v_target "
                              "= 4 and rebase = 0 (its priorities read Phi as the optimistic "

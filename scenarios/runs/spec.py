@@ -166,9 +166,9 @@ def method_class(method: str) -> type:
 
 
 def settable_fields(cls: type) -> list[str]:
-    """The config fields ``--set`` may change (a plain learner's settings are its own)."""
-    own = getattr(cls, "settable", None)
-    return list(own) if own is not None else [f.name for f in dataclasses.fields(cls)]
+    """The config fields ``--set`` may change: not those the method's rules ignore, none of
+    a plain learner's (its settings are its own)."""
+    return list(cls.settable())
 
 
 def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
@@ -180,6 +180,10 @@ def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
     names = {f.name: f for f in dataclasses.fields(cls) if f.name in settable_fields(cls)}
     kwargs: dict[str, Any] = {}
     for k, v in overrides:
+        if k in getattr(cls, "IGNORED", ()):
+            raise ExperimentError("command line", f"--set {k}", f"{method}'s rules do not "
+                                  f"read {k} (it inherits the field)",
+                                  f"drop it, or use --method {cls.reader_of(k)}")
         if k not in names:
             wider = [c.cli for c in METHODS.values()  # e.g. rnh-ql+ablation, for rnh-ql+
                      if issubclass(c, cls) and k in {f.name for f in dataclasses.fields(c)}]

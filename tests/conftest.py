@@ -12,8 +12,16 @@ import pytest
 # per map): tiny test sweeps skip it; tests/test_stochastic_model.py covers V* itself.
 os.environ.setdefault("RNHQL_NO_OPTIMUM", "1")
 
+from hypothesis import settings
+
 from sim.grid import build_model
 from sim.scenario_io import resolve_scenario
+
+# No per-example deadline: a property test's first example can take 400 ms on a loaded
+# machine (a cold cache, another job on the cores) and 0.2 ms after; a deadline then fails
+# the suite for the machine's load, not for the code. Every property test uses this profile.
+settings.register_profile("rnhql", deadline=None)
+settings.load_profile("rnhql")
 
 REPO = Path(__file__).resolve().parent.parent
 MAPS = REPO / "sim" / "builtin" / "maps"

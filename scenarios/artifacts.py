@@ -149,12 +149,49 @@ def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any
 ARTIFACT_NAME = re.compile(r"[a-z0-9][a-z0-9-]{0,63}")
 
 
+def checkout_problem() -> str | None:
+    """Why artifacts cannot be read or written here, or None: they live in the project's
+    source tree (``docs/results``, the golden records in ``tests/data``), which an installed
+    copy (``pip install .``) does not have."""
+    if GOLDEN.is_file() and RESULTS_DIR.is_dir():
+        return None
+    return (f"needs the project's source tree (docs/results and tests/data beside "
+            f"{ROOT / 'scenarios'}), and this is an installed copy without them")
+
+
+def require_checkout(what: str) -> None:
+    """One line and exit 2 (an :class:`~sim.errors.InputError`) where :func:`checkout_problem`
+    says the artifacts are not here, before any work."""
+    from sim.errors import InputError
+
+    problem = checkout_problem()
+    if problem is not None:
+        raise InputError("command line", what, problem,
+                         "run it from a clone of the repository (pip install -e . there)")
+
+
+def check_artifact_target(name: str, flag: str = "--artifact") -> None:
+    """An ``--artifact NAME`` checked before any work: a short lower-case word (it becomes a
+    file name in docs/results and a Cog call; no path can escape that folder), in a
+    source checkout."""
+    from sim.errors import InputError
+
+    if not ARTIFACT_NAME.fullmatch(name):
+        raise InputError("command line", flag, f"{name!r} is not a name",
+                         "use lower-case letters, digits and '-' (at most 64), e.g. seed7")
+    require_checkout(flag)
+
+
 def check_artifact_name(parser: Any, name: str) -> None:
     """Refuse an ``--artifact NAME`` that is not a short lower-case word (it becomes a file
-    name and a Cog call) before any work starts: argparse's usage error, exit 2."""
+    name and a Cog call), or a run outside a source checkout, before any work starts:
+    argparse's usage error, exit 2."""
     if not ARTIFACT_NAME.fullmatch(name):
         parser.error(f"--artifact {name!r}: use lower-case letters, digits and '-' "
                      "(at most 64), e.g. --artifact seed7")
+    problem = checkout_problem()
+    if problem is not None:
+        parser.error(f"--artifact {name!r}: {problem}; run it from a clone of the repository")
 
 
 def load_artifact(name: str, directory: Path = RESULTS_DIR) -> dict[str, Any]:

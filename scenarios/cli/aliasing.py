@@ -15,12 +15,9 @@ def cmd_aliasing(args: argparse.Namespace) -> int:
     from scenarios.experiments.aliasing import run
 
     if args.artifact:
-        from scenarios.artifacts import ARTIFACT_NAME
-        from sim.errors import InputError
+        from scenarios.artifacts import check_artifact_target
 
-        if not ARTIFACT_NAME.fullmatch(args.artifact):
-            raise InputError("command line", "--artifact", f"{args.artifact!r} is not a name",
-                             "use lower-case letters, digits and '-', e.g. paper-50-noisy")
+        check_artifact_target(args.artifact)
     name, start, goal = scenario_key(args)
     seed_value(args.seed, "--seed")
     positive(args.repeats, "--repeats", MAX_REPEATS)

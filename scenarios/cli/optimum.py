@@ -52,6 +52,10 @@ def cmd_optimum(args: argparse.Namespace) -> int:
     from sim.physics.stochastic_rollouts import drive_model_policy
     from sim.physics.stochastic_solve import solve
 
+    if getattr(args, "artifact", None):
+        from scenarios.artifacts import check_artifact_target
+
+        check_artifact_target(args.artifact)  # before the work: a name, in a checkout
     fid = parse_fidelity(args.fidelity)
     samples = (None if args.samples is None
                else positive(args.samples, "--samples", MAX_SAMPLES // REFINE))

@@ -55,6 +55,9 @@ def _redraw_figures(redraw) -> bool:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
+    from scenarios.artifacts import require_checkout
+
+    require_checkout("rnhql report")  # the artifacts live in the source tree, not a wheel
     now = behaviour_digests()
     stale = []
     print("artifact | measured | took | state")

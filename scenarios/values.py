@@ -135,6 +135,13 @@ class Comparison:
 
         return summary_markdown(dict(self.results), self.methods)
 
+    def brief(self, width: int = 100) -> str:
+        """What ``rnhql compare`` prints: a compact table and the verdict's headlines, every
+        line within ``width`` columns (:meth:`summary` has the full tables)."""
+        from scenarios.runs.results import summary_terminal
+
+        return summary_terminal(dict(self.results), self.methods, width)
+
     def save(self, out: str | Path, figures: bool = True) -> Path:
         """Write ``results.json``, ``summary.md`` and (``figures``) the figures to ``out``, as
         ``rnhql compare --out`` does; returns the folder."""

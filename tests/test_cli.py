@@ -346,3 +346,23 @@ def test_the_default_recording_keeps_the_method_name_the_docs_print(tmp_path, mo
     args = type("A", (), {"record": RECORD_DEFAULT})()
     assert record_path(args, "paper-50", "rnh-ql+-grid-s0") == \
         "recordings/paper-50-rnh-ql+-grid-s0.rrd"
+
+
+def test_compare_prints_a_summary_that_fits_100_columns(tmp_path, capsys):
+    """The terminal gets a compact table and the verdict's headlines (summary.md the rest),
+    every line within 100 columns, long method names included."""
+    from scenarios.cli import main
+
+    assert main(["compare", "paper-40", "--methods",
+                 "rnh-ql,st-ql,tests.plain_learners.st_ql:STQLPort", "--world", "grid,physics",
+                 "--seeds", "2", "--episodes", "10", "--jobs", "1", "--out",
+                 str(tmp_path / "c")]) == 0
+    out = capsys.readouterr().out
+    assert max(len(line) for line in out.splitlines()) <= 100
+    assert "stable optimal after: median [95 % CI]" in out and "P(G)" in out
+    assert "- grid: " in out and "- physics: " in out
+    flat = " ".join(out.split())
+    assert "full tables and the pairwise verdicts: " in flat
+    assert "  - rnh-ql vs" not in out  # those: summary.md
+    assert "  - RNH-QL vs st-ql" in (tmp_path / "c" / "summary.md").read_text() or \
+        "  - RNH-QL vs " in (tmp_path / "c" / "summary.md").read_text()

@@ -52,8 +52,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         positive(100 if args.record_every is None else args.record_every, "--record-every")
         positive(args.record_values_every, "--record-values-every")
         positive(args.record_seeds, "--record-seeds")
-    print(f"{n_seeds * len(methods) * len(worlds)} runs on {sc.name}, rewards "
-          f"{sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
+    _say(f"{n_seeds * len(methods) * len(worlds)} runs on {sc.name}, rewards "
+         f"{sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
     compile_notice(len(methods))
     out = Path(args.out)
     cmp = api.compare(name, methods, worlds=worlds, fidelity=pb.fidelity, seeds=n_seeds,
@@ -66,11 +66,22 @@ def cmd_compare(args: argparse.Namespace) -> int:
                       record_values_every=args.record_values_every,
                       record_seeds=args.record_seeds, s_starts=pb.s_starts, start=pb.start,
                       goal=pb.goal, progress=True)
+    print(cmp.brief())
+    _say(f"full tables and the pairwise verdicts: {out / 'summary.md'}; also results.json "
+         f"and figures in {out}")
     if record is not None:
-        print(f"recording: {record}  (open: rnhql view {record})")
-    print(cmp.summary())
-    print(f"wrote {out / 'results.json'}, summary.md and figures")
+        _say(f"recording: {record}  (open: rnhql view {record})")
     return 0
+
+
+def _say(text: str) -> None:
+    """A line of the command's output, wrapped to the summary's 100 columns."""
+    import textwrap
+
+    from scenarios.runs.results import TERMINAL_COLUMNS
+
+    print("\n".join(textwrap.wrap(text, TERMINAL_COLUMNS, subsequent_indent="  ",
+                                   break_on_hyphens=False, break_long_words=False)))
 
 
 def _check_backend(args: argparse.Namespace) -> None:

@@ -366,3 +366,21 @@ def test_compare_prints_a_summary_that_fits_100_columns(tmp_path, capsys):
     assert "  - rnh-ql vs" not in out  # those: summary.md
     assert "  - RNH-QL vs st-ql" in (tmp_path / "c" / "summary.md").read_text() or \
         "  - RNH-QL vs " in (tmp_path / "c" / "summary.md").read_text()
+
+
+def test_a_first_physics_run_says_it_compiles(tmp_path):
+    """On a cold cache train --world physics says what it compiles before the silence; on a
+    warm one it says nothing."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    argv = [sys.executable, "-m", "scenarios.cli", "train", "paper-40", "--method", "st-ql",
+            "--world", "physics", "--episodes", "1"]
+    cold = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=600)
+    assert cold.returncode == 0, cold.stderr[-2000:]
+    assert "compiling the numba kernels of 1 method and the physics world's kernels" in \
+        cold.stderr
+    warm = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=600)
+    assert warm.returncode == 0 and "compiling" not in warm.stderr

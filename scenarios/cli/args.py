@@ -373,12 +373,18 @@ def print_run(rec_like: dict, optimal: int) -> None:
     print(f"  wall time             {rec_like['wall_time_s']:.3f} s")
 
 
-def compile_notice(n_methods: int) -> None:
+def compile_notice(n_methods: int, physics: bool = False) -> None:
     """Say so when the numba kernels are not on disk yet: the first run compiles them
-    (a minute or more on 2 cores) before any progress can show."""
+    (a minute or more on 2 cores) before any progress can show. ``physics``: the command
+    drives the physics world, whose kernels compile on its first use (tens of seconds)."""
     from learning.jitcache import kernels_cached
+    from sim.physics.jitcache import kernels_cached as physics_cached
 
-    if not kernels_cached():
-        print(f"compiling the numba kernels of {n_methods} method"
-              f"{'' if n_methods == 1 else 's'} (first run only; cached on disk afterwards)",
+    parts = []
+    if n_methods and not kernels_cached():
+        parts.append(f"the numba kernels of {n_methods} method{'' if n_methods == 1 else 's'}")
+    if physics and not physics_cached():
+        parts.append("the physics world's kernels")
+    if parts:
+        print(f"compiling {' and '.join(parts)} (first run only; cached on disk afterwards)",
               file=sys.stderr, flush=True)

@@ -54,7 +54,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         positive(args.record_seeds, "--record-seeds")
     _say(f"{n_seeds * len(methods) * len(worlds)} runs on {sc.name}, rewards "
          f"{sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
-    compile_notice(len(methods))
+    compile_notice(len(methods), physics="physics" in worlds)
     out = Path(args.out)
     cmp = api.compare(name, methods, worlds=worlds, fidelity=pb.fidelity, seeds=n_seeds,
                       seed_base=seed_base, episodes=episodes,

@@ -40,6 +40,9 @@ def cmd_route(args: argparse.Namespace) -> int:
     print(f"{ckpt.config.name} agent {args.agent} ({ckpt.episodes} episodes) on {sc.name}")
     if args.world == "physics":
         from learning.readout import greedy_actions
+        from scenarios.cli.args import compile_notice
+
+        compile_notice(0, physics=True)
         from scenarios.runs.physics_grading import FINAL_ROLLOUTS, FINAL_TAG
         from sim.physics.fidelity import parse_fidelity
         from sim.physics.rollouts import drive_policy

@@ -12,6 +12,7 @@ from pathlib import Path
 from scenarios.cli.args import (
     MAX_EPISODES,
     check_world,
+    compile_notice,
     parse_overrides,
     physics_budget,
     positive,
@@ -52,6 +53,7 @@ def cmd_train(args: argparse.Namespace) -> int:
              f"physics at fidelity {parse_fidelity(pb.fidelity or sc.physics).label}")
     print(f"{cfg.name} on {sc.name} ({world}), seed {args.seed}, {args.episodes} episodes, "
           f"rewards {sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
+    compile_notice(1, physics=args.world == "physics")
     run = api.train(pb.scenario, args.method, world=args.world, fidelity=pb.fidelity,
                     episodes=args.episodes, seed=args.seed,
                     rewards="scenario" if pb.rewards is None else pb.rewards,

@@ -44,3 +44,12 @@ def drop_stale_cache(package: Path = PACKAGE) -> bool:
     except OSError:  # read-only install: numba falls back to its own cache locations
         return False
     return True
+
+
+def kernels_cached(package: Path = PACKAGE) -> bool:
+    """Whether numba has this package's primitive kernel on disk (False on a first run, or
+    after the sources changed): the commands then say compilation is under way."""
+    root = os.environ.get("NUMBA_CACHE_DIR")
+    dirs = (list(Path(root).glob(f"{package.name}_*")) if root
+            else [package / "__pycache__"])
+    return any(any(d.glob("kernel.*.nbi")) for d in dirs if d.is_dir())

@@ -236,7 +236,11 @@ def config_class(method: str) -> type:
     if method in METHODS:
         return METHODS[method]
     if not is_located(method):
-        raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}, or "
+        import difflib
+
+        close = difflib.get_close_matches(method, list(METHODS), n=2, cutoff=0.6)
+        hint = f"did you mean {' or '.join(close)}? " if close else ""
+        raise ValueError(f"unknown method {method!r}; {hint}known: {', '.join(METHODS)}, or "
                          "module:Class for a learner of your own")
     from learning.plain import known_class, plain_config
 

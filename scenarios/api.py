@@ -160,7 +160,7 @@ def _method(fn: str, method: Any) -> str:
     elif isinstance(method, str) and method.strip():
         name = method.strip()
     else:
-        raise _err(fn, "method", f"is {method!r}", "pass a method's name (rnhql methods), "
+        raise _err(fn, "method", f"is {method!r}", "pass a method's name (docs/methods.md), "
                    "'module:Class', or a learner class")
     try:
         method_class(name)

@@ -144,6 +144,27 @@ def config_arg(value: Any, default: Any) -> Any:
     return cfg
 
 
+class SpecOwnLimit:
+    """Mixin of the envs that truncate themselves: the ``spec`` ``gymnasium.make`` gives them
+    says so (``max_episode_steps`` = the env's ``steps_per_episode``), so a client that reads
+    the spec sees the limit. Registered without one, so ``make`` adds no ``TimeLimit``."""
+
+    _spec: Any = None
+
+    @property
+    def spec(self) -> Any:
+        return self._spec
+
+    @spec.setter
+    def spec(self, value: Any) -> None:
+        limit = getattr(self, "steps_per_episode", None)
+        if value is not None and value.max_episode_steps is None and limit is not None:
+            import dataclasses
+
+            value = dataclasses.replace(value, max_episode_steps=int(limit))
+        self._spec = value
+
+
 def episode_limit(value: Any, default: int, fld: str = "steps_per_episode") -> int:
     """An episode length in env steps: ``value``, or ``default`` (from the scenario)."""
     if value is None:

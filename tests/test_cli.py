@@ -384,3 +384,10 @@ def test_a_first_physics_run_says_it_compiles(tmp_path):
         cold.stderr
     warm = subprocess.run(argv, env=env, capture_output=True, text=True, timeout=600)
     assert warm.returncode == 0 and "compiling" not in warm.stderr
+
+
+def test_a_method_typo_gets_a_did_you_mean(capsys):
+    from scenarios.cli import main
+
+    assert main(["train", "paper-40", "--method", "rnhql+", "--episodes", "2"]) == 2
+    assert "did you mean rnh-ql+" in capsys.readouterr().err

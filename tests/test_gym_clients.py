@@ -313,3 +313,19 @@ def test_info_keys_are_the_same_after_reset_step_and_in_vector_envs(env_id):
                          scenario="paper-40")
         _, vinfo = v.reset(seed=0)
         assert {k for k in vinfo if not k.startswith("_")} == INFO_KEYS[env_id]
+
+
+@pytest.mark.parametrize("env_id", ["rnhql/GridRoute-v0", "rnhql/PhysicsRoute-v0",
+                                    "rnhql/DiffDrive-v0"])
+def test_the_spec_says_the_limit_the_env_truncates_at(env_id):
+    """A client that reads env.spec.max_episode_steps sees the scenario's limit (the env
+    truncates itself there; make adds no TimeLimit)."""
+    import gymnasium as gym
+
+    env = gym.make(env_id, scenario="ost003d" if env_id != "rnhql/DiffDrive-v0" else "paper-40",
+                   steps_per_episode=17)
+    assert env.spec.max_episode_steps == env.unwrapped.steps_per_episode == 17
+    inner = env
+    while hasattr(inner, "env"):
+        assert type(inner).__name__ != "TimeLimit"
+        inner = inner.env

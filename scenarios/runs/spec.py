@@ -161,7 +161,7 @@ def method_class(method: str) -> type:
         return config_class(method)
     except ValueError as exc:
         raise ExperimentError("command line", "--method", str(exc).removesuffix("."),
-                              "name a method `rnhql methods` lists, or module:Class of a "
+                              "name a method of docs/methods.md (rnhql train --help lists them), or module:Class of a "
                               "learner of your own (docs/python-api.md)") from None
 
 

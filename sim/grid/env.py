@@ -8,7 +8,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from sim.env_args import SCENARIO_REWARDS, discrete_action, env_scenario, episode_limit
+from sim.env_args import (
+    SCENARIO_REWARDS,
+    SpecOwnLimit,
+    discrete_action,
+    env_scenario,
+    episode_limit,
+)
 from sim.grid.model import build_model
 from sim.render import AGENT, PATH, MapCanvas
 from sim.scenario import Rewards, Scenario
@@ -52,7 +58,7 @@ def start_state_from_options(options: dict[str, Any] | None, model: Any,
     return s
 
 
-class GridRouteEnv(gym.Env):
+class GridRouteEnv(SpecOwnLimit, gym.Env):
     """The paper's 4-connected grid route world.
 
     ## Description

@@ -13,6 +13,7 @@ from gymnasium import spaces
 
 from sim.env_args import (
     SCENARIO_REWARDS,
+    SpecOwnLimit,
     box_action,
     config_arg,
     env_scenario,
@@ -44,7 +45,7 @@ def diffdrive_periods(sc: Scenario, config: PhysicsConfig) -> int:
     return max(1, math.ceil(seconds / config.control_period_s - 1e-9))
 
 
-class DiffDriveEnv(gym.Env):
+class DiffDriveEnv(SpecOwnLimit, gym.Env):
     """Continuous control of the diff-drive robot: wheel speeds in, pose out.
 
     ## Description

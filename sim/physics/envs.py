@@ -19,6 +19,7 @@ from gymnasium import spaces
 
 from sim.env_args import (
     SCENARIO_REWARDS,
+    SpecOwnLimit,
     config_arg,
     discrete_action,
     env_scenario,
@@ -36,7 +37,7 @@ from sim.physics.world import PhysicsConfig
 from sim.scenario import Rewards, Scenario
 
 
-class PhysicsRouteEnv(gym.Env):
+class PhysicsRouteEnv(SpecOwnLimit, gym.Env):
     """The grid route problem, each move driven by a diff-drive robot in Pymunk.
 
     ## Description

@@ -161,8 +161,9 @@ def method_class(method: str) -> type:
         return config_class(method)
     except ValueError as exc:
         raise ExperimentError("command line", "--method", str(exc).removesuffix("."),
-                              "name a method of docs/methods.md (rnhql train --help lists them), or module:Class of a "
-                              "learner of your own (docs/python-api.md)") from None
+                              "name a method of docs/methods.md (rnhql train --help lists "
+                              "them), or module:Class of a learner of your own "
+                              "(docs/python-api.md)") from None
 
 
 def settable_fields(cls: type) -> list[str]:

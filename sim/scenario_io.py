@@ -139,7 +139,13 @@ def parse_scenario(data: dict[str, Any], source: str, base_dir: Path) -> Scenari
     width, height = arena.get("width_m", float, None), arena.get("height_m", float, None)
     blocked_cells: tuple[Cell, ...] = ()
     if map_file is not None:
-        grid_map = load_map(base_dir / map_file)
+        where = base_dir / map_file
+        if not where.is_file():  # name the scenario and its field, not only the map's path
+            what = "is a folder" if where.exists() else "does not exist"
+            raise ScenarioError(source, "arena.map", f"{map_file!r} is not a file ({where} "
+                                f"{what})", "give the .map's path relative to the scenario "
+                                "file")
+        grid_map = load_map(where)
         mw, mh = grid_map.width * cell_size, grid_map.height * cell_size
         for given, derived, fld in ((width, mw, "width_m"), (height, mh, "height_m")):
             if given is not None and abs(given - derived) > 1e-9:

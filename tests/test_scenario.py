@@ -170,3 +170,13 @@ def test_s_start_share_puts_s_among_the_episode_starts_with_that_probability(tmp
     assert np.array_equal(mixed.start_states[:len(free)], free)  # the paper's starts, then S
     share = float(np.mean(mixed.start_states == mixed.start))
     assert abs(share - 0.25) < 1.0 / len(mixed.start_states) + 1.0 / len(free)
+
+
+def test_a_missing_map_names_the_scenario_file_and_its_field(tmp_path):
+    from sim.errors import ScenarioError
+    from sim.scenario_io import load_scenario
+
+    toml = tmp_path / "t.toml"
+    toml.write_text('name = "t"\nstart = [1, 1]\ngoal = [3, 3]\n[arena]\nmap = "nope.map"\n')
+    with pytest.raises(ScenarioError, match=r"t\.toml: arena\.map: 'nope\.map' is not a file"):
+        load_scenario(toml)

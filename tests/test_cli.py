@@ -391,3 +391,16 @@ def test_a_method_typo_gets_a_did_you_mean(capsys):
 
     assert main(["train", "paper-40", "--method", "rnhql+", "--episodes", "2"]) == 2
     assert "did you mean rnh-ql+" in capsys.readouterr().err
+
+
+def test_train_resume_says_where_it_resumes_from(tmp_path, capsys):
+    from scenarios.cli import main
+
+    agent = str(tmp_path / "a.npz")
+    assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "20",
+                 "--save", agent]) == 0
+    capsys.readouterr()
+    assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "30",
+                 "--resume", agent]) == 0
+    assert f"resuming {agent}: 20 of 30 episodes done, training the other 10" in \
+        capsys.readouterr().out

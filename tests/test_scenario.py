@@ -180,3 +180,26 @@ def test_a_missing_map_names_the_scenario_file_and_its_field(tmp_path):
     toml.write_text('name = "t"\nstart = [1, 1]\ngoal = [3, 3]\n[arena]\nmap = "nope.map"\n')
     with pytest.raises(ScenarioError, match=r"t\.toml: arena\.map: 'nope\.map' is not a file"):
         load_scenario(toml)
+
+
+def test_the_example_scenario_is_complete_and_valid(tmp_path, capsys):
+    """rnhql scenarios --example prints a file that loads, and names every field a scenario,
+    its robot and its rewards have."""
+    import dataclasses
+
+    from scenarios.cli import main
+    from sim.scenario import Rewards, Robot, Scenario
+    from sim.scenario_io import load_scenario
+
+    assert main(["scenarios", "--example"]) == 0
+    text = capsys.readouterr().out
+    path = tmp_path / "my-arena.toml"
+    path.write_text(text)
+    sc = load_scenario(path)
+    assert sc.name == "my-arena" and sc.physics is not None and len(sc.obstacles) > 2
+    for cls in (Scenario, Robot, Rewards):
+        for f in dataclasses.fields(cls):
+            if f.name in ("source", "obstacles", "blocked_cells", "robot", "rewards", "physics",
+                          "width_m", "height_m", "cell_size_m"):
+                continue  # tables, or the arena's, or set by the loader
+            assert f"{f.name} =" in text or f"{f.name} = " in text, f.name

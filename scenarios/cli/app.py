@@ -93,6 +93,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("scenarios", help="list built-in scenarios or validate one")
     p.add_argument("--check", metavar="FILE", help="validate a .toml or .map and print its facts")
+    p.add_argument("--example", action="store_true",
+                   help="print a complete scenario file, every field commented, to start from")
     add_scenario_args(p, positional=False)
     p.set_defaults(func=catalog.cmd_scenarios)
 

@@ -60,7 +60,17 @@ def format_table(rows: list[list[str]], header: list[str]) -> str:
     return "\n".join(lines)
 
 
+def example_toml() -> str:
+    """A complete scenario file, every field commented (``rnhql scenarios --example``)."""
+    from sim.scenario_io import builtin_dir
+
+    return (builtin_dir() / "example.toml.txt").read_text(encoding="utf-8")
+
+
 def cmd_scenarios(args: argparse.Namespace) -> int:
+    if getattr(args, "example", False):
+        print(example_toml(), end="")
+        return 0
     if args.check or args.scen:
         args.scenario = args.check
         f = facts(scenario_from_args(args))

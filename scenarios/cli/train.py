@@ -53,6 +53,13 @@ def cmd_train(args: argparse.Namespace) -> int:
              f"physics at fidelity {parse_fidelity(pb.fidelity or sc.physics).label}")
     print(f"{cfg.name} on {sc.name} ({world}), seed {args.seed}, {args.episodes} episodes, "
           f"rewards {sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
+    if args.resume:  # say what it resumes from (the checks run again in the run itself)
+        from learning.checkpoint import load_checkpoint
+        from learning.geometry import geometry_of
+
+        ck = load_checkpoint(args.resume, args.method, model.n_states, geometry_of(model))
+        print(f"resuming {args.resume}: {ck.episodes} of {args.episodes} episodes done, "
+              f"training the other {max(args.episodes - ck.episodes, 0)}")
     compile_notice(1, physics=args.world == "physics")
     run = api.train(pb.scenario, args.method, world=args.world, fidelity=pb.fidelity,
                     episodes=args.episodes, seed=args.seed,

@@ -261,3 +261,20 @@ def test_a_sweep_with_a_plain_learner_resumes(tmp_path, capsys):
                         resume=True)
     assert "4 of 4 runs already finished" in capsys.readouterr().err
     assert [dict(r.record) for r in again.runs] == [dict(r.record) for r in first.runs]
+
+
+def test_compare_draws_the_greedy_test_the_ranking_reads(tmp_path):
+    """greedy_test.png: per method the share of seeds whose greedy route from S is optimal at
+    each test; the training curves say they count training episodes from random cells."""
+    from scenarios.figures.plots import optimal_share, training_starts
+
+    cmp = api.compare("paper-40", ["rnh-ql+", "st-ql"], seeds=2, episodes=40, jobs=1,
+                      out=tmp_path / "c")
+    assert (tmp_path / "c" / "greedy_test.png").stat().st_size > 5000
+    runs = [dict(r.record) for r in cmp.of("rnh-ql+")]
+    episodes, share = optimal_share(runs)
+    assert list(episodes) == [10, 20, 30, 40]
+    for k, e in enumerate(episodes):
+        hits = [r["test_route_length"][k] == r["optimal_route_length"] for r in runs]
+        assert share[k] == sum(hits) / len(runs) and runs[0]["test_episodes"][k] == e
+    assert "random cells" in training_starts(dict(cmp.results))

@@ -57,7 +57,8 @@ def test_summary_and_figures_written(small):
     out, _, _ = small
     md = (out / "summary.md").read_text()
     assert "| rnh-ql | grid | 2 |" in md and "RNH-QL" in md
-    for name in ("steps_per_episode", "reward_per_step", "time_per_episode", "routes"):
+    for name in ("steps_per_episode", "reward_per_step", "time_per_episode", "routes",
+                 "greedy_test"):
         assert (out / f"{name}.png").stat().st_size > 5000
 
 

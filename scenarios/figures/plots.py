@@ -53,7 +53,9 @@ def _series(run: dict[str, Any], key: str, window: int) -> np.ndarray:
 
 
 def curve_figure(results: dict[str, Any], key: str, ylabel: str, path: Path,
-                 window: int = 25, logy: bool = False) -> None:
+                 window: int = 25, logy: bool = False, what: str = "") -> None:
+    """Median and IQR over seeds of a per-episode figure; ``what`` says which episodes it
+    counts (the training ones start on random cells: they are not the ranked test)."""
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
     n_episodes = len(results["runs"][0]["steps_per_episode"])
     window = min(window, n_episodes)
@@ -73,7 +75,54 @@ def curve_figure(results: dict[str, Any], key: str, ylabel: str, path: Path,
     rw = results["scenario"].get("rewards")
     scheme = f", rewards {rw['scheme']}" if rw else ""
     ax.set_title(f"{results['scenario']['name']}{scheme}: {ylabel} (median, IQR over seeds; "
-                 f"window {window})", fontsize=9)
+                 f"window {window})" + (f"\n{what}" if what else ""), fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, ncol=2)
+    fig.tight_layout()
+    save_figure(fig, path)
+
+
+def training_starts(results: dict[str, Any]) -> str:
+    """How the training episodes start, for a curve's title."""
+    share = results["scenario"].get("s_start_share") or 0.0
+    if share > 0:
+        return (f"training episodes, {share:.0%} from S and the rest from random cells (the "
+                "ranking reads the greedy test from S: greedy_test.png)")
+    return ("training episodes from random cells, not the greedy test from S that the ranking "
+            "reads (greedy_test.png)")
+
+
+def optimal_share(runs: list[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
+    """(test episodes, share of seeds whose greedy route from S was optimal at that test),
+    over the tests every run has."""
+    n = min(len(r["test_episodes"]) for r in runs)
+    episodes = np.asarray(runs[0]["test_episodes"][:n])
+    hits = np.array([[length == r["optimal_route_length"] for length in
+                      r["test_route_length"][:n]] for r in runs], dtype=float)
+    return episodes, hits.mean(axis=0)
+
+
+def greedy_test_figure(results: dict[str, Any], path: Path) -> None:
+    """What the ranking reads: per method, the share of seeds whose greedy route from S is
+    optimal at each test (every ``test_every`` episodes); a method is stably optimal in a
+    seed from the test after which that seed's line never drops again."""
+    fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
+    groups = _groups(results)
+    several_worlds = len({w for _, w in groups}) > 1
+    for (method, world), runs in groups.items():
+        x, share = optimal_share(runs)
+        label = f"{method} ({world})" if several_worlds else method
+        ax.step(x, share, where="post", color=method_colour_mpl(method), lw=1.6, label=label,
+                ls="-" if world == "grid" else "--", alpha=0.85)
+    ax.set_xlabel("episodes trained")
+    ax.set_ylabel("seeds whose greedy route from S is optimal")
+    ax.set_ylim(-0.03, 1.03)
+    rw = results["scenario"].get("rewards")
+    scheme = f", rewards {rw['scheme']}" if rw else ""
+    n = max(len(runs) for runs in groups.values())
+    ax.set_title(f"{results['scenario']['name']}{scheme}: the greedy test from S (what the "
+                 f"ranking reads)\nshare of the {n} seeds whose greedy route is optimal, at "
+                 "each test", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
     fig.tight_layout()
@@ -140,10 +189,14 @@ def all_figures(results: dict[str, Any], sc: Scenario, model: TabularModel,
                 out_dir: Path) -> list[Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = [out_dir / "steps_per_episode.png", out_dir / "reward_per_step.png",
-             out_dir / "time_per_episode.png", out_dir / "routes.png"]
-    curve_figure(results, "steps_per_episode", "steps per episode", paths[0], logy=True)
+             out_dir / "time_per_episode.png", out_dir / "routes.png",
+             out_dir / "greedy_test.png"]
+    starts = training_starts(results)
+    curve_figure(results, "steps_per_episode", "steps per episode", paths[0], logy=True,
+                 what=starts)
     curve_figure(results, "reward_per_step", "reward per step (total return / total steps)",
-                 paths[1])
+                 paths[1], what=starts)
     time_figure(results, paths[2])
     routes_figure(results, sc, model, paths[3])
+    greedy_test_figure(results, paths[4])
     return paths

@@ -332,7 +332,7 @@ def test_comparison_blueprint_curves_are_the_summary_only(paper50):
     runs = [(m, s) for m in ("rnh-ql", "st-ql") for s in range(3)]
     curves = [v for v in _views(comparison_blueprint(runs, paper50, run_prefix))
               if isinstance(v, rrb.TimeSeriesView)]
-    assert len(curves) == 3
+    assert len(curves) == 4
     for v in curves:  # rooted at summary/<figure>: no per-seed series from runs/...
         assert str(v.origin).startswith("/summary/")
 
@@ -361,3 +361,20 @@ def test_comparison_file_has_the_summary_before_the_runs(tmp_path, paper50, pape
     for method, seed in runs:  # and nothing of the parts is lost
         ent = f"/{run_prefix(method, seed)}/world/robot"
         assert len(positions(read_table(out, [ent], "step"), ent)) > 0
+
+
+def test_the_comparison_shows_the_greedy_test_share():
+    """The summary's greedy curve: per method the share of seeds whose latest greedy test from
+    S was optimal (every 10th episode, where the tests fall)."""
+    from scenarios.recording.summary import summary_curves
+
+    def rec(seed, lengths):
+        return {"method": "m", "seed": seed, "optimal_route_length": 5,
+                "steps_per_episode": [5] * 30, "return_per_episode": [1.0] * 30,
+                "success_per_episode": [1] * 30, "test_episodes": [10, 20, 30],
+                "test_route_length": lengths}
+
+    curves = summary_curves([rec(0, [5, 5, 5]), rec(1, [-1, 5, 7])], lambda r: r["method"])
+    episodes, q25, med, q75 = curves["m"]["greedy"]
+    assert list(episodes) == [10, 20, 30]
+    assert list(med) == [0.5, 1.0, 0.5] and list(q25) == list(med) == list(q75)

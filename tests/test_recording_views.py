@@ -106,7 +106,7 @@ def test_comparison_layout_has_a_key_panel_and_no_legend_over_a_plot(paper50):
     views = _views(blueprint.comparison_blueprint(runs, paper50, run_prefix, key=key))
     assert [v for v in views if v.name == "Key" and str(v.origin) == "/key"]
     plots = [v for v in views if isinstance(v, rrb.TimeSeriesView)]
-    assert len(plots) == 3
+    assert len(plots) == 4  # the greedy test from S, steps, success, reward per step
     for v in plots:
         assert v.properties["PlotLegend"].visible.as_arrow_array().to_pylist() == [False]
 
@@ -128,7 +128,7 @@ def test_comparison_titles_show_whole(paper50):
 def test_single_run_titles_show_whole(paper50):
     bp = blueprint.run_blueprint("", paper50, "rnh-ql+ablation", "physics", "noisy")
     for v in _views(bp):
-        limit = 80 if v.name.startswith(("Map", "Steps")) else HALF_OF_RIGHT
+        limit = 80 if v.name.startswith(("Map", "Training steps")) else HALF_OF_RIGHT
         assert len(v.name) <= limit, v.name
 
 
@@ -191,7 +191,7 @@ def test_single_run_plots_name_their_series_in_the_title_not_a_legend(paper50):
         legend = v.properties["PlotLegend"].visible.as_arrow_array().to_pylist()
         assert legend == [v.name == "Shaping F"], v.name  # two series in a tab named Shaping F
     assert scene.SERIES_COLOURS["steps/optimal"] == scene.BFS_ROUTE  # "blue: the BFS optimum"
-    assert "blue" in next(n for n in by_name if n.startswith("Steps"))
+    assert "blue" in next(n for n in by_name if n.startswith("Training steps"))
 
 
 # ---------------------------------------------------------------- (g) the sim_time note

@@ -65,7 +65,7 @@ def whole_run() -> rrb.TimeAxis:
 # a single run's plots: title (naming each series by its colour in
 # scene.SERIES_COLOURS when there are several) and a fixed y range where one is known
 PLOTS = {
-    "steps": ("Steps per episode (blue: the BFS optimum)", None),
+    "steps": ("Training steps per episode, random starts (blue: the optimum from S)", None),
     "success": (f"Success rate, last {SUCCESS_WINDOW} (dots: 0/1)", (-0.05, 1.05)),
     "reward_per_step": (f"Reward per step (last {SUCCESS_WINDOW})", None),
     "return": ("Return", None),
@@ -172,6 +172,6 @@ def comparison_blueprint(runs: Sequence[tuple[str, int]], sc: Scenario, prefix_o
     curves = [rrb.TimeSeriesView(name=title, origin=f"/summary/{fig}", axis_x=whole_run(),
                                  plot_legend=rrb.PlotLegend(visible=key is None and i == 0))
               for i, (fig, title) in enumerate(SUMMARY_FIGURES.items())]
-    row = (rrb.Horizontal(key_view(key), *curves, column_shares=[2.4, 3, 3, 3])
-           if key else rrb.Horizontal(*curves))
+    grid = rrb.Grid(*curves, grid_columns=2)
+    row = rrb.Horizontal(key_view(key), grid, column_shares=[2.4, 6]) if key else grid
     return rrb.Blueprint(rrb.Vertical(rrb.Grid(*maps), row, row_shares=[3, 2]), *_panels())

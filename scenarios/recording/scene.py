@@ -53,7 +53,8 @@ SUCCESS_WINDOW = 50  # episodes in the moving success rate
 SUMMARY_WINDOW = 50  # episodes per window of a comparison's summary curves
 SUMMARY_FIGURES = {  # figure -> view title (scenarios.recording.summary); titles are kept
     # short enough to show whole in a third of a 1600-pixel window (about 36 characters)
-    "steps": "Steps per episode: median, IQR",
+    "greedy": "Greedy test from S: seeds optimal",
+    "steps": "Training steps/episode: median, IQR",
     "success": f"Success (last {SUMMARY_WINDOW}): median, IQR",
     "reward_per_step": f"Reward/step (last {SUMMARY_WINDOW}): median, IQR"}
 KIND_STYLE = {"train": (TRAIN, TRAIN_VISITED), "greedy-test": (GREEDY, GREEDY_VISITED)}

@@ -5,7 +5,10 @@ legend of ninety entries. The comparison's default blueprint instead shows, per
 method and in the method's colour, the median over seeds and the interquartile
 band (q25 and q75 as thin lines of the same colour, left out of the legend) of:
 
-- steps per episode (moving average over ``WINDOW`` episodes),
+- the greedy test from S, what the ranking reads: the share of seeds whose greedy route is
+  optimal at the latest test (a share, not a median: its three rows are equal),
+- steps per training episode (moving average over ``WINDOW`` episodes; training episodes
+  start on random cells),
 - success rate (share of the last ``WINDOW`` episodes that reached G),
 - reward per step, as a ratio of sums over the last ``WINDOW`` episodes (total
   return / total steps: a mean of per-episode ratios is all spikes from short
@@ -38,12 +41,25 @@ def _moving_mean(y: np.ndarray, window: int) -> np.ndarray:
     return (c[hi] - c[lo]) / (hi - lo)
 
 
+def greedy_optimal(rec: dict[str, Any], n: int) -> np.ndarray:
+    """1.0 at each episode (1-based, the k-th value episode k + 1) whose latest greedy test
+    from S found an optimal route, else 0.0 (0 before the first test)."""
+    out = np.zeros(n)
+    optimum = rec.get("optimal_route_length")
+    for e, length in zip(rec.get("test_episodes", ()), rec.get("test_route_length", ()),
+                         strict=True):
+        if 1 <= e <= n:
+            out[e - 1:] = float(length == optimum)
+    return out
+
+
 def run_curves(rec: dict[str, Any]) -> dict[str, np.ndarray]:
-    """One run's three curves, one value per episode, from its results.json record."""
+    """One run's curves, one value per episode, from its results.json record."""
     steps = np.asarray(rec["steps_per_episode"], dtype=np.float64)
     returns = np.asarray(rec["return_per_episode"], dtype=np.float64)
     success = np.asarray(rec["success_per_episode"], dtype=np.float64)
-    return {"steps": _moving_mean(steps, WINDOW), "success": _moving_mean(success, WINDOW),
+    return {"greedy": greedy_optimal(rec, steps.size),
+            "steps": _moving_mean(steps, WINDOW), "success": _moving_mean(success, WINDOW),
             "reward_per_step": windowed_reward_per_step(returns, steps, WINDOW)}
 
 
@@ -60,7 +76,10 @@ def summary_curves(records: Sequence[dict[str, Any]], label_of: Any
         out[label] = {}
         for fig in FIGURES:
             y = np.stack([c[fig][:n] for c in curves])[:, idx]
-            q25, med, q75 = np.percentile(y, [25, 50, 75], axis=0)
+            if fig == "greedy":  # a share of seeds: its rows are that share
+                q25 = med = q75 = y.mean(axis=0)
+            else:
+                q25, med, q75 = np.percentile(y, [25, 50, 75], axis=0)
             out[label][fig] = np.stack([idx + 1.0, q25, med, q75])
     return out
 

@@ -10,3 +10,25 @@ Subpackages, top to bottom (a package imports only those below it):
 - ``figures``: matplotlib figures and route drawings;
 - ``builtin``: the built-in scenario TOMLs and Moving AI maps (data only).
 """
+
+from pathlib import Path as _Path
+
+
+def _check_siblings() -> None:
+    """Refuse, in one line, a ``sim.py`` or ``learning.py`` of the user's that hides rnhql's
+    package of that name (the script's folder comes first on ``sys.path``): without this the
+    first sign is an obscure error deep inside an import, or Gymnasium's "Namespace rnhql
+    not found"."""
+    import importlib.util
+
+    home = _Path(__file__).resolve().parent.parent
+    for name in ("sim", "learning"):
+        spec = importlib.util.find_spec(name)
+        origin = None if spec is None else spec.origin
+        if origin is not None and _Path(origin).resolve() != home / name / "__init__.py":
+            raise ImportError(f"{origin} hides rnhql's '{name}' package (a module named "
+                              f"{name} beside your script comes first on sys.path): rename "
+                              "that file")
+
+
+_check_siblings()

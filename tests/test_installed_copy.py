@@ -48,3 +48,21 @@ def test_an_artifact_name_never_escapes_docs_results(name):
 
     with pytest.raises(InputError, match="is not a name"):
         artifacts.check_artifact_target(name)
+
+
+def test_a_users_sim_py_is_named_not_mysterious(tmp_path):
+    """A sim.py beside the user's script hides rnhql's sim package: the import of the library
+    says so in one line, naming the file and the fix."""
+    import os
+    import subprocess
+    import sys
+
+    from tests.conftest import REPO
+
+    (tmp_path / "sim.py").write_text("x = 1\n")
+    (tmp_path / "script.py").write_text("from scenarios import api\n")
+    proc = subprocess.run([sys.executable, "script.py"], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(REPO)})
+    assert proc.returncode == 1
+    assert f"{tmp_path / 'sim.py'} hides rnhql's 'sim' package" in proc.stderr
+    assert "rename that file" in proc.stderr

@@ -112,8 +112,9 @@ def test_progress_counts_episodes_across_workers_and_estimates_from_the_rate(tmp
 
 def test_no_estimate_while_a_worker_compiles_and_the_rate_restarts_after():
     """A worker in the first task of a method (on a cold cache: compiling) withholds the
-    estimate, and the rate window restarts once no worker warms up: a rate measured
-    across a compile once gave an estimate 8x too long."""
+    first estimate and is never measured as a rate (a rate measured across a compile once
+    gave an estimate 8x too long); once an estimate exists, a later compile keeps it (the
+    last rate carries it), and the rate window restarts after the compile."""
     from scenarios.runs import work
     from scenarios.runs.backends import Progress
 
@@ -130,12 +131,35 @@ def test_no_estimate_while_a_worker_compiles_and_the_rate_restarts_after():
     assert p.eta_s(now=10.0) is None  # one sample is no rate
     work.add_episodes(1000)
     assert p.eta_s(now=15.0) == pytest.approx(8000 / 200)
-    p.counter[work.WARMING] = 1  # another worker starts compiling: no estimate, window gone
-    assert p.eta_s(now=16.0) is None
+    p.counter[work.WARMING] = 1  # another worker starts compiling: the last rate carries on
+    work.add_episodes(0)
+    assert p.eta_s(now=16.0) == pytest.approx(8000 / 200)
+    assert "compiling" not in p._line()
     p.counter[work.WARMING] = 0
     work.add_episodes(4000)
-    assert p.eta_s(now=20.0) is None  # the window restarted: one sample again
+    assert p.eta_s(now=20.0) == pytest.approx(4000 / 200)  # one sample: the last rate still
     work.add_episodes(1000)
-    assert p.eta_s(now=25.0) == pytest.approx(3000 / 200)
+    assert p.eta_s(now=25.0) == pytest.approx(3000 / 200)  # the new window's rate
+
+
+def test_each_world_is_estimated_from_its_own_rate():
+    """A mixed sweep: grid episodes flow first and fast, physics episodes slowly; the time
+    left is each world's episodes left over its own rate, and none until physics has one."""
+    from scenarios.runs import work
+    from scenarios.runs.backends import Progress
+
+    p = Progress(4, enabled=False)
+    p.expect(4, 2000, physics_episodes=1000)
+    assert p.eta_s(now=0.0) is None
+    work.add_episodes(500)
+    assert p.eta_s(now=1.0) is None
+    work.add_episodes(500)  # every grid episode done in 4 s
+    assert p.eta_s(now=5.0) is None  # physics has work left and no rate yet
+    work.add_episodes(10, physics=True)
+    assert p.eta_s(now=6.0) is None
+    work.add_episodes(40, physics=True)
+    assert p.eta_s(now=11.0) == pytest.approx(950 / 8)  # 40 physics episodes in 5 s
+    p.close()
+    work.share(None)
     p.close()
     work.share(None)

@@ -245,6 +245,7 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
             results = _run_and_keep(specs, out_dir, execute, resume, files, recording,
                                     **execute_kwargs)
             if recording is not None:
+                tail(execute_kwargs.get("progress"), f"merging the recording {recording.path}")
                 try:
                     with finishing(recording.path):  # every run is done: the recording holds all
                         gather_parts(specs, recording.path, records=results["runs"])
@@ -256,6 +257,13 @@ def run_sweep(specs: Sequence[RunSpec], out_dir: Path,
                         raise
                     raise _disk_full(err, out_dir, specs, recording, files, True) from None
     return results
+
+
+def tail(progress: Any, what: str) -> None:
+    """Name the work after the last run (seconds to a minute: figures, the recording's
+    merge) on the progress stream, so the end of the bar is not followed by silence."""
+    if progress is not None and getattr(progress, "enabled", False):
+        print(f"{what}…", file=progress.stream, flush=True)
 
 
 def _run_and_keep(specs: Sequence[RunSpec], out_dir: Path,
@@ -318,7 +326,8 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
               f"{out_dir / PARTIAL}; running the other {len(todo)}", file=sys.stderr)
     progress = execute_kwargs.get("progress")
     if progress is not None and hasattr(progress, "expect"):
-        progress.expect(len(todo), sum(s.episodes for s in todo))
+        progress.expect(len(todo), sum(s.episodes for s in todo),
+                        sum(s.episodes for s in todo if s.world == "physics"))
     with open(out_dir / PARTIAL, "a", encoding="utf-8") as partial:
         def save(rec: dict[str, Any]) -> None:
             at = partial.tell()
@@ -334,6 +343,7 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
         new = execute(todo, on_result=save, **keep, **execute_kwargs) if todo else []
     if progress is not None:  # nothing left to run: its heartbeat must not outlive the sweep
         progress.close()
+        tail(progress, "writing results.json, summary.md and the figures")
     results = files.write(specs, [*done.values(), *new], out_dir)
     (out_dir / PARTIAL).unlink(missing_ok=True)
     return results

@@ -56,20 +56,22 @@ class Progress:
 
     On a terminal: a one-line bar, redrawn as work is done. Off a terminal (logs, CI,
     a notebook): a plain line every ``interval_s`` seconds while the sweep runs, and one
-    when it ends. ``enabled=False`` silences both. The estimate of the time left is the
-    episodes left over the rate of the last ``window_s`` seconds, and is given only once
-    episodes have been finishing for a few seconds: the first seconds of a sweep are
-    compilation and loading, which no rate of runs finished can tell apart from work.
+    when it ends. ``enabled=False`` silences both. The estimate of the time left is each
+    world's episodes left over that world's rate of the last ``window_s`` seconds
+    (:meth:`eta_s`), given only once episodes have been finishing for a few seconds: the
+    first seconds of a sweep are compilation and loading, which no rate of runs finished
+    can tell apart from work.
     """
 
     def __init__(self, total: int, enabled: bool | None = None, interval_s: float = 5.0,
                  stream: Any = None, window_s: float = 20.0) -> None:
         self.total, self.done, self.t0 = total, 0, time.perf_counter()
-        self.episodes_total = 0
+        self.episodes_total = self.physics_total = 0
+        self._rates: dict[str, float] = {}  # the last rate measured per world [episodes/s]
         self.counter = work.new_counter()
         work.share(self.counter)  # runs in this process (--jobs 1) count here too
         self.window_s = window_s
-        self._samples: list[tuple[float, int]] = []
+        self._samples: list[tuple[float, int, int]] = []  # (time, grid, physics episodes)
         self.stream = sys.stderr if stream is None else stream
         tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self.enabled = True if enabled is None else enabled
@@ -83,34 +85,60 @@ class Progress:
                                             name="rnhql-progress")
             self._thread.start()
 
-    def expect(self, runs: int, episodes: int) -> None:
-        """The work this sweep will do (after ``--resume`` dropped what was finished)."""
+    def expect(self, runs: int, episodes: int, physics_episodes: int = 0) -> None:
+        """The work this sweep will do (after ``--resume`` dropped what was finished):
+        ``episodes`` in all, ``physics_episodes`` of them in the physics world."""
         with self._lock:
             self.total, self.episodes_total = runs, episodes
+            self.physics_total = physics_episodes
 
     @property
     def episodes_done(self) -> int:
         return work.episodes(self.counter)
 
     def eta_s(self, now: float | None = None) -> float | None:
-        """Seconds left at the recent rate of episodes, or None while too early to say: while
-        a worker warms up (compiles a method's kernels, :func:`scenarios.runs.work.warm_up`)
-        and until episodes have flowed for a few seconds after."""
+        """Seconds left, or None while too early to say.
+
+        Each world is estimated from its own rate (a physics episode costs hundreds of grid
+        episodes: one rate for both once called a mixed sweep half done after its grid runs),
+        measured over the last ``window_s`` seconds once its episodes have flowed for a few
+        seconds; the time left is the sum of each world's episodes left over its rate, and
+        there is none until every world with work left has a rate. While a worker warms up
+        (compiles a method's kernels, :func:`scenarios.runs.work.warm_up`) no rate is
+        measured (a rate across a compile once gave an estimate 8x too long): before the
+        first estimate there is none, after it the last rates carry the estimate through.
+        """
         now = time.perf_counter() if now is None else now
         done = self.episodes_done
-        if work.warming(self.counter):  # a rate measured across a compile says nothing
+        physics = work.physics_episodes(self.counter)
+        if work.warming(self.counter):
             self._samples.clear()
-            return None
-        self._samples.append((now, done))
+            return self._estimate(done - physics, physics)
+        self._samples.append((now, done - physics, physics))
         while len(self._samples) > 2 and now - self._samples[1][0] >= self.window_s:
             self._samples.pop(0)
-        flowing = [(t, d) for t, d in self._samples if d > 0]
-        if not self.episodes_total or len(flowing) < 2:
+        for k, world in ((1, "grid"), (2, "physics")):
+            flowing = [(smp[0], smp[k]) for smp in self._samples if smp[k] > 0]
+            if len(flowing) < 2:
+                continue
+            (t_a, d_a), (t_b, d_b) = flowing[0], flowing[-1]
+            if t_b - t_a >= min(3.0, self.window_s) and d_b > d_a:
+                self._rates[world] = (d_b - d_a) / (t_b - t_a)
+        return self._estimate(done - physics, physics)
+
+    def _estimate(self, grid_done: int, physics_done: int) -> float | None:
+        if not self.episodes_total:
             return None
-        (t_a, d_a), (t_b, d_b) = flowing[0], flowing[-1]
-        if t_b - t_a < min(3.0, self.window_s) or d_b <= d_a:
-            return None
-        return (self.episodes_total - done) / ((d_b - d_a) / (t_b - t_a))
+        left = {"grid": self.episodes_total - self.physics_total - grid_done,
+                "physics": self.physics_total - physics_done}
+        total = 0.0
+        for world, n in left.items():
+            if n <= 0:
+                continue
+            if world not in self._rates:
+                return None
+            total += n / self._rates[world]
+        return total
 
     def _line(self) -> str:
         elapsed = time.perf_counter() - self.t0

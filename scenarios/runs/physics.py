@@ -254,7 +254,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                     if not sub.any():
                         continue
                     ag.end_episode(sub)
-                    add_episodes(int(np.count_nonzero(sub)))
+                    add_episodes(int(np.count_nonzero(sub)), physics=True)
                     fmean, fstd = ag.last_shaping()
                     for k in np.flatnonzero(sub):
                         i = b0 + int(k)

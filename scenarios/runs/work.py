@@ -27,7 +27,8 @@ import multiprocessing
 from collections.abc import Iterable, Iterator
 from typing import Any
 
-EPISODES, WARMING = 0, 1  # slots of the shared block
+EPISODES, WARMING, PHYSICS = 0, 1, 2  # slots of the shared block: episodes (every world),
+#                                      workers warming up, physics episodes among them
 LOCK_WAIT_S = 1.0  # a worker waits this long for the block's lock, then counts nothing [s]
 
 _shared: Any = None  # a multiprocessing.Array("q", 2) while a sweep runs, else None
@@ -37,8 +38,8 @@ _warming_here = False  # this process counts in the WARMING slot right now
 
 def new_counter() -> Any:
     """The block of counters worker processes share (passed to the pool's initializer):
-    episodes finished, workers warming up."""
-    return multiprocessing.Array("q", 2)
+    episodes finished, workers warming up, physics episodes finished."""
+    return multiprocessing.Array("q", 3)
 
 
 def share(counter: Any) -> None:
@@ -53,6 +54,11 @@ def share(counter: Any) -> None:
 def episodes(counter: Any) -> int:
     """The episodes ``counter`` holds, read without its lock (see the module's doc)."""
     return int(counter.get_obj()[EPISODES])
+
+
+def physics_episodes(counter: Any) -> int:
+    """The physics episodes ``counter`` holds (a part of :func:`episodes`)."""
+    return int(counter.get_obj()[PHYSICS])
 
 
 def warming(counter: Any) -> int:
@@ -73,12 +79,16 @@ def _add(slot: int, n: int) -> None:
             lock.release()
 
 
-def add_episodes(n: int) -> None:
-    """``n`` more episodes finished in this process (a no-op outside a sweep). The first
-    episodes of a warming task end its warm-up: its training kernel is compiled by then
-    (the greedy-test loops compile within its first chunk too)."""
+def add_episodes(n: int, physics: bool = False) -> None:
+    """``n`` more episodes finished in this process (a no-op outside a sweep); ``physics``:
+    physics episodes, which cost hundreds of times a grid episode, so progress estimates
+    each world from its own rate. The first episodes of a warming task end its warm-up: its
+    training kernel is compiled by then (the greedy-test loops compile within its first
+    chunk too)."""
     _end_warming()
     _add(EPISODES, n)
+    if physics:
+        _add(PHYSICS, n)
 
 
 def _end_warming() -> None:

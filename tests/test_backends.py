@@ -94,6 +94,8 @@ def test_progress_counts_episodes_across_workers_and_estimates_from_the_rate(tmp
     run_sweep(specs, tmp_path / "s", run_local, figures=False, jobs=2, progress=progress)
     wall = time.perf_counter() - t0
     lines = out.getvalue().splitlines()
+    assert lines[-1] == "writing results.json, summary.md and the figures…"  # the tail, named
+    lines = [ln for ln in lines if ln.startswith("progress: ")]
     assert lines[-1].startswith(f"progress: {12 * 4000:,}/{12 * 4000:,} episodes (100 %)")
     first = next((ln for ln in lines if "s left" in ln), None)
     compiling = [i for i, ln in enumerate(lines) if "compiling kernels" in ln]

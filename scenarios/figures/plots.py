@@ -80,6 +80,7 @@ def curve_figure(results: dict[str, Any], key: str, ylabel: str, path: Path,
     ax.legend(fontsize=8, ncol=2)
     fig.tight_layout()
     save_figure(fig, path)
+    plt.close(fig)
 
 
 def training_starts(results: dict[str, Any]) -> str:

@@ -342,6 +342,9 @@ def log_drive_note(rec: rr.RecordingStream, prefix: str) -> None:
 KEY_LINES = (("BFS shortest route", BFS_ROUTE), ("final greedy route", ROUTE_PALETTE[0]),
              ("last training episode", TRAIN), ("greedy test from S", GREEDY))
 KEY_COLUMN = 2.8  # the key's two columns are centred at -/+ this (a row is 1 unit tall)
+# under the key: a large comparison streams into the viewer for a minute or more, its
+# curves empty until their data arrives, and nothing else says it is still loading
+LOADING_NOTE = ("curves empty? a large recording", "takes a minute or more to load")
 
 
 def log_comparison_key(rec: rr.RecordingStream, labels: Sequence[str]
@@ -352,10 +355,13 @@ def log_comparison_key(rec: rr.RecordingStream, labels: Sequence[str]
     apart keep ~20-character names apart at any panel size (the view keeps the aspect)."""
     left = [("maps:", WALL), *KEY_LINES]
     right = [("methods:", WALL), *[(lab, label_colour(lab)) for lab in labels]]
-    rows = left + right
+    n = max(len(left), len(right))
+    note = [(text, WALL) for text in LOADING_NOTE]
+    rows = left + right + note
     xy = np.array([(-KEY_COLUMN, i) for i in range(len(left))]
-                  + [(KEY_COLUMN, i) for i in range(len(right))], dtype=float)
+                  + [(KEY_COLUMN, i) for i in range(len(right))]
+                  + [(0.0, n + 0.6 + i) for i in range(len(note))], dtype=float)
     rec.log("key", rr.Points2D(xy, radii=0.0, colors=[c for _, c in rows],
                                labels=[t for t, _ in rows], show_labels=True), static=True)
     half = 2 * KEY_COLUMN
-    return (-half, half), (-0.8, max(len(left), len(right)) + 0.2)
+    return (-half, half), (-0.8, n + len(note) + 0.8)

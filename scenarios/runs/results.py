@@ -225,6 +225,9 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
                  f"{m}: " + ", ".join(f"{k}={v:g}" for k, v in o.items())
                  for m, o in results["overrides"].items()), ""]
                if results.get("overrides") else []),
+             "Cells: median [25th, 75th percentile] over seeds, but the 95 % CI column "
+             "(the median's bootstrap interval).",
+             "",
              "| method | world | seeds | final route optimal | stable optimal after | "
              "its median's 95 % CI | first optimal | final route length | ε-route | "
              "success rate | reward / step | wall time (s) |",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from scenarios.cli.args import positive, scenario_key, seed_value
+from scenarios.cli.args import compile_notice, positive, scenario_key, seed_value
 from scenarios.cli.paths import check_output_file
 
 MAX_REPEATS = 100_000  # drives per (cell, action)
@@ -24,6 +24,7 @@ def cmd_aliasing(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         check_output_file(out / "aliasing.json", "--out")
+    compile_notice(0, physics=True)
     run(argparse.Namespace(scenario=name, start=start, goal=goal, fidelity=args.fidelity or
                            "exact", repeats=args.repeats, seed=args.seed, rewards=args.rewards,
                            out=out, artifact=args.artifact))

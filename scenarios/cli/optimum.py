@@ -14,7 +14,7 @@ import argparse
 import math
 import time
 
-from scenarios.cli.args import positive, scenario_from_args, seed_value
+from scenarios.cli.args import compile_notice, positive, scenario_from_args, seed_value
 from sim.grid.actions import ACTION_NAMES
 
 MAX_ROLLOUTS = 100_000
@@ -64,6 +64,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
     if rollouts:
         positive(rollouts, "--rollouts", MAX_ROLLOUTS)
     sc = scenario_from_args(args)
+    compile_notice(0, physics=True)
     sampling = Sampling.default(fid, samples, seed)
     path = cache_dir() / f"{digest(sc, PhysicsConfig(), fid, sampling)}.npz"
     cached = path.exists()

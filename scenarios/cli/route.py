@@ -10,6 +10,7 @@ import numpy as np
 
 from scenarios.cli.args import (
     check_world,
+    compile_notice,
     physics_budget,
     problem_arg,
 )
@@ -40,8 +41,6 @@ def cmd_route(args: argparse.Namespace) -> int:
     print(f"{ckpt.config.name} agent {args.agent} ({ckpt.episodes} episodes) on {sc.name}")
     if args.world == "physics":
         from learning.readout import greedy_actions
-        from scenarios.cli.args import compile_notice
-
         compile_notice(0, physics=True)
         from scenarios.runs.physics_grading import FINAL_ROLLOUTS, FINAL_TAG
         from sim.physics.fidelity import parse_fidelity

@@ -35,7 +35,7 @@ PLACEHOLDERS = {"N": "3", "K": "3", "DIR": "out", "FILE": "x", "MAP": "x.map",
 
 def split_outside_quotes(line: str) -> list[str]:
     """``line`` split at && ; | that stand outside quotes (a method's overrides are quoted
-    because they hold ';')."""
+    because they hold ';'); an output redirection (``> FILE``) ends a command."""
     parts, start, quote, i = [], 0, "", 0
     while i < len(line):
         c = line[i]
@@ -43,6 +43,8 @@ def split_outside_quotes(line: str) -> list[str]:
             quote = "" if c == quote else quote
         elif c in "'\"":
             quote = c
+        elif c == ">":
+            return [*parts, line[start:i]]
         elif line.startswith("&&", i) or c in ";|":
             parts.append(line[start:i])
             i += 2 if c == "&" else 1

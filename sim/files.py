@@ -191,17 +191,27 @@ def move_into_place(tmp: str | Path, path: str | Path) -> None:
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | Path) -> Iterator[Path]:
+def atomic_path(path: str | Path, follow: bool = True) -> Iterator[Path]:
     """A temp path beside ``path`` to write to; it becomes ``path`` when the block ends.
 
     The parent folder is created. If the block raises, the temp file is removed
     and ``path`` is untouched (an OSError then names ``path``). The file gets the
     mode ``open()`` would give (``mkstemp`` alone leaves 0600). A device or FIFO at
     ``path`` is written through, the temp file then in the system's temp folder.
+
+    ``follow=False``: a file the tool names itself inside an output folder (results,
+    summaries, figures): a symlink found at ``path`` is replaced, never written through,
+    so a link planted in a shared folder cannot send the write elsewhere. A path the user
+    named keeps ``follow=True``: their link survives and its target is written.
     """
     path = Path(path)
+    if not follow and path.is_symlink():
+        path.unlink()  # the link only, never its target
     check_output(path)
     through = node_kind(path) in ("device", "fifo") or fd_link(path) is not None
+    if not follow and through:
+        raise OSError(errno.EEXIST, "a device or FIFO stands where the tool writes its own "
+                      "file; remove it", str(path))
     target = _real_target(path)
     try:
         if through:
@@ -230,16 +240,26 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         raise
 
 
-def atomic_write_bytes(path: str | Path, data: bytes) -> None:
+def atomic_write_bytes(path: str | Path, data: bytes, follow: bool = True) -> None:
     """Write ``data`` to ``path`` atomically (:func:`atomic_path`)."""
-    with atomic_path(path) as tmp:
+    with atomic_path(path, follow) as tmp:
         tmp.write_bytes(data)
 
 
-def atomic_write_text(path: str | Path, text: str) -> None:
+def atomic_write_text(path: str | Path, text: str, follow: bool = True) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically (:func:`atomic_path`)."""
-    with atomic_path(path) as tmp:
+    with atomic_path(path, follow) as tmp:
         tmp.write_text(text, encoding="utf-8")
+
+
+def open_own_file(path: str | Path, flags: int, mode: int = 0o644) -> int:
+    """``os.open`` of a file the tool names itself in an output folder, never through a
+    symlink someone planted there (``O_NOFOLLOW``): a link at ``path`` is removed first and
+    the file created afresh. Returns the descriptor."""
+    path = Path(path)
+    if path.is_symlink():
+        path.unlink()
+    return os.open(path, flags | os.O_NOFOLLOW, mode)
 
 
 def read_input(path: Path, error: type[InputError], kind: str, fix: str,

@@ -18,6 +18,7 @@ import contextlib
 import errno
 import functools
 import json
+import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -328,7 +329,10 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     if progress is not None and hasattr(progress, "expect"):
         progress.expect(len(todo), sum(s.episodes for s in todo),
                         sum(s.episodes for s in todo if s.world == "physics"))
-    with open(out_dir / PARTIAL, "a", encoding="utf-8") as partial:
+    from sim.files import open_own_file
+
+    fd = open_own_file(out_dir / PARTIAL, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+    with os.fdopen(fd, "a", encoding="utf-8") as partial:
         def save(rec: dict[str, Any]) -> None:
             at = partial.tell()
             try:

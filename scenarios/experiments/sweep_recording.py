@@ -45,6 +45,8 @@ def with_recording(specs: Sequence[RunSpec], recording: SweepRecording) -> list[
 
     record = recording.path
     parts = Path(record + ".parts")
+    if parts.is_symlink():  # the tool's own folder: a link planted there is removed
+        parts.unlink()
     parts.mkdir(parents=True, exist_ok=True)
     # the same sweep gets the same id, so the parts of an interrupted run and of its
     # --resume are one recording in the viewer

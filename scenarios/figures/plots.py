@@ -192,6 +192,9 @@ def all_figures(results: dict[str, Any], sc: Scenario, model: TabularModel,
     paths = [out_dir / "steps_per_episode.png", out_dir / "reward_per_step.png",
              out_dir / "time_per_episode.png", out_dir / "routes.png",
              out_dir / "greedy_test.png"]
+    for p in paths:  # the tool's own names: a link planted there is replaced, not followed
+        if p.is_symlink():
+            p.unlink()
     starts = training_starts(results)
     curve_figure(results, "steps_per_episode", "steps per episode", paths[0], logy=True,
                  what=starts)

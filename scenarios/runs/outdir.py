@@ -58,14 +58,23 @@ def _alive(pid: int) -> bool:
 @contextlib.contextmanager
 def sweep_lock(out_dir: Path, flag: str = "--out") -> Iterator[None]:
     """Hold ``out_dir`` for this process; refuse if a live process holds it."""
+    from sim.files import open_own_file
+
     lock = out_dir / LOCK_NAME
     mine = out_dir / f"{LOCK_NAME}.{os.getpid()}"
-    mine.write_text(f"{os.getpid()}\n")
+    # never through a link or file planted under this name (it would be truncated to a pid)
+    mine.unlink(missing_ok=True)
+    fd = open_own_file(mine, os.O_WRONLY | os.O_CREAT | os.O_EXCL)
+    with os.fdopen(fd, "w") as helper:
+        helper.write(f"{os.getpid()}\n")
     try:
         for _ in range(2):
             try:  # a hard link appears atomically *with* its content: never an empty lock
                 os.link(mine, lock)
             except FileExistsError:
+                if lock.is_symlink():  # planted: never read or honoured through a link
+                    lock.unlink()
+                    continue
                 if lock.is_dir() or (lock.exists() and not lock.is_file()):
                     raise OutDirError(str(lock), flag, "is not a lock file (a folder or device "
                                       "under the lock's name)",

@@ -478,6 +478,6 @@ def dumps_by_line(doc: dict[str, Any]) -> str:
 
 def write_results(out_dir: str | Path, results: dict[str, Any],
                   method_order: list[str] | None = None) -> None:
-    out = Path(out_dir)
-    atomic_write_text(out / "results.json", dumps_by_line(results))
-    atomic_write_text(out / "summary.md", summary_markdown(results, method_order))
+    out = Path(out_dir)  # the tool's own names: a link planted there is replaced, not followed
+    atomic_write_text(out / "results.json", dumps_by_line(results), follow=False)
+    atomic_write_text(out / "summary.md", summary_markdown(results, method_order), follow=False)

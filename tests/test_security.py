@@ -1,0 +1,44 @@
+"""A shared output folder cannot turn a sweep into a writer of someone else's files: links
+planted under the names the tool gives its own files (the lock and its helper, results,
+summary, the resume file, figures, the recording's parts) are replaced, never followed."""
+
+from __future__ import annotations
+
+import os
+
+from scenarios import api
+from scenarios.runs.outdir import LOCK_NAME
+
+
+def test_links_planted_in_an_output_folder_are_not_followed(tmp_path):
+    out = tmp_path / "shared"
+    out.mkdir()
+    victims = tmp_path / "victims"
+    victims.mkdir()
+    names = [f"{LOCK_NAME}.{os.getpid()}", LOCK_NAME, "results.json", "summary.md",
+             "runs.partial.jsonl", "steps_per_episode.png", "greedy_test.png"]
+    for name in names:
+        (victims / name).write_text("precious\n")
+        (out / name).symlink_to(victims / name)
+    victim_dir = tmp_path / "victim-dir"
+    victim_dir.mkdir()
+    record = tmp_path / "rec.rrd"
+    (tmp_path / "rec.rrd.parts").symlink_to(victim_dir)
+    cmp = api.compare("paper-40", ["st-ql"], seeds=1, episodes=10, jobs=1, out=out,
+                      record=record)
+    for name in names:
+        assert (victims / name).read_text() == "precious\n", name
+    assert list(victim_dir.iterdir()) == []
+    assert (out / "results.json").is_file() and not (out / "results.json").is_symlink()
+    assert cmp.runs and record.stat().st_size > 0
+
+
+def test_a_link_the_user_named_is_still_written_through(tmp_path):
+    """--json FILE, --save, --record: a path the user named may be their own link."""
+    from sim.files import atomic_write_text
+
+    target = tmp_path / "real.json"
+    link = tmp_path / "mine.json"
+    link.symlink_to(target)
+    atomic_write_text(link, "{}")
+    assert link.is_symlink() and target.read_text() == "{}"

@@ -42,3 +42,28 @@ def test_a_link_the_user_named_is_still_written_through(tmp_path):
     link.symlink_to(target)
     atomic_write_text(link, "{}")
     assert link.is_symlink() and target.read_text() == "{}"
+
+
+def test_report_refresh_runs_only_commands_it_builds_from_study_entry_points():
+    """An artifact is data: report --refresh builds its argv from a closed list of study
+    entry points, with this interpreter and no shell, and refuses anything else."""
+    import sys
+
+    import pytest
+
+    from scenarios.artifacts import artifact_names, load_artifact
+    from scenarios.cli.report import argv_of
+
+    for name in artifact_names():  # every committed artifact still refreshes
+        argv = argv_of(load_artifact(name)["command"])
+        assert argv[0] == sys.executable and argv[1] == "-m"
+    assert argv_of("rnhql optimum paper-50 --fidelity noisy --artifact x")[:4] == \
+        [sys.executable, "-m", "scenarios.cli", "optimum"]
+    for hostile in ["sh -c 'id > PWNED'", "python -m os", "python -c 'import os'",
+                    "rnhql view --version", "python -m scenarios.experiments.nope",
+                    "python -m scenarios.experiments.ablation --out /etc",
+                    "python -m scenarios.experiments.ablation --out ../../x",
+                    "python -m scenarios.experiments.ablation --out $(id)",
+                    "/usr/bin/python -m scenarios.experiments.ablation", ""]:
+        with pytest.raises(ValueError, match="re-run the study by hand"):
+            argv_of(hostile)

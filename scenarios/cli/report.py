@@ -13,9 +13,11 @@ uses every core), then redraws the figures and regenerates the pages (``cog -r``
 from __future__ import annotations
 
 import argparse
+import re
 import shlex
 import subprocess
 import sys
+from pathlib import Path
 
 from scenarios.artifacts import (
     ROOT,
@@ -34,14 +36,43 @@ def _took(wall_s: float | None) -> str:
     return f"{wall_s / 60:.0f} min" if wall_s >= 90 else f"{wall_s:.0f} s"
 
 
-def argv_of(command: str) -> list[str]:
-    """An artifact's command as argv for this interpreter (``rnhql`` and ``python``)."""
+ARTIFACT_SUBCOMMANDS = ("aliasing", "optimum")  # rnhql subcommands that write artifacts
+STUDY_PACKAGES = ("scenarios.experiments", "scenarios.bench")  # where the studies live
+SAFE_WORD = re.compile(r"[A-Za-z0-9_.,=:+;@%-]+(/[A-Za-z0-9_.,=:+;@%-]+)*")
+
+
+def argv_of(command: str, source: str = "an artifact") -> list[str]:
+    """The argv ``rnhql report --refresh`` runs for an artifact's ``command``, built by this
+    tool, never the text itself: the command must be a study entry point of this package
+    (``rnhql aliasing|optimum ...`` or ``python -m scenarios.experiments|bench.NAME ...``,
+    NAME a module that exists), run with this interpreter, no shell, and its arguments plain
+    words and relative paths inside the checkout (no ``..``, no absolute path). An artifact
+    is data: a JSON file that names anything else is refused (ValueError naming it)."""
     words = shlex.split(command)
-    if words[0] == "rnhql":
-        return [sys.executable, "-m", "scenarios.cli", *words[1:]]
-    if words[0] in ("python", "python3"):
-        return [sys.executable, *words[1:]]
-    return words
+
+    def refuse(why: str) -> ValueError:
+        return ValueError(f"{source}: its command {command!r} {why}; re-run the study by hand "
+                          "if you trust it")
+
+    if not words:
+        raise refuse("is empty")
+    if words[0] == "rnhql" and len(words) > 1 and words[1] in ARTIFACT_SUBCOMMANDS:
+        head, args = [sys.executable, "-m", "scenarios.cli", words[1]], words[2:]
+    elif words[0] in ("python", "python3") and len(words) > 2 and words[1] == "-m":
+        module = words[2]
+        package, _, name = module.rpartition(".")
+        if package not in STUDY_PACKAGES or not re.fullmatch(r"[a-z_][a-z0-9_]*", name) or \
+                not (ROOT / Path(*package.split(".")) / f"{name}.py").is_file():
+            raise refuse(f"runs {module!r}, not a study of this package")
+        head, args = [sys.executable, "-m", module], words[3:]
+    else:
+        raise refuse("is not a study entry point of this package (rnhql aliasing or "
+                     "optimum, python -m scenarios.experiments.* or scenarios.bench.*)")
+    for arg in args:
+        if not SAFE_WORD.fullmatch(arg) or ".." in arg.split("/"):
+            raise refuse(f"passes {arg!r}, not a plain word or a relative path in the "
+                         "checkout")
+    return [*head, *args]
 
 
 def _redraw_figures(redraw) -> bool:
@@ -96,11 +127,16 @@ def cmd_report(args: argparse.Namespace) -> int:
             f"about {_took(total)} measured last time"
             + (" (some unknown)" if None in known else ""))
     print(f"\nrefresh: {len(stale)} stale artifact(s), {took}")
-    for doc in stale:
+    try:  # every command checked before any runs
+        argvs = [argv_of(doc["command"], f"docs/results/{doc['name']}.json") for doc in stale]
+    except ValueError as exc:
+        print(f"rnhql report: {exc}", file=sys.stderr)
+        return 2
+    for doc, argv in zip(stale, argvs, strict=True):
         print(f"  {doc['command']}")
         if args.dry_run:
             continue
-        code = subprocess.call(argv_of(doc["command"]), cwd=ROOT)
+        code = subprocess.call(argv, cwd=ROOT)
         if code != 0:
             print(f"rnhql report: `{doc['command']}` exited with {code}; the pages are not "
                   "regenerated", file=sys.stderr)

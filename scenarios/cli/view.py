@@ -66,6 +66,8 @@ def cmd_view(args: argparse.Namespace) -> int:
     path = Path(args.file)
     if not path.is_file():
         raise InputError(str(path), "FILE", "does not exist", "pass a .rrd written by --record")
+    # absolute: a file named like a flag ("--version") must reach rerun as a path, not a flag
+    path = path.absolute()
     if not args.web:
         _check_display(path)
     try:

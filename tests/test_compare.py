@@ -213,3 +213,24 @@ def test_an_import_broken_by_ctrl_c_counts_as_ctrl_c():
     except ImportError as err:
         assert interrupted(err)
     assert not interrupted(ImportError("no module named x"))
+
+
+def test_a_maps_walls_are_drawn_as_one_image_not_a_patch_per_cell(tmp_path):
+    """routes.png of a big map: its blocked cells are one image (ost003d has 24,422; a patch
+    each took 11 s and grew with the map), drawn where the cells are."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from scenarios.figures.plots import draw_map
+    from scenarios.runs.spec import load
+
+    sc, model = load("maze-1")
+    fig, ax = plt.subplots()
+    draw_map(ax, sc, model)
+    assert len(ax.patches) == len(sc.obstacles)  # circles only: no rectangle per cell
+    walls = ax.images[-1].get_array()
+    ix, iy = sc.blocked_cells[0]
+    assert not walls.mask[iy, ix] and walls.mask.sum() == sc.nx * sc.ny - len(sc.blocked_cells)
+    plt.close(fig)

@@ -137,8 +137,15 @@ def draw_map(ax: plt.Axes, sc: Scenario, model: TabularModel) -> None:
     for o in sc.obstacles:
         ax.add_patch(CirclePatch((o.x_m, o.y_m), o.radius_m, color="#464a54", lw=0))
     c = sc.cell_size_m
-    for ix, iy in sc.blocked_cells:
-        ax.add_patch(plt.Rectangle((ix * c, iy * c), c, c, color="#464a54", lw=0))
+    if sc.blocked_cells:  # one image, not a patch per cell (a 512² map has ~10^5 of them)
+        from matplotlib.colors import ListedColormap
+
+        walls = np.zeros((sc.ny, sc.nx))
+        cells = np.asarray(sc.blocked_cells, dtype=np.int64)
+        walls[cells[:, 1], cells[:, 0]] = 1.0
+        ax.imshow(np.ma.masked_equal(walls, 0.0), origin="lower", interpolation="nearest",
+                  cmap=ListedColormap(["#464a54"]), extent=(0, sc.width_m, 0, sc.height_m),
+                  vmin=0, vmax=1)
     for cell, colour, label in ((sc.start, "#2ea043", "S"), (sc.goal, "#e6aa14", "G")):
         x, y = (cell[0] + 0.5) * c, (cell[1] + 0.5) * c
         ax.plot(x, y, "o", color=colour, ms=8, zorder=5)

@@ -180,6 +180,12 @@ MAX_OBSTACLES = 100_000
 MAX_COORDINATE_M = 1e6
 
 
+def _is_cell(cell: object) -> bool:
+    """Two whole numbers (ints, numpy's included; not bools, not floats that truncate)."""
+    return (isinstance(cell, tuple | list) and len(cell) == 2
+            and all(isinstance(v, int | np.integer) and not isinstance(v, bool) for v in cell))
+
+
 def validate_shape(sc: Scenario) -> None:
     """Checks that need no rasterising: sizes, radii, cells in range."""
     src = sc.source
@@ -220,12 +226,28 @@ def validate_shape(sc: Scenario) -> None:
         if not (math.isfinite(c.radius_m) and c.radius_m > 0):
             raise ScenarioError(src, fld, f"radius must be a finite positive number, got "
                                 f"{c.radius_m}", "give the radius in metres, e.g. 1.5")
-    for fld, (ix, iy) in (("start", sc.start), ("goal", sc.goal)):
+    for fld, cell in (("start", sc.start), ("goal", sc.goal)):
+        if not _is_cell(cell):
+            raise ScenarioError(src, fld, f"is {cell!r}, not a cell of two whole numbers",
+                                "write it as (x, y), e.g. (1, 1)")
+        ix, iy = cell
         if not (0 <= ix < sc.nx and 0 <= iy < sc.ny):
             raise ScenarioError(src, fld, f"cell ({ix}, {iy}) is outside the {sc.nx}x{sc.ny} "
                                 "arena", f"use 0 <= x < {sc.nx} and 0 <= y < {sc.ny}")
     if sc.start == sc.goal:
         raise ScenarioError(src, "goal", "goal equals start", "choose a different goal cell")
+    cells = np.asarray(sc.blocked_cells, dtype=object).reshape(-1, 2) \
+        if sc.blocked_cells else np.zeros((0, 2), dtype=np.int64)
+    ok = (np.issubdtype(np.asarray(sc.blocked_cells).dtype, np.integer) and
+          len(cells) == len(sc.blocked_cells) and bool(
+              ((cells[:, 0] >= 0) & (cells[:, 0] < sc.nx) & (cells[:, 1] >= 0)
+               & (cells[:, 1] < sc.ny)).all())) if sc.blocked_cells else True
+    for i, cell in enumerate(() if ok else sc.blocked_cells):  # (the first bad one, named)
+        if not _is_cell(cell) or not (0 <= cell[0] < sc.nx and 0 <= cell[1] < sc.ny):
+            raise ScenarioError(src, f"blocked_cells[{i}]", f"is {cell!r}, not a cell of the "
+                                f"{sc.nx}x{sc.ny} arena (negative or too large numbers would "
+                                "block another cell)", f"use whole numbers 0 <= x < {sc.nx}, "
+                                f"0 <= y < {sc.ny}")
     if not (isinstance(sc.steps_per_episode, int)
             and 0 < sc.steps_per_episode <= MAX_STEPS_PER_EPISODE):
         raise ScenarioError(src, "steps_per_episode", f"must be an integer in 1.."

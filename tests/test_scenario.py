@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import textwrap
 
 import numpy as np
@@ -203,3 +204,23 @@ def test_the_example_scenario_is_complete_and_valid(tmp_path, capsys):
                           "width_m", "height_m", "cell_size_m"):
                 continue  # tables, or the arena's, or set by the loader
             assert f"{f.name} =" in text or f"{f.name} = " in text, f.name
+
+
+@pytest.mark.parametrize(("change", "field"), [
+    ({"blocked_cells": ((-1, 0),)}, "blocked_cells[0]"),
+    ({"blocked_cells": ((3, 3), (10, 3))}, "blocked_cells[1]"),
+    ({"blocked_cells": ((3.7, 3),)}, "blocked_cells[0]"),
+    ({"start": (1.5, 1)}, "start"),
+])
+def test_a_python_scenario_gets_the_files_range_checks(change, field):
+    """A Scenario built in Python (the API, Gymnasium) is checked as a file's: a negative or
+    too large cell would block another cell, a float one would truncate."""
+    import dataclasses
+
+    from sim.errors import ScenarioError
+    from sim.scenario import Scenario
+    from sim.scenario_io import resolve_scenario
+
+    sc = dataclasses.replace(Scenario("t", 10.0, 10.0, (1, 1), (8, 8)), **change)
+    with pytest.raises(ScenarioError, match=re.escape(f": {field}: ")):
+        resolve_scenario(sc)

@@ -212,3 +212,19 @@ def test_the_printed_address_opens_the_recording_in_a_browser(rrd, tmp_path):
     for colour, least in ((OBSTACLE, 10_000), (TRAIN, 500)):
         printed, bare = pixels_like(shots["printed"], colour), pixels_like(shots["bare"], colour)
         assert printed > least and bare < least / 5, (colour, printed, bare)
+
+
+@pytest.mark.parametrize(("make", "argv_tail", "says"), [
+    (lambda p: p.write_bytes(b""), [], "is empty"),
+    (lambda p: p.mkdir(), [], "is not a regular file"),
+    (lambda p: p.write_bytes(b"RRF2"), ["--web", "--port", "65536"], "65536 is not a port"),
+    (lambda p: p.write_bytes(b"RRF2"), ["--web", "--port", "-1"], "-1 is not a port"),
+])
+def test_view_refuses_bad_input_in_one_line(tmp_path, capsys, make, argv_tail, says):
+    from scenarios.cli import main
+
+    path = tmp_path / "x.rrd"
+    make(path)
+    assert main(["view", str(path), *argv_tail]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and says in err

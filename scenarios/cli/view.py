@@ -64,8 +64,17 @@ def cmd_view(args: argparse.Namespace) -> int:
     from scenarios.recording.viewer import Stopped, stopping_on_signals
 
     path = Path(args.file)
-    if not path.is_file():
+    if not path.exists():
         raise InputError(str(path), "FILE", "does not exist", "pass a .rrd written by --record")
+    if not path.is_file():
+        raise InputError(str(path), "FILE", "is not a regular file (a folder, device or FIFO)",
+                         "pass a .rrd written by --record")
+    if path.stat().st_size == 0:
+        raise InputError(str(path), "FILE", "is empty (a recording stopped before it wrote "
+                         "anything)", "record the run again")
+    if args.port is not None and not 1 <= args.port <= 65535:
+        raise InputError("command line", "--port", f"{args.port} is not a port",
+                         "pass a port in 1..65535, e.g. --port 9090")
     # absolute: a file named like a flag ("--version") must reach rerun as a path, not a flag
     path = path.absolute()
     if not args.web:

@@ -83,3 +83,26 @@ def test_step_before_reset_and_bad_heading():
         DiffDriveEnv(OPEN).reset(options={"heading": float("nan")})
     with pytest.raises(ValueError, match="options"):
         PhysicsRouteEnv(OPEN).reset(options={"start": 10_000})
+
+
+@pytest.mark.parametrize("config", [{"friction": float("nan")}, {"substeps": 10**7},
+                                    {"dt_s": 1e-9}, {"timeout_s": 1e9}])
+def test_physics_settings_that_crash_or_hang_are_refused(config):
+    """friction=nan aborted the interpreter inside Chipmunk; a 1e-9 s step or 10^7 substeps
+    ran a primitive for minutes."""
+    import gymnasium as gym
+
+    import sim  # noqa: F401
+
+    with pytest.raises(ValueError, match="PhysicsConfig"):
+        gym.make("rnhql/PhysicsRoute-v0", scenario="paper-40", config=config)
+
+
+def test_a_vector_env_has_a_bounded_number_of_robots():
+    import gymnasium as gym
+
+    import sim  # noqa: F401
+
+    with pytest.raises(ValueError, match="num_envs must be an int in 1..4,096"):
+        gym.make_vec("rnhql/PhysicsRoute-v0", num_envs=100_000,
+                     vectorization_mode="vector_entry_point", scenario="paper-40")

@@ -38,6 +38,12 @@ HOLD_STEP_M = 1e-5  # central-difference step of a surface's normal [m]
 DEEPER_M = 1e-12  # a step that deepens the robot's overlap by more pushes into the surface [m]
 
 
+MAX_FRICTION = 10.0  # a Coulomb coefficient beyond any material pair [-]
+MIN_DT_S, MAX_DT_S = 1e-4, 1.0  # a physics step [s]
+MAX_SUBSTEPS, MAX_ITERATIONS = 1000, 1000
+MAX_TIMEOUT_S = 600.0  # a primitive's give-up time [s]
+
+
 @dataclass(frozen=True)
 class PhysicsConfig:
     """Time stepping, controller tolerances and contact parameters."""
@@ -79,6 +85,24 @@ class PhysicsConfig:
         if not (isinstance(self.iterations, int) and self.iterations >= 1):
             raise ValueError(f"PhysicsConfig.iterations must be an int >= 1, "
                              f"got {self.iterations!r}")
+        # Chipmunk aborts the interpreter on a nan coefficient; past these bounds a primitive
+        # runs for minutes (a step of 1e-9 s, 10^7 substeps), far from any robot's physics
+        if not (math.isfinite(self.friction) and 0.0 <= self.friction <= MAX_FRICTION):
+            raise ValueError(f"PhysicsConfig.friction must be in [0, {MAX_FRICTION:g}], "
+                             f"got {self.friction!r}")
+        if not (isinstance(self.collision_slop_m, int | float)
+                and math.isfinite(self.collision_slop_m) and self.collision_slop_m >= 0):
+            raise ValueError(f"PhysicsConfig.collision_slop_m must be a finite number >= 0, "
+                             f"got {self.collision_slop_m!r}")
+        if not MIN_DT_S <= self.dt_s <= MAX_DT_S:
+            raise ValueError(f"PhysicsConfig.dt_s must be in [{MIN_DT_S:g}, {MAX_DT_S:g}] s, "
+                             f"got {self.dt_s!r}")
+        if self.substeps > MAX_SUBSTEPS or self.iterations > MAX_ITERATIONS:
+            raise ValueError(f"PhysicsConfig.substeps (<= {MAX_SUBSTEPS}) and iterations "
+                             f"(<= {MAX_ITERATIONS}) are {self.substeps} and {self.iterations}")
+        if self.timeout_s > MAX_TIMEOUT_S:
+            raise ValueError(f"PhysicsConfig.timeout_s must be at most {MAX_TIMEOUT_S:g} s, "
+                             f"got {self.timeout_s!r}")
 
 
 class Contact(NamedTuple):

@@ -58,6 +58,8 @@ from sim.scenario import Rewards, Scenario
 INFO_KEYS = ("state", "bumped", "reached", "timeout", "steps", "contacts", "pose", "time_s")
 MASK_KEYS = tuple(f"_{k}" for k in INFO_KEYS)
 
+MAX_NUM_ENVS = 4096  # robots in one vector env: 100,000 took 24 GB and was killed
+
 
 def autoreset_mode_arg(mode: AutoresetMode | str) -> AutoresetMode:
     """One of gymnasium's :class:`AutoresetMode` (or its value, ``"NextStep"``, ...)."""
@@ -160,8 +162,9 @@ class PhysicsRouteVectorEnv(VectorEnv):
                  contact_records: bool = True) -> None:
         if render_mode is not None:
             raise ValueError("PhysicsRouteVectorEnv does not render; use the single env")
-        if not (isinstance(num_envs, int) and num_envs >= 1):
-            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+        if not (isinstance(num_envs, int) and 1 <= num_envs <= MAX_NUM_ENVS):
+            raise ValueError(f"num_envs must be an int in 1..{MAX_NUM_ENVS:,} (robots in one "
+                             f"Space; each holds its own state), got {num_envs!r}")
         mode = autoreset_mode_arg(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": mode}
         self.num_envs = num_envs
@@ -346,8 +349,9 @@ class DiffDriveVectorEnv(VectorEnv):
                  steps_per_episode: int | None = None, start: str | int = "S") -> None:
         if render_mode is not None:
             raise ValueError("DiffDriveVectorEnv does not render; use the single env")
-        if not (isinstance(num_envs, int) and num_envs >= 1):
-            raise ValueError(f"num_envs must be an int >= 1, got {num_envs!r}")
+        if not (isinstance(num_envs, int) and 1 <= num_envs <= MAX_NUM_ENVS):
+            raise ValueError(f"num_envs must be an int in 1..{MAX_NUM_ENVS:,} (robots in one "
+                             f"Space; each holds its own state), got {num_envs!r}")
         mode = autoreset_mode_arg(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": mode}
         self.num_envs = num_envs

@@ -35,6 +35,11 @@ def random_circles(sc: Scenario, count: int, radius_min_m: float, radius_max_m: 
             if all(math.hypot(x - kx, y - ky) > r + sc.robot.inflation_m + keep_clear_m
                    for kx, ky in keep):
                 circles.append(Circle(x, y, r))
+        if len(circles) < count:  # never a silent layout with fewer circles than asked for
+            raise ScenarioError(sc.source, "obstacles.random.count",
+                                f"only {len(circles)} of {count} circles fit in "
+                                f"{100 * count:,} draws while keeping S and G clear",
+                                f"ask for at most {len(circles)} circles, or smaller ones")
         candidate = replace(sc, obstacles=sc.obstacles + tuple(circles))
         try:
             validate(candidate)

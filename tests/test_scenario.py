@@ -224,3 +224,15 @@ def test_a_python_scenario_gets_the_files_range_checks(change, field):
     sc = dataclasses.replace(Scenario("t", 10.0, 10.0, (1, 1), (8, 8)), **change)
     with pytest.raises(ScenarioError, match=re.escape(f": {field}: ")):
         resolve_scenario(sc)
+
+
+def test_random_circles_that_do_not_all_fit_are_an_error_not_fewer_circles(tmp_path):
+    from sim.scenario_io import load_scenario
+
+    toml = tmp_path / "few.toml"
+    toml.write_text('name = "t"\nstart = [0, 0]\ngoal = [2, 2]\n[arena]\nwidth_m = 3.0\n'
+                    'height_m = 3.0\n[obstacles.random]\ncount = 2\nradius_min_m = 0.5\n'
+                    'radius_max_m = 1.0\nseed = 1\n')
+    with pytest.raises(ScenarioError, match=r"obstacles\.random\.count: only 1 of 2 circles "
+                                            r"fit"):
+        load_scenario(toml)

@@ -4,6 +4,7 @@ summary, the resume file, figures, the recording's parts) are replaced, never fo
 
 from __future__ import annotations
 
+import itertools
 import os
 
 from scenarios import api
@@ -88,3 +89,56 @@ def test_a_recording_named_like_a_flag_reaches_the_viewer_as_a_path(tmp_path, mo
 
     assert main(["view", "--", "--version"]) == 0
     assert seen == [[str(tmp_path / "--version")]]
+
+
+def _contend(out: str, barrier, log: str, rounds: int, planter: bool) -> None:
+    """One of many processes: each round a stale lock is planted (a dead pid's), then all
+    try the lock at once; each logs how long it held it."""
+    import time
+    from pathlib import Path
+
+    from scenarios.runs.outdir import OutDirError, sweep_lock
+
+    for _ in range(rounds):
+        if planter:
+            (Path(out) / LOCK_NAME).write_text("4194304\n")  # a pid no process has
+        barrier.wait()
+        try:
+            with sweep_lock(Path(out)):
+                t0 = time.monotonic()
+                time.sleep(0.02)
+                t1 = time.monotonic()
+            with open(log, "a") as f:
+                f.write(f"{t0} {t1}\n")
+        except OutDirError:
+            pass
+        barrier.wait()
+
+
+def test_no_two_processes_ever_hold_the_sweep_lock(tmp_path):
+    """Eight processes released together, fifty times, onto a folder whose lock a dead
+    process left each time: never two holders at once (the old read-then-remove takeover
+    let two in)."""
+    import multiprocessing
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / LOCK_NAME).write_text("4194304\n")  # a pid no process has: stale
+    ctx = multiprocessing.get_context("fork")
+    n, rounds = 8, 50
+    barrier = ctx.Barrier(n)
+    logs = [str(tmp_path / f"log{k}") for k in range(n)]
+    procs = [ctx.Process(target=_contend, args=(str(out), barrier, logs[k], rounds, k == 0))
+             for k in range(n)]
+    for p in procs:
+        p.start()
+    for p in procs:
+        p.join(timeout=120)
+        assert p.exitcode == 0
+    from pathlib import Path
+
+    spans = sorted(tuple(map(float, line.split())) for log in logs if os.path.exists(log)
+                   for line in Path(log).read_text().splitlines())
+    assert len(spans) >= rounds  # somebody held it every round
+    for (_, end), (start, _) in itertools.pairwise(spans):
+        assert start >= end  # the next holder began after the last one ended

@@ -55,47 +55,70 @@ def _alive(pid: int) -> bool:
     return True
 
 
+def _owner(fd: int) -> int:
+    """The pid a lock file names (0: none or junk)."""
+    try:
+        text = os.pread(fd, 32, 0).decode("ascii").strip()
+        return int(text or "0")
+    except (OSError, ValueError):  # junk (UnicodeDecodeError is a ValueError)
+        return 0
+
+
 @contextlib.contextmanager
 def sweep_lock(out_dir: Path, flag: str = "--out") -> Iterator[None]:
-    """Hold ``out_dir`` for this process; refuse if a live process holds it."""
+    """Hold ``out_dir`` for this process; refuse if a live process holds it.
+
+    The lock is a kernel lock (``flock``) on the lock file, held while the sweep runs: only
+    one process can hold it at any instant, and the kernel releases it when its process
+    dies however it dies, so a stale lock is simply taken (no read-then-remove race: the
+    old takeover let two processes in at once in 53 of 200 synchronised trials). The file
+    names the holder's pid for the message; a file naming another live process whose
+    ``flock`` is not held (a sweep of an older rnhql) is respected too. A link planted
+    under the lock's name is removed, never followed.
+    """
+    import fcntl
+
     from sim.files import open_own_file
 
     lock = out_dir / LOCK_NAME
-    mine = out_dir / f"{LOCK_NAME}.{os.getpid()}"
-    # never through a link or file planted under this name (it would be truncated to a pid)
-    mine.unlink(missing_ok=True)
-    fd = open_own_file(mine, os.O_WRONLY | os.O_CREAT | os.O_EXCL)
-    with os.fdopen(fd, "w") as helper:
-        helper.write(f"{os.getpid()}\n")
+    for _ in range(3):
+        if lock.is_symlink():
+            lock.unlink()
+        if lock.exists() and not lock.is_file():
+            raise OutDirError(str(lock), flag, "is not a lock file (a folder or device "
+                              "under the lock's name)",
+                              f"remove it if no sweep is running: rm -r {lock}")
+        fd = open_own_file(lock, os.O_RDWR | os.O_CREAT)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            owner = _owner(fd)
+            os.close(fd)
+            raise OutDirError(str(out_dir), flag, "is in use by another sweep"
+                              + (f" (pid {owner})" if owner else ""),
+                              "wait for it to finish or pick another directory") from None
+        owner = _owner(fd)
+        try:
+            same = os.fstat(fd).st_ino == os.stat(lock).st_ino
+        except FileNotFoundError:  # its holder removed it as we opened it: try again
+            same = False
+        if not same:
+            os.close(fd)
+            continue
+        if owner and owner != os.getpid() and _alive(owner):
+            os.close(fd)
+            raise OutDirError(str(out_dir), flag, f"is in use by another sweep (pid {owner})",
+                              "wait for it to finish or pick another directory")
+        break
+    else:
+        raise OutDirError(str(out_dir), flag, "lock file keeps changing",
+                          f"remove {lock} if no sweep is running")
     try:
-        for _ in range(2):
-            try:  # a hard link appears atomically *with* its content: never an empty lock
-                os.link(mine, lock)
-            except FileExistsError:
-                if lock.is_symlink():  # planted: never read or honoured through a link
-                    lock.unlink()
-                    continue
-                if lock.is_dir() or (lock.exists() and not lock.is_file()):
-                    raise OutDirError(str(lock), flag, "is not a lock file (a folder or device "
-                                      "under the lock's name)",
-                                      f"remove it if no sweep is running: rm -r {lock}") from None
-                try:
-                    owner = int(lock.read_bytes().decode("ascii").strip() or "0")
-                except (OSError, ValueError):  # junk (UnicodeDecodeError is a ValueError)
-                    owner = 0
-                if owner and owner != os.getpid() and _alive(owner):
-                    raise OutDirError(str(out_dir), flag,
-                                      f"is in use by another sweep (pid {owner})",
-                                      "wait for it to finish or pick another directory") from None
-                lock.unlink(missing_ok=True)  # stale: its owner is gone
-                continue
-            break
-        else:
-            raise OutDirError(str(out_dir), flag, "lock file keeps reappearing",
-                              f"remove {lock} if no sweep is running")
-    finally:
-        mine.unlink(missing_ok=True)
-    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
         yield
     finally:
-        lock.unlink(missing_ok=True)
+        with contextlib.suppress(OSError):  # removed while held: no one can hold it between
+            if os.fstat(fd).st_ino == os.stat(lock).st_ino:
+                lock.unlink()
+        os.close(fd)

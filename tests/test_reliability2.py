@@ -284,7 +284,8 @@ def test_a_torn_last_line_is_still_run_again_not_refused(tmp_path):
     from scenarios.runs.resume_state import read_partial
 
     (tmp_path / "runs.partial.jsonl").write_text('{"key": "a"}\n{"key": "b", "x": [1, ')
-    assert list(read_partial(tmp_path)) == ["a"]
+    # a study's partial runs hold a few fields each (a comparison's are checked whole)
+    assert list(read_partial(tmp_path, finished=lambda out: {})) == ["a"]
 
 
 # ------------------------------------------------------------------ 5: the physics-model cache

@@ -142,3 +142,27 @@ def test_no_two_processes_ever_hold_the_sweep_lock(tmp_path):
     assert len(spans) >= rounds  # somebody held it every round
     for (_, end), (start, _) in itertools.pairwise(spans):
         assert start >= end  # the next holder began after the last one ended
+
+
+def test_damaged_runs_in_a_resumed_comparison_are_one_line(tmp_path, capsys):
+    """A run edited to hold a string where a number goes, or only its key, is refused in one
+    line naming the file and the run (both once ended in a traceback in the summary)."""
+    import json
+
+    from scenarios.cli import main
+
+    out = tmp_path / "c"
+    argv = ["compare", "paper-40", "--methods", "st-ql", "--seeds", "2", "--episodes", "5",
+            "--jobs", "1", "--out", str(out)]
+    assert main(argv) == 0
+    good = json.loads((out / "results.json").read_text())
+    for damage, says in ((lambda r: r.update(success_rate="x"), "field 'success_rate' is 'x'"),
+                         (lambda r: [r.pop(k) for k in list(r) if k != "key"],
+                          "has no field 'method'")):
+        doc = json.loads(json.dumps(good))
+        damage(doc["runs"][0])
+        (out / "results.json").write_text(json.dumps(doc))
+        capsys.readouterr()
+        assert main([*argv, "--resume"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "results.json: runs[0]: " + says in err

@@ -61,6 +61,40 @@ def parse_record(text: str) -> dict[str, Any]:
     return rec
 
 
+_INT, _NUM = (int,), (int, float)
+# what a comparison's summary and figures read of each run: field -> (types, None allowed)
+COMPARE_FIELDS: dict[str, tuple[tuple[type, ...], bool]] = {
+    "method": ((str,), False), "world": ((str,), False), "seed": (_INT, False),
+    "final_route_length": (_INT, False), "optimal_route_length": (_INT, False),
+    "final_route_optimal": ((bool,), False), "episodes_to_stable_optimal": (_INT, True),
+    "episodes_to_optimal": (_INT, True), "optimal_test_fraction": (_NUM, True),
+    "epsilon_route_length": (_NUM, True), "success_rate": (_NUM, False),
+    "reward_per_step": (_NUM, False), "reward_per_step_last_10pct": (_NUM, False),
+    "wall_time_s": (_NUM, False), "env_steps": (_INT, False),
+    "optimal_action_fraction": (_NUM, False),
+}
+COMPARE_SERIES = ("steps_per_episode", "return_per_episode", "success_per_episode",
+                  "test_episodes", "test_route_length")  # lists of numbers
+
+
+def check_compare_record(rec: dict[str, Any]) -> None:
+    """A comparison's run holds every field its summary and figures read, each of its type;
+    ValueError names the first that does not (a hand-edited run surfaced as a traceback in
+    the summary)."""
+    for name, (types, nullable) in COMPARE_FIELDS.items():
+        if name not in rec:
+            raise ValueError(f"has no field {name!r}")
+        v = rec[name]
+        if v is None and nullable:
+            continue
+        if not isinstance(v, types) or (isinstance(v, bool) and bool not in types):
+            raise ValueError(f"field {name!r} is {v!r}, not a {types[-1].__name__}")
+    for name in COMPARE_SERIES:
+        v = rec.get(name)
+        if not isinstance(v, list) or not all(isinstance(x, _NUM) for x in v):
+            raise ValueError(f"field {name!r} is not a list of numbers")
+
+
 def check_state_file(path: Path, flag: str = "--out") -> None:
     """Refuse a resume file's name taken by something that is not a regular file (a folder
     named ``results.json``): rnhql would fail on it only after every run."""
@@ -117,6 +151,7 @@ def finished_compare(out_dir: Path) -> dict[str, dict[str, Any]]:
     for i, rec in enumerate(runs):
         try:
             rec = parse_record(json.dumps(rec, allow_nan=True))
+            check_compare_record(rec)
         except ValueError as exc:
             raise ResumeStateError(str(path), f"runs[{i}]", str(exc), fix) from None
         done[rec["key"]] = rec
@@ -132,6 +167,7 @@ def read_partial(out_dir: Path, finished: Finished | None = None) -> dict[str, d
     finished re-runs nothing of it (an extended sweep runs only what is new). A torn last
     line (a write cut short) is ignored; any other line that is not a run is refused."""
     path = out_dir / PARTIAL
+    whole = finished is None  # a comparison keeps whole records (a study, a few fields each)
     done = (finished or finished_compare)(out_dir)
     if not path.exists() and not path.is_symlink():
         return done
@@ -142,6 +178,8 @@ def read_partial(out_dir: Path, finished: Finished | None = None) -> dict[str, d
             continue
         try:
             rec = parse_record(line)
+            if whole:
+                check_compare_record(rec)
         except ValueError as exc:
             if i == len(lines):  # no newline after it: the write was cut short
                 continue

@@ -166,3 +166,18 @@ def test_damaged_runs_in_a_resumed_comparison_are_one_line(tmp_path, capsys):
         assert main([*argv, "--resume"]) == 2
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and "results.json: runs[0]: " + says in err
+
+
+def test_running_out_of_memory_is_one_line_and_exit_1(monkeypatch, capsys):
+    from scenarios.cli import main, train
+
+    def starve(args):
+        raise MemoryError
+
+    monkeypatch.setattr(train, "cmd_train", starve)
+    from scenarios.cli import app
+
+    monkeypatch.setattr(app.train, "cmd_train", starve)
+    assert main(["train", "paper-40", "--episodes", "1"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "out of memory" in err

@@ -265,6 +265,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"rnhql: error: {where}: cannot be written ({err.strerror}). Fix: free "
                   "some space or write elsewhere", file=sys.stderr)
         return 1
+    except MemoryError:  # the machine's memory, not a bug: one line (the lock is released,
+        #                  the finished runs stay in runs.partial.jsonl for --resume)
+        print("rnhql: error: out of memory. Fix: a smaller map or fewer --jobs, or a machine "
+              "with more memory (docs/studies.md gives what 256² and 512² runs take); "
+              "--resume keeps the runs already finished", file=sys.stderr)
+        return 1
     except Exception as err:
         from learning.checkpoint import CheckpointError
 

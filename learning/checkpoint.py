@@ -43,7 +43,8 @@ FORMAT = "rnhql-checkpoint-2"
 # float state arrays that hold learned values (Q, network weights, V): finite and sane in
 # magnitude, or every later update is inf or NaN. Others may hold inf by design (a move
 # reading's "not seen yet") and are only checked for NaN.
-VALUE_ARRAYS = frozenset({"q", "w", "v"})
+VALUE_ARRAYS = frozenset({"q", "w", "v", "tally.f_sum", "tally.f_sq", "tally.f_mean",
+                          "tally.f_std"})
 # integer state arrays that compiled code indexes with, unchecked: each value's range, as
 # (lowest, the size it indexes: "states", "pairs" (s * nA + a), "actions", or "slots"
 # (the length of the array named after the colon) and "+1" for a count up to it). A
@@ -81,9 +82,12 @@ class Checkpoint:
 
     def check_problem(self, problem: dict) -> None:
         """Raise CheckpointError if this checkpoint was trained on another scenario or reward
-        scheme than ``problem`` (older checkpoints without the record are not checked)."""
-        if self.problem is None:
-            return
+        scheme than ``problem``, or does not say what it was trained on."""
+        if self.problem is None:  # removed or never written: nothing says it fits this run
+            raise CheckpointError(
+                f"{self.path}: field 'problem' is missing: nothing records which scenario and "
+                "rewards it was trained on, so it cannot be checked against this run; train "
+                "again with rnhql train --save")
         for key, what, fix in (("rewards", "reward scheme", "resume with the same --rewards "
                                 "or start without --resume"),
                                ("scenario", "scenario (content digest)",

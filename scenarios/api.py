@@ -565,5 +565,8 @@ def route(agent: str | Path, scenario: ScenarioLike, *, fidelity: Any = "exact",
     _, model = _problem("route", scenario, None, None, _rewards("route", rewards), None,
                          ["physics"])
     ck = load_checkpoint(agent, None, model.n_states, geometry_of(model))
+    from scenarios.runs.spec import layout_digest
+
+    ck.check_problem({"layout": layout_digest(scenario)})  # trained on this layout
     return grade(greedy_actions(ck.state), scenario, fidelity=fidelity, drives=drives,
                  seed=seed, rewards=rewards)

@@ -181,3 +181,28 @@ def test_running_out_of_memory_is_one_line_and_exit_1(monkeypatch, capsys):
     assert main(["train", "paper-40", "--episodes", "1"]) == 1
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "out of memory" in err
+
+
+def test_a_tampered_checkpoint_is_refused(tmp_path, capsys):
+    """An infinite tally sum, or a file whose record of what it was trained on was removed
+    (so it would load on any scenario of its size), is refused in one line."""
+    import numpy as np
+
+    from scenarios.cli import main
+
+    agent = tmp_path / "a.npz"
+    assert main(["train", "paper-40", "--method", "st-ql", "--episodes", "5",
+                 "--save", str(agent)]) == 0
+    with np.load(agent, allow_pickle=False) as data:
+        fields = {k: data[k] for k in data.files}
+    assert "state_tally.f_sum" in fields and "problem" in fields
+    for name, change, says in (
+            ("inf.npz", {"state_tally.f_sum": np.array([np.inf])},
+             "field 'state_tally.f_sum' holds infinite values"),
+            ("bare.npz", {"problem": None}, "field 'problem' is missing")):
+        tampered = {k: v for k, v in {**fields, **change}.items() if v is not None}
+        np.savez(tmp_path / name, **tampered)
+        capsys.readouterr()
+        assert main(["route", "paper-40", "--agent", str(tmp_path / name)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and says in err, err

@@ -68,7 +68,7 @@ _TABLE: tuple[tuple[type[MethodConfig], ModuleType, bool], ...] = (
     (DynaQ, dyna_q, True),
     # rnh-ql+ with the ablation's switches (run for run rnh-ql+ at its defaults)
     (RNHQLPlusAblation, rnh_ql_plus_ablation, False),
-    # rnh-ql+ with the held-out maps' options on (issue 37), named: run on request
+    # rnh-ql+ with the held-out maps' options on, named: run on request
     (RNHQLPlusExplore, rnh_ql_plus, False),
 )
 HOOKS = ("State", "init_state", "act", "update", "begin", "exploit")

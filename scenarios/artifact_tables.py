@@ -332,7 +332,7 @@ def scaling_maps(d: dict[str, Any]) -> str:
 
 @renderer("heldout")
 def heldout(d: dict[str, Any]) -> str:
-    """Held-out maps (issue 37): a row per method, a column per map and protocol; cells
+    """Held-out maps: a row per method, a column per map and protocol; cells
     optimal seeds / seeds · median episodes to a stable optimal route · median wall time."""
     cols = d["columns"]
     lines = [d["caption"], "", "| method | " + " | ".join(cols) + " |",
@@ -344,7 +344,7 @@ def heldout(d: dict[str, Any]) -> str:
 
 @renderer("test-from-s")
 def test_from_s(d: dict[str, Any]) -> str:
-    """Where the greedy test from S stops, a line per seed (issue 37's diagnosis)."""
+    """Where the greedy test from S stops, a line per seed (the held-out maps' diagnosis)."""
     return "```text\n" + "\n".join(d["lines"]) + "\n```\n"
 
 

@@ -39,7 +39,7 @@ OTHER_COLOURS = ((252, 108, 12), (252, 0, 252), (12, 156, 168), (144, 108, 96))
 
 def method_colour(method: str) -> tuple[int, int, int]:
     """The method's RGB colour; a method not listed gets one by a stable hash of its name."""
-    base = method.split(" ", 1)[0]  # "rnh-ql+ (issue ...)" or "haql (grid)" -> the method
+    base = method.split(" ", 1)[0]  # "rnh-ql+ (a variant)" or "haql (grid)" -> the method
     if base in METHOD_COLOURS:
         return METHOD_COLOURS[base]
     return OTHER_COLOURS[zlib.crc32(method.encode()) % len(OTHER_COLOURS)]

@@ -157,10 +157,6 @@ class Scenario:
     def ny(self) -> int:
         return round(self.height_m / self.cell_size_m)
 
-    @property
-    def n_cells(self) -> int:
-        return self.nx * self.ny
-
 
 # ---------------------------------------------------------------- validation
 

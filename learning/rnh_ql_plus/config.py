@@ -48,7 +48,7 @@ class RNHQLPlus(MethodConfig):
       cell with one, the shortest route over moves seen to work
       (:mod:`learning.known_routes`); elsewhere the greedy choice above. The moves seen
       to work only grow, so once the optimal route is walked the test stays optimal.
-    * ``model_acting=1`` (off by default, issue 37): the behaviour's greedy move is the
+    * ``model_acting=1`` (off by default; held-out maps): the behaviour's greedy move is the
       optimistic model's, every move (tried or not) valued by one step of look-ahead on
       Phi, a move the model holds blocked never; ties drawn. Q is still learned, off
       policy, and the test is unchanged. Why: by default a *tried* move is valued by its
@@ -66,7 +66,7 @@ class RNHQLPlus(MethodConfig):
       test follows them) or finds the wall that refutes it (HAQL's and D* Lite's
       behaviour). Needs ``lookahead=1`` and ``shaping_scale > 0``.
 
-    * ``model_test=1`` (off by default, issue 37): the greedy test walks the optimistic
+    * ``model_test=1`` (off by default; held-out maps): the greedy test walks the optimistic
       model's route (HAQL's test): from s, the move into the neighbour the model holds
       nearest G (ties: a move seen to work, then the lowest index), except where s has a
       known route as short as the model's distance (with ``known_route``), which it then
@@ -77,7 +77,7 @@ class RNHQLPlus(MethodConfig):
       episode in ten from S: 3/5 seeds optimal by default, 5/5 with it; docs/studies.md).
       The risk is HAQL's: a move never tried may be a wall the test then walks into.
 
-    * ``explore_steps`` (0 by default, issue 37): the first steps of each episode walk to
+    * ``explore_steps`` (0 by default; held-out maps): the first steps of each episode walk to
       cells never visited (:mod:`learning.coverage`), bumping the walls on the way, then
       the behaviour above takes over. Why: under uniform starts the agent heading
       straight for G never enters the region of S (a third of the cells of a 256² map
@@ -150,7 +150,7 @@ class RNHQLPlus(MethodConfig):
 
 @dataclass(frozen=True)
 class RNHQLPlusExplore(RNHQLPlus):
-    """RNH-QL+ explore (``rnh-ql+explore``): rnh-ql+ with the three issue-37 options on, for
+    """RNH-QL+ explore (``rnh-ql+explore``): rnh-ql+ with the three held-out-maps options on, for
     maps nobody tuned for and for the paper's uniform starts: ``explore_steps=1000`` (a
     coverage walk opens each episode), ``model_acting=1`` (the behaviour acts on the
     optimistic model), ``model_test=1`` (the test walks the model's route where no known

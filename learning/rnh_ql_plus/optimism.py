@@ -94,11 +94,6 @@ def ensure_values(y, stamp, r_goal_seen, r_free_seen, dist, queue, gamma):
         refresh_values(y, stamp, r_goal_seen, r_free_seen, dist, queue, gamma)
 
 
-def ensure_values_of(opt: Optimism, fs, gamma: float) -> None:
-    """:func:`ensure_values` on the named tuples (from Python)."""
-    ensure_values(opt.y, opt.stamp, opt.r_goal, opt.r_free, fs.distance, fs.queue, gamma)
-
-
 @njit(cache=True, inline="always")
 def mark_stale(stamp):
     """The BFS distances changed: the next :func:`ensure_values` refreshes the cache

@@ -1,4 +1,4 @@
-"""Benchmarks of the learners (issue 3): kernel throughput, the paper protocol, JIT cold start.
+"""Benchmarks of the learners: kernel throughput, the paper protocol, JIT cold start.
 
 Run: ``python -m scenarios.bench.learners`` (prints JSON). Measures, on paper-50:
 

@@ -36,7 +36,6 @@ from learning.agent import StepAgent
 from learning.batch_agent import BatchAgent
 from learning.generator_handle import handles
 from learning.geometry import geometry_of
-from learning.metrics import episodes_to_first_optimal
 from learning.plain import PlainBatchAgent, is_plain
 from learning.readout import greedy_actions
 from scenarios.runs.physics_grading import FinalGrade, Grader
@@ -90,11 +89,6 @@ class PhysicsTrainResult:
     grader: Grader  # how the run was graded (its world and fidelity)
     final_rollouts: Any = None  # sim.physics.rollouts.Rollouts of the final policy
     world_extras: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def episodes_to_optimal(self) -> int | None:
-        return episodes_to_first_optimal(self.test_episodes, self.test_route_length,
-                                         self.optimal_length)
 
 
 def continuous_optimum_rounded(sc: Scenario) -> float | None:

@@ -14,7 +14,7 @@
                          "odometry_rot_trans" [rad^2/m^2], "odometry_trans_trans" [m^2/m^2],
                          "odometry_trans_rot" [m^2/rad^2], "fix_every" [primitives],
                          "fix_sigma_m" [m], "fix_sigma_rad" [rad]} or null (every field of
-                         sim.physics.fidelity.Fidelity; records from before issue 38 hold
+                         sim.physics.fidelity.Fidelity; records from before the ladder's rungs hold
                          the first four),
       "physics_grading": how physics runs were graded (rollouts per test and final) or null,
       "optimum_at_fidelity": V* above exact {"expected_primitives", "p_goal_within_budget",

@@ -61,7 +61,7 @@ MAX_BIAS_SIGMA = 0.1  # a 10 % wheel-radius or wheelbase error is a broken robot
 MAX_ODOMETRY_ALPHA = 1.0  # odometry variance per squared motion; beyond, odometry is noise
 MAX_FIX_SIGMA_M = 1.0  # [m]
 MAX_FIX_SIGMA_RAD = math.pi / 4  # [rad]
-RENAMED = {"rough": "slippery"}  # old preset names: what they were renamed to (issue 38)
+RENAMED = {"rough": "slippery"}  # old preset names: what they were renamed to
 
 
 @dataclass(frozen=True)

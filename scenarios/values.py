@@ -63,7 +63,8 @@ class Run:
     optimal_route_length: int  # the optimum of the world the run was graded in [moves]
     episodes_to_stable_optimal: int | None  # None: never stably optimal
     success_rate: float  # share of training episodes that reached G
-    policy: np.ndarray  # int[n_states]: the final greedy action of every cell (read-only)
+    policy: np.ndarray  # int[n_states]: the final greedy action of every cell (read-only;
+    #                     empty for a run resumed from a record written before the field)
     p_goal: float | None  # physics above exact: P(G) of the final policy's drives
     p_goal_ci95: tuple[float, float] | None
     wall_time_s: float  # [s]
@@ -89,7 +90,8 @@ class Run:
             optimal_route_length=int(rec["optimal_route_length"]),
             episodes_to_stable_optimal=rec.get("episodes_to_stable_optimal"),
             success_rate=float(rec["success_rate"]),
-            policy=_frozen(policy_from_text(rec["greedy_policy"])),
+            policy=_frozen(policy_from_text(rec["greedy_policy"]) if rec.get("greedy_policy")
+                           else np.zeros(0, np.int64)),  # (records from before the field)
             p_goal=float(pol["p_goal"]) if above and pol else None,
             p_goal_ci95=tuple(pol["p_goal_ci95"]) if above and pol else None,
             wall_time_s=float(rec["wall_time_s"]), record=_readonly(rec),

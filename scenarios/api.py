@@ -22,7 +22,6 @@ keywords are kept stable.
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import os
 import tempfile
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -31,225 +30,37 @@ from typing import Any
 
 import numpy as np
 
-from scenarios.runs.spec import WORLDS, ExperimentError, RunSpec, load
+from scenarios.api_args import (
+    DEFAULT_EPISODES,
+    MAX_DRIVES,
+    MAX_EPISODES,
+    MAX_JOBS,
+    MAX_SEED,
+    MAX_SEEDS,
+    MethodLike,
+    ScenarioLike,
+    cell_arg,
+    err,
+    fidelity_arg,
+    method_arg,
+    methods_arg,
+    policy_table,
+    problem_of,
+    record_arg,
+    rewards_arg,
+    scenario_arg,
+    scenario_name,
+    settings_arg,
+    whole,
+    worlds_arg,
+)
+from scenarios.runs.spec import WORLDS, ExperimentError, RunSpec
 from scenarios.values import Comparison, Grade, Optimum, Run
 from sim.errors import InputError
-from sim.scenario import REWARD_SCHEMES, Cell, Rewards, Scenario
+from sim.scenario import Cell, Scenario
 
 __all__ = ["Comparison", "Grade", "InputError", "Optimum", "Run", "compare", "grade",
            "optimum", "route", "train"]
-
-DEFAULT_EPISODES = 3000  # the paper's
-DEFAULT_REWARDS = "goal-only"  # as the command: the paper's own is rewards="paper"
-MAX_EPISODES = 10_000_000
-MAX_SEEDS = 10_000
-MAX_SEED = 2**63 - 1
-MAX_DRIVES = 100_000
-MAX_JOBS = 4096
-
-ScenarioLike = str | Path | Scenario
-MethodLike = str | type
-
-
-def _err(fn: str, arg: str, problem: str, fix: str) -> InputError:
-    return InputError(f"scenarios.api.{fn}", arg, problem, fix)
-
-
-# ---------------------------------------------------------------- arguments, checked
-
-
-def _whole(fn: str, arg: str, value: Any, lo: int, hi: int, example: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        raise _err(fn, arg, f"is {value!r}, not a whole number", f"pass e.g. {arg}={example}")
-    if not lo <= int(value) <= hi:
-        raise _err(fn, arg, f"is {value}, outside {lo}..{hi:,}", f"pass e.g. {arg}={example}")
-    return int(value)
-
-
-def _scenario(fn: str, scenario: Any) -> str | Scenario:
-    if isinstance(scenario, Scenario):
-        return scenario
-    if isinstance(scenario, Path):
-        return str(scenario)
-    if isinstance(scenario, str) and scenario.strip():
-        return scenario
-    raise _err(fn, "scenario", f"is {scenario!r}", "pass a built-in name (rnhql scenarios), "
-               "a .toml or .map path, or a sim.scenario.Scenario")
-
-
-def _cell(fn: str, arg: str, value: Any) -> Cell | None:
-    if value is None:
-        return None
-    try:
-        x, y = (int(v) for v in value)
-    except (TypeError, ValueError):
-        raise _err(fn, arg, f"is {value!r}, not a cell", f"pass {arg}=(x, y)") from None
-    return x, y
-
-
-def _rewards(fn: str, rewards: Any) -> str | None:
-    """The reward scheme as a sweep holds it: text, or None for the scenario's own."""
-    from sim.scenario import rewards_from_text
-
-    if rewards is None:
-        return DEFAULT_REWARDS
-    if isinstance(rewards, Rewards):
-        return f"goal={rewards.goal!r},bump={rewards.bump!r},step={rewards.step!r}"
-    if rewards == "scenario":
-        return None
-    if not isinstance(rewards, str):
-        raise _err(fn, "rewards", f"is a {type(rewards).__name__}", "pass a scheme name ("
-                   f"{', '.join(REWARD_SCHEMES)}), 'scenario', 'goal=..,bump=..,step=..' or a "
-                   "sim.scenario.Rewards")
-    try:
-        rewards_from_text(rewards)
-    except InputError as exc:
-        raise _err(fn, "rewards", exc.problem, exc.fix.replace("--rewards ", "rewards=")) \
-            from None
-    return rewards
-
-
-def _fidelity(fn: str, fidelity: Any, physics: bool) -> str | None:
-    """The fidelity as text (what a sweep's specs hold), checked; None: the scenario's own."""
-    from sim.physics.fidelity import PRESETS, Fidelity, parse_fidelity
-
-    if fidelity is None:
-        return None
-    if not physics:
-        raise _err(fn, "fidelity", f"{fidelity!r} applies to the physics world only",
-                   "add world='physics' (worlds=('grid', 'physics')), or drop fidelity")
-    if isinstance(fidelity, Fidelity):
-        fidelity.validate(f"scenarios.api.{fn}: fidelity")
-        if PRESETS.get(fidelity.name) == fidelity:
-            return fidelity.name
-        exact = Fidelity()
-        return ",".join(f"{f.name}={getattr(fidelity, f.name)}"
-                        for f in dataclasses.fields(Fidelity)
-                        if f.name != "name" and getattr(fidelity, f.name) != getattr(exact,
-                                                                                     f.name)) \
-            or "exact"
-    if not isinstance(fidelity, str):
-        raise _err(fn, "fidelity", f"is a {type(fidelity).__name__}", "pass a rung's name ("
-                   f"{', '.join(PRESETS)}), 'PRESET,knob=value', or a Fidelity")
-    try:
-        parse_fidelity(fidelity, f"scenarios.api.{fn}: fidelity")
-    except InputError:
-        raise
-    return fidelity
-
-
-def _method(fn: str, method: Any) -> str:
-    """A method's name in a sweep: a registry name, or ``module:Class`` (a class given as an
-    object is remembered in this process and the workers it forks)."""
-    from learning.config import MethodConfig
-    from learning.plain import remember
-    from scenarios.runs.spec import method_class
-
-    if isinstance(method, type):
-        if issubclass(method, MethodConfig):
-            from learning.plain import located_name
-            from learning.registry import METHODS
-
-            name = method.cli if METHODS.get(method.cli) is method else located_name(method)
-        else:
-            try:
-                name = remember(method)
-            except ValueError as exc:
-                raise _err(fn, "method", str(exc), "see docs/python-api.md, your own "
-                           "learner") from None
-    elif isinstance(method, str) and method.strip():
-        name = method.strip()
-    else:
-        raise _err(fn, "method", f"is {method!r}", "pass a method's name (docs/methods.md), "
-                   "'module:Class', or a learner class")
-    try:
-        method_class(name)
-    except InputError as exc:
-        raise _err(fn, "method", exc.problem, exc.fix) from None
-    return name
-
-
-def _methods(fn: str, methods: Any) -> list[str]:
-    from learning.registry import comparison_methods
-
-    if methods is None:
-        return list(comparison_methods())
-    if isinstance(methods, str | type):
-        methods = [methods]
-    names = [_method(fn, m) for m in methods]
-    if not names:
-        raise _err(fn, "methods", "is empty", "pass e.g. methods=['rnh-ql+', 'haql']")
-    twice = [m for i, m in enumerate(names) if m in names[:i]]
-    if twice:
-        raise _err(fn, "methods", f"names {twice[0]!r} twice", "list each method once")
-    return names
-
-
-def _worlds(fn: str, worlds: Any) -> list[str]:
-    if isinstance(worlds, str):
-        worlds = [w.strip() for w in worlds.split(",")]
-    worlds = list(worlds)
-    bad = [w for w in worlds if w not in WORLDS]
-    if not worlds or bad:
-        raise _err(fn, "worlds", f"has {bad[0]!r}" if bad else "is empty",
-                   f"use {', '.join(WORLDS)}")
-    if len(set(worlds)) != len(worlds):
-        raise _err(fn, "worlds", "names a world twice", "list each world once")
-    return worlds
-
-
-def _settings(fn: str, settings: Mapping[str, float] | None) -> tuple[tuple[str, float], ...]:
-    if not settings:
-        return ()
-    if not isinstance(settings, Mapping):
-        raise _err(fn, "settings", f"is a {type(settings).__name__}",
-                   "pass a dict of config fields, e.g. settings={'eps': 0.2}")
-    out = []
-    for k, v in settings.items():
-        if isinstance(v, bool) or not isinstance(v, int | float | np.number):
-            raise _err(fn, f"settings[{k!r}]", f"is {v!r}, not a number",
-                       f"pass e.g. settings={{{k!r}: 0.2}}")
-        out.append((str(k), float(v)))
-    return tuple(out)
-
-
-def _record(fn: str, record: Any, name: str, rest: str) -> str | None:
-    """``record``: True for the default path under recordings/, a .rrd path, or None."""
-    import re
-
-    from sim.files import check_output
-
-    if record is None or record is False:
-        return None
-    if record is True:
-        safe = re.sub(r"[^A-Za-z0-9._-]+", "_", name).lstrip("._")[:100] or "run"
-        path = Path(f"recordings/{safe}-{re.sub(r'[^A-Za-z0-9._+-]+', '_', rest)}.rrd")
-    elif isinstance(record, str | Path) and str(record).strip():
-        path = Path(record)
-    else:
-        raise _err(fn, "record", f"is {record!r}", "pass True, or a path ending in .rrd")
-    if path.suffix != ".rrd":
-        raise _err(fn, "record", f"{path} does not end in .rrd", "name it e.g. run.rrd")
-    check_output(path, "record")
-    return str(path)
-
-
-def _problem(fn: str, scenario: str | Scenario, start: Cell | None, goal: Cell | None,
-             rewards: str | None, s_starts: float | None, worlds: Sequence[str]):
-    from scenarios.runs.spec import physics_budget
-
-    if s_starts is not None and not (isinstance(s_starts, int | float) and
-                                     0.0 <= s_starts < 1.0):
-        raise _err(fn, "s_starts", f"must be in [0, 1), got {s_starts!r}",
-                   "pass e.g. s_starts=0.1 (one episode in ten starts at S)")
-    sc, model = load(scenario, start, goal, rewards, s_starts)
-    physics_budget(sc, worlds)
-    return sc, model
-
-
-def _scenario_name(scenario: str | Scenario) -> str:
-    return scenario if isinstance(scenario, str) else scenario.name
-
 
 # ---------------------------------------------------------------- train
 
@@ -271,24 +82,24 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
     ``AGENT.npz`` checkpoint of a compiled method's grid run.
     """
     fn = "train"
-    scenario = _scenario(fn, scenario)
-    name = _method(fn, method)
+    scenario = scenario_arg(fn, scenario)
+    name = method_arg(fn, method)
     if world not in WORLDS:
-        raise _err(fn, "world", f"is {world!r}", f"use one of: {', '.join(WORLDS)}")
-    episodes = _whole(fn, "episodes", DEFAULT_EPISODES if episodes is None else episodes, 1,
+        raise err(fn, "world", f"is {world!r}", f"use one of: {', '.join(WORLDS)}")
+    episodes = whole(fn, "episodes", DEFAULT_EPISODES if episodes is None else episodes, 1,
                       MAX_EPISODES, 300)
-    seed = _whole(fn, "seed", seed, 0, MAX_SEED, 0)
-    rewards_text = _rewards(fn, rewards)
-    fid_text = _fidelity(fn, fidelity, world == "physics")
-    overrides = _settings(fn, settings)
-    start, goal = _cell(fn, "start", start), _cell(fn, "goal", goal)
-    record_every = _whole(fn, "record_every", record_every, 1, MAX_EPISODES, 10)
-    record_values_every = _whole(fn, "record_values_every", record_values_every, 1,
+    seed = whole(fn, "seed", seed, 0, MAX_SEED, 0)
+    rewards_text = rewards_arg(fn, rewards)
+    fid_text = fidelity_arg(fn, fidelity, world == "physics")
+    overrides = settings_arg(fn, settings)
+    start, goal = cell_arg(fn, "start", start), cell_arg(fn, "goal", goal)
+    record_every = whole(fn, "record_every", record_every, 1, MAX_EPISODES, 10)
+    record_values_every = whole(fn, "record_values_every", record_values_every, 1,
                                  MAX_EPISODES, 300)
-    sc, model = _problem(fn, scenario, start, goal, rewards_text, s_starts, [world])
+    sc, model = problem_of(fn, scenario, start, goal, rewards_text, s_starts, [world])
     from scenarios.runs.single import train_single
 
-    rec_path = _record(fn, record, sc.name, f"{name.replace(':', '.')}-{world}-s{seed}")
+    rec_path = record_arg(fn, record, sc.name, f"{name.replace(':', '.')}-{world}-s{seed}")
     spec = RunSpec(scenario, name, seed, episodes, world, overrides, start=start, goal=goal,
                    rewards=rewards_text, fidelity=fid_text, s_starts=s_starts)
     rec = train_single(spec, sc, model, save=save, resume=resume, record=rec_path,
@@ -321,23 +132,23 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
     ``"forkserver"``; default Python's). The rest as :func:`train`.
     """
     fn = "compare"
-    scenario = _scenario(fn, scenario)
-    names = _methods(fn, methods)
-    worlds = _worlds(fn, worlds)
-    n_seeds = _whole(fn, "seeds", seeds, 1, MAX_SEEDS, 10)
-    seed_base = _whole(fn, "seed_base", seed_base, 0, MAX_SEED - n_seeds + 1, 0)
-    episodes = _whole(fn, "episodes", DEFAULT_EPISODES if episodes is None else episodes, 1,
+    scenario = scenario_arg(fn, scenario)
+    names = methods_arg(fn, methods)
+    worlds = worlds_arg(fn, worlds)
+    n_seeds = whole(fn, "seeds", seeds, 1, MAX_SEEDS, 10)
+    seed_base = whole(fn, "seed_base", seed_base, 0, MAX_SEED - n_seeds + 1, 0)
+    episodes = whole(fn, "episodes", DEFAULT_EPISODES if episodes is None else episodes, 1,
                       MAX_EPISODES, 300)
-    rewards_text = _rewards(fn, rewards)
-    fid_text = _fidelity(fn, fidelity, "physics" in worlds)
-    overrides = _settings(fn, settings)
-    start, goal = _cell(fn, "start", start), _cell(fn, "goal", goal)
+    rewards_text = rewards_arg(fn, rewards)
+    fid_text = fidelity_arg(fn, fidelity, "physics" in worlds)
+    overrides = settings_arg(fn, settings)
+    start, goal = cell_arg(fn, "start", start), cell_arg(fn, "goal", goal)
     if jobs is not None:
-        jobs = _whole(fn, "jobs", jobs, 1, MAX_JOBS, 2)
+        jobs = whole(fn, "jobs", jobs, 1, MAX_JOBS, 2)
     if resume and out is None:
-        raise _err(fn, "resume", "needs out: the folder whose finished runs to keep",
+        raise err(fn, "resume", "needs out: the folder whose finished runs to keep",
                    "pass out='DIR' as well, or drop resume")
-    sc, _ = _problem(fn, scenario, start, goal, rewards_text, s_starts, worlds)
+    sc, _ = problem_of(fn, scenario, start, goal, rewards_text, s_starts, worlds)
     per_method = settings_per_method(names, overrides)
     from scenarios.experiments.compare import SweepRecording, assemble, make_specs, run_sweep
     from scenarios.runs.backends import Progress
@@ -346,15 +157,15 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
                        worlds, per_method, start=start, goal=goal, rewards=rewards_text,
                        fidelity=fid_text, s_starts=s_starts)
     execute, kwargs = _backend(fn, backend, address, jobs, start_method)
-    rec_path = _record(fn, record, _scenario_name(scenario).rsplit("/", 1)[-1]
+    rec_path = record_arg(fn, record, scenario_name(scenario).rsplit("/", 1)[-1]
                        .removesuffix(".toml"), "compare")
     recording = None
     if rec_path is not None:
         recording = SweepRecording(
-            rec_path, every=_whole(fn, "record_every", record_every, 1, MAX_EPISODES, 100),
-            values_every=_whole(fn, "record_values_every", record_values_every, 1,
+            rec_path, every=whole(fn, "record_every", record_every, 1, MAX_EPISODES, 100),
+            values_every=whole(fn, "record_values_every", record_values_every, 1,
                                 MAX_EPISODES, 300),
-            detail_seeds=_whole(fn, "record_seeds", record_seeds, 1, MAX_SEEDS, 1))
+            detail_seeds=whole(fn, "record_seeds", record_seeds, 1, MAX_SEEDS, 1))
     bar = Progress(len(specs), enabled=bool(progress))
     if out is None and recording is None:
         try:
@@ -399,15 +210,15 @@ def _backend(fn: str, backend: str, address: str | None, jobs: int | None,
 
     if backend == "local":
         if address is not None:
-            raise _err(fn, "address", "only applies with backend='ray'",
+            raise err(fn, "address", "only applies with backend='ray'",
                        "pass backend='ray', or drop address")
         if start_method not in (None, "fork", "spawn", "forkserver"):
-            raise _err(fn, "start_method", f"is {start_method!r}",
+            raise err(fn, "start_method", f"is {start_method!r}",
                        "use 'fork', 'spawn' or 'forkserver' (or None)")
         return run_local, {"jobs": jobs or os.cpu_count() or 1, "start_method": start_method}
     if backend == "ray":
         return run_ray, {"address": address, "num_cpus": jobs}
-    raise _err(fn, "backend", f"is {backend!r}", "use 'local' or 'ray'")
+    raise err(fn, "backend", f"is {backend!r}", "use 'local' or 'ray'")
 
 
 @contextlib.contextmanager
@@ -430,10 +241,10 @@ def optimum(scenario: ScenarioLike, *, fidelity: Any = "exact", rewards: Any = N
     hidden: open loop, localisation), and the disc's continuous path. V* is built by
     driving and cached on disk (``rnhql optimum`` says what it cost)."""
     fn = "optimum"
-    scenario = _scenario(fn, scenario)
-    fid_text = _fidelity(fn, fidelity, True) or "exact"
-    sc, model = _problem(fn, scenario, _cell(fn, "start", start), _cell(fn, "goal", goal),
-                         _rewards(fn, rewards), None, ["physics"])
+    scenario = scenario_arg(fn, scenario)
+    fid_text = fidelity_arg(fn, fidelity, True) or "exact"
+    sc, model = problem_of(fn, scenario, cell_arg(fn, "start", start), cell_arg(fn, "goal", goal),
+                         rewards_arg(fn, rewards), None, ["physics"])
     return _optimum(sc, model, fid_text)
 
 
@@ -483,12 +294,12 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
     ``with_optimum``: also build V* (cached on disk) and say whether the policy matches it.
     """
     fn = "grade"
-    scenario = _scenario(fn, scenario)
-    fid_text = _fidelity(fn, fidelity, True) or "exact"
-    drives = _whole(fn, "drives", drives, 1, MAX_DRIVES, 50)
-    seed = _whole(fn, "seed", seed, 0, MAX_SEED, 0)
-    sc, model = _problem(fn, scenario, _cell(fn, "start", start), _cell(fn, "goal", goal),
-                         _rewards(fn, rewards), None, ["physics"])
+    scenario = scenario_arg(fn, scenario)
+    fid_text = fidelity_arg(fn, fidelity, True) or "exact"
+    drives = whole(fn, "drives", drives, 1, MAX_DRIVES, 50)
+    seed = whole(fn, "seed", seed, 0, MAX_SEED, 0)
+    sc, model = problem_of(fn, scenario, cell_arg(fn, "start", start), cell_arg(fn, "goal", goal),
+                         rewards_arg(fn, rewards), None, ["physics"])
     table = policy_table(fn, policy, model.n_states)
     from learning.policy_state import policy_state
     from learning.train import greedy_test
@@ -523,36 +334,6 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
                  dict(summary))
 
 
-def policy_table(fn: str, policy: Any, n_states: int) -> np.ndarray:
-    """int64[n_states] from an array or a function of the cell; errors name the cell."""
-    if callable(policy) and not isinstance(policy, np.ndarray):
-        out = np.empty(n_states, dtype=np.int64)
-        for s in range(n_states):
-            a = policy(s)
-            a = np.asarray(a).reshape(-1)[0] if np.ndim(a) else a
-            try:
-                out[s] = int(a)
-            except (TypeError, ValueError):
-                raise _err(fn, "policy", f"returned {a!r} for cell {s}, not an action",
-                           "return 0 (up), 1 (down), 2 (left) or 3 (right)") from None
-    else:
-        try:
-            out = np.asarray(policy)
-        except Exception:  # a ragged list
-            raise _err(fn, "policy", "is not an array of actions",
-                       f"pass an int array of {n_states} actions") from None
-        if out.shape != (n_states,) or not np.issubdtype(out.dtype, np.integer):
-            raise _err(fn, "policy", f"has shape {out.shape} and dtype {out.dtype}",
-                       f"pass an int array of {n_states} actions, one per cell (or a "
-                       "function of the cell)")
-        out = out.astype(np.int64)
-    bad = np.flatnonzero((out < 0) | (out > 3))
-    if bad.size:
-        raise _err(fn, "policy", f"gives {out[bad[0]]} in cell {bad[0]}, not an action",
-                   "use 0 (up), 1 (down), 2 (left) or 3 (right)")
-    return out
-
-
 def route(agent: str | Path, scenario: ScenarioLike, *, fidelity: Any = "exact",
           rewards: Any = None, drives: int = 50, seed: int = 0) -> Grade:
     """A saved agent (``train(..., save=...)``, ``rnhql train --save``) graded from S: its
@@ -561,8 +342,8 @@ def route(agent: str | Path, scenario: ScenarioLike, *, fidelity: Any = "exact",
     from learning.geometry import geometry_of
     from learning.readout import greedy_actions
 
-    scenario = _scenario("route", scenario)
-    _, model = _problem("route", scenario, None, None, _rewards("route", rewards), None,
+    scenario = scenario_arg("route", scenario)
+    _, model = problem_of("route", scenario, None, None, rewards_arg("route", rewards), None,
                          ["physics"])
     ck = load_checkpoint(agent, None, model.n_states, geometry_of(model))
     from scenarios.runs.spec import layout_digest

@@ -140,7 +140,7 @@ class Comparison:
     def brief(self, width: int = 100) -> str:
         """What ``rnhql compare`` prints: a compact table and the verdict's headlines, every
         line within ``width`` columns (:meth:`summary` has the full tables)."""
-        from scenarios.runs.results import summary_terminal
+        from scenarios.runs.brief import summary_terminal
 
         return summary_terminal(dict(self.results), self.methods, width)
 

@@ -78,7 +78,7 @@ def _say(text: str) -> None:
     """A line of the command's output, wrapped to the summary's 100 columns."""
     import textwrap
 
-    from scenarios.runs.results import TERMINAL_COLUMNS
+    from scenarios.runs.brief import TERMINAL_COLUMNS
 
     print("\n".join(textwrap.wrap(text, TERMINAL_COLUMNS, subsequent_indent="  ",
                                    break_on_hyphens=False, break_long_words=False)))

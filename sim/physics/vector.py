@@ -45,7 +45,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from sim.env_args import SCENARIO_REWARDS, config_arg, env_scenario, episode_limit
+from sim.env_args import SCENARIO_REWARDS, check_num_envs, config_arg, env_scenario, episode_limit
 from sim.grid.env import start_state_from_options
 from sim.physics.batch import RouteBatch
 from sim.physics.diffdrive_env import DIFFDRIVE_CONFIG, DiffDriveEnv, diffdrive_periods
@@ -57,8 +57,6 @@ from sim.scenario import Rewards, Scenario
 
 INFO_KEYS = ("state", "bumped", "reached", "timeout", "steps", "contacts", "pose", "time_s")
 MASK_KEYS = tuple(f"_{k}" for k in INFO_KEYS)
-
-MAX_NUM_ENVS = 4096  # robots in one vector env: 100,000 took 24 GB and was killed
 
 
 def autoreset_mode_arg(mode: AutoresetMode | str) -> AutoresetMode:
@@ -162,9 +160,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
                  contact_records: bool = True) -> None:
         if render_mode is not None:
             raise ValueError("PhysicsRouteVectorEnv does not render; use the single env")
-        if not (isinstance(num_envs, int) and 1 <= num_envs <= MAX_NUM_ENVS):
-            raise ValueError(f"num_envs must be an int in 1..{MAX_NUM_ENVS:,} (robots in one "
-                             f"Space; each holds its own state), got {num_envs!r}")
+        check_num_envs(num_envs)
         mode = autoreset_mode_arg(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": mode}
         self.num_envs = num_envs
@@ -349,9 +345,7 @@ class DiffDriveVectorEnv(VectorEnv):
                  steps_per_episode: int | None = None, start: str | int = "S") -> None:
         if render_mode is not None:
             raise ValueError("DiffDriveVectorEnv does not render; use the single env")
-        if not (isinstance(num_envs, int) and 1 <= num_envs <= MAX_NUM_ENVS):
-            raise ValueError(f"num_envs must be an int in 1..{MAX_NUM_ENVS:,} (robots in one "
-                             f"Space; each holds its own state), got {num_envs!r}")
+        check_num_envs(num_envs)
         mode = autoreset_mode_arg(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": mode}
         self.num_envs = num_envs

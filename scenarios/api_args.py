@@ -1,0 +1,258 @@
+"""The arguments of :mod:`scenarios.api`, checked before any work: each helper returns the
+value as a sweep holds it (text, a name, a cell) or raises :class:`sim.errors.InputError`
+naming the function, the argument and the fix (the command's flags are checked by
+:mod:`scenarios.cli.args`, naming the flag)."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from scenarios.runs.spec import WORLDS, load
+from sim.errors import InputError
+from sim.scenario import REWARD_SCHEMES, Cell, Rewards, Scenario
+
+DEFAULT_EPISODES = 3000  # the paper's
+DEFAULT_REWARDS = "goal-only"  # as the command: the paper's own is rewards="paper"
+MAX_EPISODES = 10_000_000
+MAX_SEEDS = 10_000
+MAX_SEED = 2**63 - 1
+MAX_DRIVES = 100_000
+MAX_JOBS = 4096
+
+ScenarioLike = str | Path | Scenario
+MethodLike = str | type
+
+
+def err(fn: str, arg: str, problem: str, fix: str) -> InputError:
+    return InputError(f"scenarios.api.{fn}", arg, problem, fix)
+
+
+# ---------------------------------------------------------------- arguments, checked
+
+
+def whole(fn: str, arg: str, value: Any, lo: int, hi: int, example: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise err(fn, arg, f"is {value!r}, not a whole number", f"pass e.g. {arg}={example}")
+    if not lo <= int(value) <= hi:
+        raise err(fn, arg, f"is {value}, outside {lo}..{hi:,}", f"pass e.g. {arg}={example}")
+    return int(value)
+
+
+def scenario_arg(fn: str, scenario: Any) -> str | Scenario:
+    if isinstance(scenario, Scenario):
+        return scenario
+    if isinstance(scenario, Path):
+        return str(scenario)
+    if isinstance(scenario, str) and scenario.strip():
+        return scenario
+    raise err(fn, "scenario", f"is {scenario!r}", "pass a built-in name (rnhql scenarios), "
+               "a .toml or .map path, or a sim.scenario.Scenario")
+
+
+def cell_arg(fn: str, arg: str, value: Any) -> Cell | None:
+    if value is None:
+        return None
+    try:
+        x, y = (int(v) for v in value)
+    except (TypeError, ValueError):
+        raise err(fn, arg, f"is {value!r}, not a cell", f"pass {arg}=(x, y)") from None
+    return x, y
+
+
+def rewards_arg(fn: str, rewards: Any) -> str | None:
+    """The reward scheme as a sweep holds it: text, or None for the scenario's own."""
+    from sim.scenario import rewards_from_text
+
+    if rewards is None:
+        return DEFAULT_REWARDS
+    if isinstance(rewards, Rewards):
+        return f"goal={rewards.goal!r},bump={rewards.bump!r},step={rewards.step!r}"
+    if rewards == "scenario":
+        return None
+    if not isinstance(rewards, str):
+        raise err(fn, "rewards", f"is a {type(rewards).__name__}", "pass a scheme name ("
+                   f"{', '.join(REWARD_SCHEMES)}), 'scenario', 'goal=..,bump=..,step=..' or a "
+                   "sim.scenario.Rewards")
+    try:
+        rewards_from_text(rewards)
+    except InputError as exc:
+        raise err(fn, "rewards", exc.problem, exc.fix.replace("--rewards ", "rewards=")) \
+            from None
+    return rewards
+
+
+def fidelity_arg(fn: str, fidelity: Any, physics: bool) -> str | None:
+    """The fidelity as text (what a sweep's specs hold), checked; None: the scenario's own."""
+    from sim.physics.fidelity import PRESETS, Fidelity, parse_fidelity
+
+    if fidelity is None:
+        return None
+    if not physics:
+        raise err(fn, "fidelity", f"{fidelity!r} applies to the physics world only",
+                   "add world='physics' (worlds=('grid', 'physics')), or drop fidelity")
+    if isinstance(fidelity, Fidelity):
+        fidelity.validate(f"scenarios.api.{fn}: fidelity")
+        if PRESETS.get(fidelity.name) == fidelity:
+            return fidelity.name
+        exact = Fidelity()
+        return ",".join(f"{f.name}={getattr(fidelity, f.name)}"
+                        for f in dataclasses.fields(Fidelity)
+                        if f.name != "name" and getattr(fidelity, f.name) != getattr(exact,
+                                                                                     f.name)) \
+            or "exact"
+    if not isinstance(fidelity, str):
+        raise err(fn, "fidelity", f"is a {type(fidelity).__name__}", "pass a rung's name ("
+                   f"{', '.join(PRESETS)}), 'PRESET,knob=value', or a Fidelity")
+    try:
+        parse_fidelity(fidelity, f"scenarios.api.{fn}: fidelity")
+    except InputError:
+        raise
+    return fidelity
+
+
+def method_arg(fn: str, method: Any) -> str:
+    """A method's name in a sweep: a registry name, or ``module:Class`` (a class given as an
+    object is remembered in this process and the workers it forks)."""
+    from learning.config import MethodConfig
+    from learning.plain import remember
+    from scenarios.runs.spec import method_class
+
+    if isinstance(method, type):
+        if issubclass(method, MethodConfig):
+            from learning.plain import located_name
+            from learning.registry import METHODS
+
+            name = method.cli if METHODS.get(method.cli) is method else located_name(method)
+        else:
+            try:
+                name = remember(method)
+            except ValueError as exc:
+                raise err(fn, "method", str(exc), "see docs/python-api.md, your own "
+                           "learner") from None
+    elif isinstance(method, str) and method.strip():
+        name = method.strip()
+    else:
+        raise err(fn, "method", f"is {method!r}", "pass a method's name (docs/methods.md), "
+                   "'module:Class', or a learner class")
+    try:
+        method_class(name)
+    except InputError as exc:
+        raise err(fn, "method", exc.problem, exc.fix) from None
+    return name
+
+
+def methods_arg(fn: str, methods: Any) -> list[str]:
+    from learning.registry import comparison_methods
+
+    if methods is None:
+        return list(comparison_methods())
+    if isinstance(methods, str | type):
+        methods = [methods]
+    names = [method_arg(fn, m) for m in methods]
+    if not names:
+        raise err(fn, "methods", "is empty", "pass e.g. methods=['rnh-ql+', 'haql']")
+    twice = [m for i, m in enumerate(names) if m in names[:i]]
+    if twice:
+        raise err(fn, "methods", f"names {twice[0]!r} twice", "list each method once")
+    return names
+
+
+def worlds_arg(fn: str, worlds: Any) -> list[str]:
+    if isinstance(worlds, str):
+        worlds = [w.strip() for w in worlds.split(",")]
+    worlds = list(worlds)
+    bad = [w for w in worlds if w not in WORLDS]
+    if not worlds or bad:
+        raise err(fn, "worlds", f"has {bad[0]!r}" if bad else "is empty",
+                   f"use {', '.join(WORLDS)}")
+    if len(set(worlds)) != len(worlds):
+        raise err(fn, "worlds", "names a world twice", "list each world once")
+    return worlds
+
+
+def settings_arg(fn: str, settings: Mapping[str, float] | None) -> tuple[tuple[str, float], ...]:
+    if not settings:
+        return ()
+    if not isinstance(settings, Mapping):
+        raise err(fn, "settings", f"is a {type(settings).__name__}",
+                   "pass a dict of config fields, e.g. settings={'eps': 0.2}")
+    out = []
+    for k, v in settings.items():
+        if isinstance(v, bool) or not isinstance(v, int | float | np.number):
+            raise err(fn, f"settings[{k!r}]", f"is {v!r}, not a number",
+                       f"pass e.g. settings={{{k!r}: 0.2}}")
+        out.append((str(k), float(v)))
+    return tuple(out)
+
+
+def record_arg(fn: str, record: Any, name: str, rest: str) -> str | None:
+    """``record``: True for the default path under recordings/, a .rrd path, or None."""
+    import re
+
+    from sim.files import check_output
+
+    if record is None or record is False:
+        return None
+    if record is True:
+        safe = re.sub(r"[^A-Za-z0-9._-]+", "_", name).lstrip("._")[:100] or "run"
+        path = Path(f"recordings/{safe}-{re.sub(r'[^A-Za-z0-9._+-]+', '_', rest)}.rrd")
+    elif isinstance(record, str | Path) and str(record).strip():
+        path = Path(record)
+    else:
+        raise err(fn, "record", f"is {record!r}", "pass True, or a path ending in .rrd")
+    if path.suffix != ".rrd":
+        raise err(fn, "record", f"{path} does not end in .rrd", "name it e.g. run.rrd")
+    check_output(path, "record")
+    return str(path)
+
+
+def problem_of(fn: str, scenario: str | Scenario, start: Cell | None, goal: Cell | None,
+             rewards: str | None, s_starts: float | None, worlds: Sequence[str]):
+    from scenarios.runs.spec import physics_budget
+
+    if s_starts is not None and not (isinstance(s_starts, int | float) and
+                                     0.0 <= s_starts < 1.0):
+        raise err(fn, "s_starts", f"must be in [0, 1), got {s_starts!r}",
+                   "pass e.g. s_starts=0.1 (one episode in ten starts at S)")
+    sc, model = load(scenario, start, goal, rewards, s_starts)
+    physics_budget(sc, worlds)
+    return sc, model
+
+
+def scenario_name(scenario: str | Scenario) -> str:
+    return scenario if isinstance(scenario, str) else scenario.name
+
+
+def policy_table(fn: str, policy: Any, n_states: int) -> np.ndarray:
+    """int64[n_states] from an array or a function of the cell; errors name the cell."""
+    if callable(policy) and not isinstance(policy, np.ndarray):
+        out = np.empty(n_states, dtype=np.int64)
+        for s in range(n_states):
+            a = policy(s)
+            a = np.asarray(a).reshape(-1)[0] if np.ndim(a) else a
+            try:
+                out[s] = int(a)
+            except (TypeError, ValueError):
+                raise err(fn, "policy", f"returned {a!r} for cell {s}, not an action",
+                           "return 0 (up), 1 (down), 2 (left) or 3 (right)") from None
+    else:
+        try:
+            out = np.asarray(policy)
+        except Exception:  # a ragged list
+            raise err(fn, "policy", "is not an array of actions",
+                       f"pass an int array of {n_states} actions") from None
+        if out.shape != (n_states,) or not np.issubdtype(out.dtype, np.integer):
+            raise err(fn, "policy", f"has shape {out.shape} and dtype {out.dtype}",
+                       f"pass an int array of {n_states} actions, one per cell (or a "
+                       "function of the cell)")
+        out = out.astype(np.int64)
+    bad = np.flatnonzero((out < 0) | (out > 3))
+    if bad.size:
+        raise err(fn, "policy", f"gives {out[bad[0]]} in cell {bad[0]}, not an action",
+                   "use 0 (up), 1 (down), 2 (left) or 3 (right)")
+    return out

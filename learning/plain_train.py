@@ -24,13 +24,7 @@ from learning.plain import (
     new_learner,
     snapshot,
 )
-from learning.train import (
-    EPISODE_FIELDS,
-    TrainObserver,
-    TrainResult,
-    greedy_test,
-    shortest_fraction,
-)
+from learning.train import EPISODE_FIELDS, TrainObserver, TrainResult, finished
 
 _DTYPES = {"steps": np.int32, "success": np.bool_}
 
@@ -113,12 +107,6 @@ def train_plain(cfg: PlainConfig, model: TabularMDP, n_episodes: int, rng: np.ra
                                  snapshot(learner, cfg, n_states, n_actions) if wants
                                  else None, test)
     st = snapshot(learner, cfg, n_states, n_actions)
-    length, route = greedy_test(st, model)
-    result = TrainResult(config=cfg, state=st, episodes=done, env_steps=env_steps, **arrays,
-                         test_episodes=np.asarray(tests_e, dtype=np.int64),
-                         test_route_length=np.asarray(tests_l, dtype=np.int64),
-                         optimal_length=int(model.distance_to_goal[model.start]),
-                         final_route=route, final_route_length=length,
-                         optimal_action_fraction=shortest_fraction(st, model))
+    result = finished(cfg, st, model, done, env_steps, arrays, tests_e, tests_l)
     result.agent = PlainAgent(cfg, learner, st)  # type: ignore[attr-defined]
     return result

@@ -202,8 +202,16 @@ def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np
             observer.after_chunk(done - n, n, trace if trace.shape[0] else None, arrays, st,
                                  test)
     assert episodes_done(st) == done
+    return finished(cfg, st, model, done, env_steps, arrays, tests_e, tests_l)
+
+
+def finished(cfg: MethodConfig, st, model: TabularMDP, episodes: int, env_steps: int,
+             arrays: dict[str, np.ndarray], tests_e: list[int], tests_l: list[int]
+             ) -> TrainResult:
+    """The :class:`TrainResult` of a finished run: its metrics, its tests, and the final
+    greedy route and policy read from ``st`` (any learner's state, a graded policy's too)."""
     length, route = greedy_test(st, model)
-    return TrainResult(config=cfg, state=st, episodes=done, env_steps=env_steps, **arrays,
+    return TrainResult(config=cfg, state=st, episodes=episodes, env_steps=env_steps, **arrays,
                        test_episodes=np.asarray(tests_e, dtype=np.int64),
                        test_route_length=np.asarray(tests_l, dtype=np.int64),
                        optimal_length=int(model.distance_to_goal[model.start]), final_route=route,

@@ -26,6 +26,7 @@ keeps every record leaves every table fresh.
 
 from __future__ import annotations
 
+import ast
 import datetime as _dt
 import hashlib
 import json
@@ -117,12 +118,39 @@ def busy_note(doc: dict[str, Any]) -> str:
             "are longer than on a quiet machine.")
 
 
+def study_code_digest(source: str) -> str:
+    """A hash of a study's *code*: its syntax tree without its import statements. Imports
+    say where a name comes from, not what the study measures, so moving a module (or
+    hoisting an import) leaves its tables fresh; comments and layout are not code either.
+    A change of a row's settings, a formula or a docstring changes the hash."""
+    tree = ast.parse(source)
+    for node in ast.walk(tree):
+        for field in ("body", "orelse", "finalbody", "handlers"):
+            block = getattr(node, field, None)
+            if isinstance(block, list):
+                setattr(node, field, [n for n in block
+                                      if not isinstance(n, ast.Import | ast.ImportFrom)])
+    return hashlib.sha256(ast.dump(tree).encode()).hexdigest()
+
+
 def study_digest(path: str | Path) -> dict[str, str]:
-    """The study script a table came from, and a hash of its text: a change of the study's
-    own code (a row's settings, what it measures) is not in the behaviour digests."""
+    """The study script a table came from, and a hash of its code
+    (:func:`study_code_digest`): a change of the study's own code (a row's settings, what
+    it measures) is not in the behaviour digests."""
     path = Path(path).resolve()
     rel = path.relative_to(ROOT).as_posix() if path.is_relative_to(ROOT) else str(path)
-    return {"path": rel, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
+    return {"path": rel, "code_sha256": study_code_digest(path.read_text())}
+
+
+def study_changed(study: dict[str, str]) -> bool:
+    """Whether the study script an artifact recorded is gone or its code changed (an
+    artifact written before the code hash holds the hash of the file's bytes)."""
+    path = ROOT / study["path"]
+    if not path.is_file():
+        return True
+    if "code_sha256" in study:
+        return study_code_digest(path.read_text()) != study["code_sha256"]
+    return hashlib.sha256(path.read_bytes()).hexdigest() != study.get("sha256")
 
 
 def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any,
@@ -214,8 +242,7 @@ def stale_parts(doc: dict[str, Any], now: dict[str, str] | None = None) -> list[
     stale = sorted(p for p, d in doc["behaviour"].items() if now.get(p) != d)
     study = doc.get("study")
     if study is not None:
-        path = ROOT / study["path"]
-        if not path.exists() or study_digest(path)["sha256"] != study["sha256"]:
+        if study_changed(study):
             stale.append(f"the study {study['path']}")
     return stale
 

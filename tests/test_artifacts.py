@@ -90,6 +90,33 @@ def test_editing_the_study_script_marks_its_artifact_stale(tmp_path):
     assert stale_parts(doc) == [f"the study {study}"]
 
 
+def test_a_study_moved_or_its_imports_rearranged_stays_fresh(tmp_path):
+    """The study hash is of its code without import statements: moving a module (every
+    import of it rewritten), hoisting an import or editing a comment changes no table, while
+    the code that measures does."""
+    from scenarios.artifacts import study_code_digest
+
+    before = ("import math\n\n\ndef rows():\n    from a.b import c  # lazy\n"
+              "    return [('a', math.pi, c)]\n")
+    moved = ("import math\n\nfrom a.b.c2 import c\n\n\ndef rows():\n"
+             "    # the rows\n    return [('a', math.pi, c)]\n")
+    assert study_code_digest(before) == study_code_digest(moved)
+    assert study_code_digest(before) != study_code_digest(moved.replace("'a'", "'b'"))
+
+
+def test_an_artifact_written_before_the_code_hash_is_checked_by_its_bytes(tmp_path):
+    import hashlib
+
+    from scenarios.artifacts import study_changed
+
+    study = tmp_path / "study.py"
+    study.write_text("ROWS = 1\n")
+    old = {"path": str(study), "sha256": hashlib.sha256(study.read_bytes()).hexdigest()}
+    assert not study_changed(old)
+    study.write_text("ROWS = 1  # a comment is a change of bytes\n")
+    assert study_changed(old)
+
+
 def test_an_artifact_records_the_machine_load_and_a_busy_machine_is_named():
     from scenarios.artifacts import busy_note
 

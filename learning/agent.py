@@ -1,7 +1,7 @@
 """The step-by-step driver: an agent for any gymnasium ``Discrete`` env, and its episode loop.
 
 The agent holds the same named state the fused kernels train, and each event
-calls the same compiled hook the kernels inline (:mod:`learning.hooks`), with
+calls the same compiled hook the kernels inline (:mod:`learning.compiled.hooks`), with
 the same generator, so a run through an env
 and a kernel run with the same seed end with identical tables and weights.
 Use this driver where there is no tabular model (the physics env); use
@@ -16,16 +16,16 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from learning import hooks
+from learning.compiled import hooks
+from learning.compiled.generator_handle import handle
+from learning.compiled.hooks import draw_start
+from learning.compiled.named_state import episodes_done
+from learning.compiled.state_box import box_of
 from learning.config import MethodConfig
-from learning.generator_handle import handle
 from learning.geometry import Geometry
-from learning.hooks import draw_start
-from learning.named_state import episodes_done
 from learning.state import init_state
-from learning.state_box import box_of
 
-# Each takes the state's box (learning.state_box): one reference to unbox per call.
+# Each takes the state's box (learning.compiled.state_box): one reference to unbox per call.
 
 
 @njit(cache=True)

@@ -1,11 +1,11 @@
 """N learners of one method, driven together: one compiled call per event for all of them.
 
-The physics world steps many robots at once (:mod:`sim.physics.batch`); its learners must
+The physics world steps many robots at once (:mod:`sim.physics.kernel.batch`); its learners must
 keep up. A :class:`BatchAgent` stacks the agents' states (every array of the method's
-named state gains a leading axis of N, :func:`learning.named_state.stack`) and passes
-their generators as handles (:mod:`learning.generator_handle`), so ``act``, ``update``,
+named state gains a leading axis of N, :func:`learning.compiled.named_state.stack`) and passes
+their generators as handles (:mod:`learning.compiled.generator_handle`), so ``act``, ``update``,
 ``begin`` and ``end`` for all N agents are one compiled call each, which calls the same
-hooks the step agent and the kernels call (:mod:`learning.hooks`) on agent i's row.
+hooks the step agent and the kernels call (:mod:`learning.compiled.hooks`) on agent i's row.
 Each agent draws from its own generator in the same order as a :class:`StepAgent`
 would, so agent ``i`` of a batch ends with the same tables as a step agent run alone
 with its seed (tested).
@@ -16,14 +16,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from learning import hooks
 from learning.agent import StepAgent
+from learning.compiled import hooks
+from learning.compiled.generator_handle import generator_from, handles
+from learning.compiled.named_state import copy_state, row, row_view, stack
+from learning.compiled.state_box import box_of
 from learning.config import MethodConfig
-from learning.generator_handle import generator_from, handles
 from learning.geometry import Geometry
-from learning.named_state import copy_state, row, row_view, stack
 from learning.state import init_state
-from learning.state_box import box_of
 
 
 @njit(cache=True)
@@ -33,7 +33,7 @@ def _draw_starts(start_handles, starts, active, out):
             out[i] = hooks.draw_start(generator_from(start_handles[i]), starts)
 
 
-# Each takes the stacked state's box (learning.state_box): one reference to unbox per call.
+# Each takes the stacked state's box (learning.compiled.state_box): one reference to unbox per call.
 
 
 @njit(cache=True)

@@ -32,10 +32,9 @@ from learning.checkpoint_fields import (
     read_header,
     read_metrics,
 )
-from learning.config import FieldMovedError, MethodConfig
+from learning.compiled.named_state import arrays, episodes_done, rebuild
+from learning.config import MAX_MAGNITUDE, FieldMovedError, MethodConfig, config_problem
 from learning.geometry import Geometry
-from learning.limits import MAX_MAGNITUDE, config_problem
-from learning.named_state import arrays, episodes_done, rebuild
 from learning.registry import METHODS, config_from_fields, family_of, n_states_of
 from learning.state import init_state
 

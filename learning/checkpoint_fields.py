@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from learning.limits import MAX_MAGNITUDE
+from learning.config import MAX_MAGNITUDE
 
 METRIC_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std",
                  "test_episodes", "test_route_length")

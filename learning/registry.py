@@ -2,12 +2,12 @@
 
 A method is one module (config, named state, hooks); :data:`FAMILY_OF_CONFIG` maps
 each config class to it, in the order every table, figure and ``rnhql compare`` lists
-the methods. Dispatch (:mod:`learning.hooks`) reads :data:`FAMILY_OF_STATE`: a
+the methods. Dispatch (:mod:`learning.compiled.hooks`) reads :data:`FAMILY_OF_STATE`: a
 compiled call on a state goes to the module whose ``State`` it is.
 
 Adding a method ``my-ql``:
 
-1. write ``learning/my_ql.py`` after :mod:`learning.q_learning` (the template): a
+1. write ``learning/my_ql.py`` after :mod:`learning.methods.q_learning` (the template): a
    frozen config subclassing :class:`~learning.config.MethodConfig` with ``name``
    (display) and ``cli`` (``"my-ql"``), a ``State`` named tuple whose first fields are
    ``par`` and ``tally``, ``init_state(cfg, geom, rng)``, and the hooks ``act``,
@@ -29,11 +29,11 @@ import importlib
 import inspect
 from types import ModuleType
 
-from learning import (
+from learning.config import MethodConfig
+from learning.methods import (
     dyna_q,
     haql,
     pfh_rl,
-    policy_state,
     q_lambda,
     q_learning,
     rn_ql,
@@ -42,17 +42,17 @@ from learning import (
     rnh_ql_plus_ablation,
     sarsa_rs,
 )
-from learning.config import MethodConfig
-from learning.dyna_q import DynaQ
-from learning.haql import HAQL
-from learning.pfh_rl import PFHRL
-from learning.q_lambda import QLambda
-from learning.q_learning import STQL, QOpt
-from learning.rn_ql import RNQL
-from learning.rnh_ql import RNHQL
-from learning.rnh_ql_plus import RNHQLPlus, RNHQLPlusExplore
-from learning.rnh_ql_plus_ablation import RNHQLPlusAblation
-from learning.sarsa_rs import SarsaRS
+from learning.methods.dyna_q import DynaQ
+from learning.methods.haql import HAQL
+from learning.methods.pfh_rl import PFHRL
+from learning.methods.q_lambda import QLambda
+from learning.methods.q_learning import STQL, QOpt
+from learning.methods.rn_ql import RNQL
+from learning.methods.rnh_ql import RNHQL
+from learning.methods.rnh_ql_plus import RNHQLPlus, RNHQLPlusExplore
+from learning.methods.rnh_ql_plus_ablation import RNHQLPlusAblation
+from learning.methods.sarsa_rs import SarsaRS
+from learning.plain import policy as policy_state
 
 # every method: config, module, in rnhql compare's default list; in display order
 _TABLE: tuple[tuple[type[MethodConfig], ModuleType, bool], ...] = (
@@ -72,7 +72,7 @@ _TABLE: tuple[tuple[type[MethodConfig], ModuleType, bool], ...] = (
     (RNHQLPlusExplore, rnh_ql_plus, False),
 )
 HOOKS = ("State", "init_state", "act", "update", "begin", "exploit")
-# each compiled hook's parameters, as learning.hooks calls it
+# each compiled hook's parameters, as learning.compiled.hooks calls it
 HOOK_PARAMETERS = {"act": ("st", "s", "rng"),
                    "update": ("st", "s", "a", "r", "s2", "terminated", "rng"),
                    "begin": ("st", "s0"), "exploit": ("st", "s")}
@@ -178,7 +178,7 @@ def register(config: type[MethodConfig], module: ModuleType, compared: bool = Tr
     if compared:
         _COMPARED.append(config.cli)
     if not module.__name__.startswith(f"{__package__}."):
-        from learning.jitcache import FOREIGN_STATES, guard_cache
+        from learning.compiled.jitcache import FOREIGN_STATES, guard_cache
 
         guard_cache()
         FOREIGN_STATES.add(module.State)
@@ -232,7 +232,7 @@ def is_located(method: str) -> bool:
 def config_class(method: str) -> type:
     """The config class of ``method``: a registered CLI name, or ``module:Attribute`` naming a
     compiled method's config (registered here on first use, left out of ``rnhql compare``'s
-    default list) or a plain-Python learner class (:func:`learning.plain.plain_config`)."""
+    default list) or a plain-Python learner class (:func:`learning.plain.learner.plain_config`)."""
     if method in METHODS:
         return METHODS[method]
     if not is_located(method):
@@ -242,7 +242,7 @@ def config_class(method: str) -> type:
         hint = f"did you mean {' or '.join(close)}? " if close else ""
         raise ValueError(f"unknown method {method!r}; {hint}known: {', '.join(METHODS)}, or "
                          "module:Class for a learner of your own")
-    from learning.plain import known_class, plain_config
+    from learning.plain.learner import known_class, plain_config
 
     obj = known_class(method) or import_attribute(method)
     if isinstance(obj, type) and issubclass(obj, MethodConfig):

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from learning.compiled.named_state import copy_state
 from learning.config import MethodConfig
 from learning.geometry import Geometry
-from learning.named_state import copy_state
 from learning.registry import family_of
 
 

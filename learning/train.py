@@ -16,16 +16,16 @@ from typing import Protocol
 import numpy as np
 
 from learning.checkpoint import Checkpoint, CheckpointError
+from learning.compiled.kernels import NO_TRACE, greedy_route, on_shortest_fraction, run_episodes
+from learning.compiled.named_state import copy_state, episodes_done
 from learning.config import MethodConfig
 from learning.geometry import TabularMDP, geometry_of
-from learning.kernels import NO_TRACE, greedy_route, on_shortest_fraction, run_episodes
 from learning.metrics import (
     episodes_to_first_optimal,
     episodes_to_stable_optimal,
     optimal_test_fraction,
     reward_per_step,
 )
-from learning.named_state import copy_state, episodes_done
 from learning.state import init_state
 
 EPISODE_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std")
@@ -101,7 +101,7 @@ def greedy_test(st, model: TabularMDP, start: int | None = None) -> tuple[int, l
 def epsilon_route_lengths(st, model: TabularMDP, eps: float,
                           rng: np.random.Generator, n: int = 20) -> np.ndarray:
     """Route lengths (-1: G missed) of ``n`` epsilon-greedy rollouts from S, no learning."""
-    from learning.kernels import epsilon_rollouts
+    from learning.compiled.kernels import epsilon_rollouts
 
     return epsilon_rollouts(st, model.next_state, model.terminal, int(model.start),
                             int(model.max_steps), float(eps), int(n), rng)

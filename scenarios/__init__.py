@@ -1,14 +1,18 @@
 """The composition layer of rnhql: the only package that imports both ``sim`` and ``learning``.
 
+Beside them: ``api`` and ``values`` (the library face: train, compare, grade, optimum and
+the typed values they return), ``artifacts`` (results as code) and ``signals``.
+
 Subpackages, top to bottom (a package imports only those below it):
 
 - ``cli``: the ``rnhql`` command, one module per subcommand;
 - ``bench``: the benchmarks behind ``rnhql bench`` and ``python -m scenarios.bench.*``;
-- ``experiments``: comparisons, the paper's experiments, continuous vs grid;
-- ``runs``: run specs, one run end to end, sweep backends, the ``results.json`` contract;
+- ``studies``: the scripts behind the docs' tables (the paper, the ladder, maps);
+- ``sweep``: many runs and their owner ``run_sweep`` (backends, output folder, resume,
+  Ctrl-C, the comparison recording);
+- ``runs``: run specs, one run end to end, the ``results.json`` contract;
 - ``recording``: Rerun recordings of runs and comparisons;
 - ``figures``: matplotlib figures and route drawings;
-- ``builtin``: the built-in scenario TOMLs and Moving AI maps (data only).
 """
 
 from pathlib import Path as _Path

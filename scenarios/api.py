@@ -9,7 +9,7 @@ values back. The ``rnhql`` command is a shell over these calls.
 
 ``scenario`` is a built-in name, a ``.toml``/``.map`` path or a :class:`sim.scenario.Scenario`;
 a method is a registry name (``"rnh-ql+"``), ``"module:Class"``, or the class itself: a
-plain-Python learner (:mod:`learning.plain`) or a compiled method's config. Bad input
+plain-Python learner (:mod:`learning.plain.learner`) or a compiled method's config. Bad input
 raises :class:`sim.errors.InputError` naming the argument and the fix, before any work.
 The same inputs give the same records as the command (tested). These names and their
 keywords are kept stable.
@@ -150,8 +150,8 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
                    "pass out='DIR' as well, or drop resume")
     sc, _ = problem_of(fn, scenario, start, goal, rewards_text, s_starts, worlds)
     per_method = settings_per_method(names, overrides)
-    from scenarios.experiments.compare import SweepRecording, assemble, make_specs, run_sweep
-    from scenarios.runs.backends import Progress
+    from scenarios.sweep.backends import Progress
+    from scenarios.sweep.run import SweepRecording, assemble, make_specs, run_sweep
 
     specs = make_specs(scenario, names, list(range(seed_base, seed_base + n_seeds)), episodes,
                        worlds, per_method, start=start, goal=goal, rewards=rewards_text,
@@ -206,7 +206,7 @@ def settings_per_method(methods: Sequence[str], overrides: tuple[tuple[str, floa
 
 def _backend(fn: str, backend: str, address: str | None, jobs: int | None,
              start_method: str | None) -> tuple[Callable[..., Any], dict[str, Any]]:
-    from scenarios.runs.backends import run_local, run_ray
+    from scenarios.sweep.backends import run_local, run_ray
 
     if backend == "local":
         if address is not None:
@@ -249,10 +249,10 @@ def optimum(scenario: ScenarioLike, *, fidelity: Any = "exact", rewards: Any = N
 
 
 def _optimum(sc: Scenario, model: Any, fid_text: str) -> Optimum:
-    from scenarios.experiments.compare import optimum_at_fidelity
+    from scenarios.sweep.run import optimum_at_fidelity
     from sim.physics.fidelity import parse_fidelity
-    from sim.physics.model import physics_model
-    from sim.physics.optimum import continuous_optimum_m
+    from sim.physics.models.optimum import continuous_optimum_m
+    from sim.physics.models.transition import physics_model
 
     fid = parse_fidelity(fid_text)
     exact = physics_model(sc).optimal_route_length
@@ -301,10 +301,10 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
     sc, model = problem_of(fn, scenario, cell_arg(fn, "start", start), cell_arg(fn, "goal", goal),
                          rewards_arg(fn, rewards), None, ["physics"])
     table = policy_table(fn, policy, model.n_states)
-    from learning.policy_state import policy_state
+    from learning.plain.policy import policy_state
     from learning.train import greedy_test
-    from scenarios.experiments.compare import matches_optimum
     from scenarios.runs.physics_grading import FINAL_TAG, Grader
+    from scenarios.sweep.run import matches_optimum
     from sim.physics.fidelity import parse_fidelity
 
     fid = parse_fidelity(fid_text)
@@ -321,7 +321,7 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
         if fid.is_exact:
             optimal = bool(r.reached[0]) and int(r.primitives[0]) == opt.physics_route_length
         else:
-            from scenarios.experiments.compare import optimum_at_fidelity
+            from scenarios.sweep.run import optimum_at_fidelity
 
             with _optimum_always():
                 at = optimum_at_fidelity(sc, fid)
@@ -339,8 +339,8 @@ def route(agent: str | Path, scenario: ScenarioLike, *, fidelity: Any = "exact",
     """A saved agent (``train(..., save=...)``, ``rnhql train --save``) graded from S: its
     greedy policy through :func:`grade`."""
     from learning.checkpoint import load_checkpoint
+    from learning.compiled.readout import greedy_actions
     from learning.geometry import geometry_of
-    from learning.readout import greedy_actions
 
     scenario = scenario_arg("route", scenario)
     _, model = problem_of("route", scenario, None, None, rewards_arg("route", rewards), None,

@@ -119,12 +119,12 @@ def method_arg(fn: str, method: Any) -> str:
     """A method's name in a sweep: a registry name, or ``module:Class`` (a class given as an
     object is remembered in this process and the workers it forks)."""
     from learning.config import MethodConfig
-    from learning.plain import remember
+    from learning.plain.learner import remember
     from scenarios.runs.spec import method_class
 
     if isinstance(method, type):
         if issubclass(method, MethodConfig):
-            from learning.plain import located_name
+            from learning.plain.learner import located_name
             from learning.registry import METHODS
 
             name = method.cli if METHODS.get(method.cli) is method else located_name(method)

@@ -36,7 +36,7 @@ class Screenshot:
 
 
 def _scaling(path: Path) -> None:
-    from scenarios.experiments.scaling import figure_from_artifact
+    from scenarios.studies.paper.scaling import figure_from_artifact
 
     figure_from_artifact("scaling.arenas", path)
 
@@ -45,25 +45,25 @@ SCALING_MAPS = ("small", "seed7", "512")
 
 
 def _scaling_maps(path: Path) -> None:
-    from scenarios.experiments.scaling_maps_figure import draw, points_from_artifacts
+    from scenarios.studies.maps.scaling_maps_figure import draw, points_from_artifacts
 
     draw(points_from_artifacts(SCALING_MAPS), path)
 
 
 def _ablation(path: Path) -> None:
-    from scenarios.experiments.ablation import figure_from_artifact
+    from scenarios.studies.maps.ablation import figure_from_artifact
 
     figure_from_artifact("ablation.suite", path)
 
 
 def _ladder(path: Path) -> None:
-    from scenarios.experiments.continuous_vs_grid import figure_from_artifact
+    from scenarios.studies.ladder.continuous_vs_grid import figure_from_artifact
 
     figure_from_artifact("ladder.study", path)
 
 
 def _aliasing(path: Path) -> None:
-    from scenarios.experiments.aliasing import figure_from_artifact
+    from scenarios.studies.ladder.aliasing import figure_from_artifact
 
     figure_from_artifact("aliasing.paper-50-noisy", path)
 

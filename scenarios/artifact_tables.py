@@ -165,7 +165,7 @@ def ladder_predictivity(d: dict[str, Any]) -> str:
     lines = ["#### Does the grid rank the methods as the rung does? (SRCC)", "",
              "Spearman's ρ between the methods' order in the grid (grid-trained runs, the "
              "grid's own figures) and at the rung (runs trained and driven there), with a 95 % "
-             "bootstrap interval over seeds (`scenarios/experiments/predictivity.py`). "
+             "bootstrap interval over seeds (`scenarios/studies/ladder/predictivity.py`). "
              "*Deployed*: expected primitives of the final policy from S, a miss costing the "
              "episode budget; *learning*: mean training episode length. 1: the grid orders "
              "the methods exactly as the rung does; — (no spread): one of the two worlds "

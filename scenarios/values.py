@@ -140,18 +140,18 @@ class Comparison:
     def brief(self, width: int = 100) -> str:
         """What ``rnhql compare`` prints: a compact table and the verdict's headlines, every
         line within ``width`` columns (:meth:`summary` has the full tables)."""
-        from scenarios.runs.brief import summary_terminal
+        from scenarios.sweep.brief import summary_terminal
 
         return summary_terminal(dict(self.results), self.methods, width)
 
     def save(self, out: str | Path, figures: bool = True) -> Path:
         """Write ``results.json``, ``summary.md`` and (``figures``) the figures to ``out``, as
         ``rnhql compare --out`` does; returns the folder."""
-        from scenarios.experiments.compare import ctrl_c_held
         from scenarios.figures.plots import all_figures
-        from scenarios.runs.outdir import check_out_dir
         from scenarios.runs.results import write_results
         from scenarios.runs.spec import load
+        from scenarios.sweep.outdir import check_out_dir
+        from scenarios.sweep.run import ctrl_c_held
 
         out = check_out_dir(Path(out), "out")
         results = dict(self.results)
@@ -172,7 +172,7 @@ class Comparison:
 
 def _method_key(cls: type) -> str:
     from learning.config import MethodConfig
-    from learning.plain import located_name
+    from learning.plain.learner import located_name
 
     return cls.cli if issubclass(cls, MethodConfig) else located_name(cls)
 

@@ -20,13 +20,13 @@ from sim.env_args import DEFAULT_REWARDS
 
 ENV_SPECS = {
     "rnhql/GridRoute-v0": "sim.grid.env:GridRouteEnv",
-    "rnhql/PhysicsRoute-v0": "sim.physics.envs:PhysicsRouteEnv",
-    "rnhql/DiffDrive-v0": "sim.physics.diffdrive_env:DiffDriveEnv",
+    "rnhql/PhysicsRoute-v0": "sim.physics.envs.route:PhysicsRouteEnv",
+    "rnhql/DiffDrive-v0": "sim.physics.envs.diffdrive:DiffDriveEnv",
 }
 # make_vec(id, num_envs=N, vectorization_mode="vector_entry_point"): N robots in one Space
 VECTOR_ENTRY_POINTS = {
-    "rnhql/PhysicsRoute-v0": "sim.physics.vector:PhysicsRouteVectorEnv",
-    "rnhql/DiffDrive-v0": "sim.physics.vector:DiffDriveVectorEnv",
+    "rnhql/PhysicsRoute-v0": "sim.physics.envs.vector:PhysicsRouteVectorEnv",
+    "rnhql/DiffDrive-v0": "sim.physics.envs.vector:DiffDriveVectorEnv",
 }
 DEFAULT_KWARGS = {"rewards": DEFAULT_REWARDS}
 

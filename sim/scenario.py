@@ -4,13 +4,13 @@ Frames and units: metres, x to the right, y upwards, origin at the arena's
 bottom-left corner. Cells are ``(ix, iy)`` with ``ix`` the column from the left
 and ``iy`` the row from the *bottom*; cell ``(ix, iy)`` covers
 ``[ix*c, (ix+1)*c) x [iy*c, (iy+1)*c)`` for cell size ``c``. Moving AI maps count
-rows from the top; :mod:`sim.maps` converts them explicitly.
+rows from the top; :mod:`sim.maps.movingai` converts them explicitly.
 
 A scenario is plain frozen data. Everything derived from it (occupancy, the
 tabular model, the physics world) is built by the modules that need it, so a
 scenario stays cheap to copy, hash and pickle into worker processes. Loading
 (TOML, ``.map``, built-ins) is :mod:`sim.scenario_io`; random layouts are
-:mod:`sim.layouts`; the feasibility check that rasterises is :mod:`sim.feasibility`.
+:mod:`sim.maps.layouts`; the feasibility check that rasterises is :mod:`sim.feasibility`.
 """
 
 from __future__ import annotations

@@ -18,8 +18,8 @@ import numpy as np
 from sim.errors import ScenarioError
 from sim.feasibility import validate
 from sim.files import read_input
-from sim.layouts import chain, random_circles
-from sim.maps import GridMap, load_map, movingai_to_cell
+from sim.maps.layouts import chain, random_circles
+from sim.maps.movingai import GridMap, load_map, movingai_to_cell
 from sim.scenario import (
     MAX_COORDINATE_M,
     MAX_OBSTACLES,

@@ -35,7 +35,7 @@ READOUT_KEYS = ("greedy_policy",)
 
 def sweep_specs() -> list[Any]:
     from learning.registry import comparison_methods
-    from scenarios.experiments.compare import make_specs
+    from scenarios.sweep.run import make_specs
 
     return [*make_specs("paper-40", comparison_methods(), SEEDS, EPISODES, ("grid", "physics"),
                         rewards="goal-only"),
@@ -50,7 +50,7 @@ def record_digest(rec: dict[str, Any]) -> str:
 
 
 def sweep_digests(jobs: int = 1) -> dict[str, str]:
-    from scenarios.runs.backends import run_local
+    from scenarios.sweep.backends import run_local
 
     specs = sweep_specs()
     recs = run_local(specs, jobs=jobs)

@@ -6,7 +6,7 @@ imports, lazy ones inside functions included:
 - ``sim`` never imports ``learning`` or ``scenarios``; ``learning`` never
   imports ``sim`` or ``scenarios``; neither imports rerun or matplotlib;
 - inside ``scenarios`` the subpackages are ranked ``cli`` > ``bench`` >
-  ``experiments`` > ``runs`` > ``recording`` > ``figures``: a module imports its
+  ``studies`` > ``sweep`` > ``runs`` > ``recording`` > ``figures``: a module imports its
   own subpackage or lower ones only;
 - the module import graph has no cycle.
 """
@@ -18,7 +18,8 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 PACKAGES = ("sim", "learning", "scenarios")
-SCENARIO_RANK = {"figures": 1, "recording": 2, "runs": 3, "experiments": 4, "bench": 5, "cli": 6}
+SCENARIO_RANK = {"figures": 1, "recording": 2, "runs": 3, "sweep": 4, "studies": 5, "bench": 6,
+                 "cli": 7}
 FORBIDDEN = {
     "sim": ("learning", "scenarios", "rerun", "matplotlib"),
     "learning": ("sim", "scenarios", "rerun", "matplotlib", "pymunk"),
@@ -122,8 +123,8 @@ def method_modules() -> set[str]:
     registry's (a new method is added there, not here)."""
     from learning.registry import FAMILY_OF_CONFIG
 
-    return {m.__name__.split(".")[1] for m in FAMILY_OF_CONFIG.values()
-            if m.__name__.startswith("learning.")}
+    return {m.__name__.split(".")[2] for m in FAMILY_OF_CONFIG.values()
+            if m.__name__.startswith("learning.methods.")}
 
 
 # a method that is another one with more switches builds on it (never the other way round)
@@ -139,12 +140,13 @@ def test_each_method_module_imports_no_other_method():
     assert {"q_learning", "rnh_ql_plus", "rnh_ql_plus_ablation"} <= methods
     for mod, deps in graph().items():
         parts = mod.split(".")
-        if parts[0] != "learning" or len(parts) < 2 or parts[1] not in methods:
+        if parts[:2] != ["learning", "methods"] or len(parts) < 3 or parts[2] not in methods:
             continue
         for dep in deps:
             dparts = dep.split(".")
-            if dparts[0] == "learning" and len(dparts) > 1 and dparts[1] in methods \
-                    and dparts[1] not in (parts[1], BUILDS_ON.get(parts[1])):
+            if dparts[:2] == ["learning", "methods"] and len(dparts) > 2 \
+                    and dparts[2] in methods \
+                    and dparts[2] not in (parts[2], BUILDS_ON.get(parts[2])):
                 bad.append(f"{mod} imports {dep}")
     assert bad == [], "\n".join(sorted(bad))
 

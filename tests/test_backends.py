@@ -7,8 +7,8 @@ import os
 
 import pytest
 
-from scenarios.experiments.compare import make_specs, run_sweep
-from scenarios.runs.backends import BackendError, run_local, run_ray
+from scenarios.sweep.backends import BackendError, run_local, run_ray
+from scenarios.sweep.run import make_specs, run_sweep
 
 TIMING = ("wall_time_s", "wall_time_per_episode_s")
 
@@ -54,7 +54,7 @@ def test_progress_off_a_terminal_prints_a_line_every_interval_and_at_the_end():
     import io
     import time
 
-    from scenarios.runs.backends import Progress
+    from scenarios.sweep.backends import Progress
 
     out = io.StringIO()  # not a TTY
     p = Progress(3, interval_s=0.05, stream=out)
@@ -83,8 +83,8 @@ def test_progress_counts_episodes_across_workers_and_estimates_from_the_rate(tmp
     import re
     import time
 
-    from scenarios.experiments.compare import make_specs, run_sweep
-    from scenarios.runs.backends import Progress, run_local
+    from scenarios.sweep.backends import Progress, run_local
+    from scenarios.sweep.run import make_specs, run_sweep
 
     specs = make_specs("paper-40", ["st-ql", "q-lambda", "rnh-ql"], [0, 1, 2, 3], 4000,
                        ["grid"])
@@ -118,7 +118,7 @@ def test_no_estimate_while_a_worker_compiles_and_the_rate_restarts_after():
     gave an estimate 8x too long); once an estimate exists, a later compile keeps it (the
     last rate carries it), and the rate window restarts after the compile."""
     from scenarios.runs import work
-    from scenarios.runs.backends import Progress
+    from scenarios.sweep.backends import Progress
 
     p = Progress(4, enabled=False)
     p.expect(4, 10_000)
@@ -148,7 +148,7 @@ def test_each_world_is_estimated_from_its_own_rate():
     """A mixed sweep: grid episodes flow first and fast, physics episodes slowly; the time
     left is each world's episodes left over its own rate, and none until physics has one."""
     from scenarios.runs import work
-    from scenarios.runs.backends import Progress
+    from scenarios.sweep.backends import Progress
 
     p = Progress(4, enabled=False)
     p.expect(4, 2000, physics_episodes=1000)

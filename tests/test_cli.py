@@ -129,7 +129,7 @@ def test_out_that_is_a_file_is_an_input_error(tmp_path, capsys):
 
 
 def test_out_in_use_by_a_live_sweep_is_refused_and_a_stale_lock_taken_over(tmp_path, capsys):
-    from scenarios.runs.outdir import LOCK_NAME
+    from scenarios.sweep.outdir import LOCK_NAME
 
     out = tmp_path / "o"
     out.mkdir()
@@ -169,7 +169,7 @@ def test_scen_errors_are_one_line(capsys, tmp_path):
 
 def test_a_scenario_name_never_sends_the_default_recording_out_of_recordings(tmp_path,
                                                                              monkeypatch):
-    from scenarios.cli.paths import record_path
+    from scenarios.sweep.outdir import record_path
 
     monkeypatch.chdir(tmp_path)
     args = type("A", (), {"record": ""})()
@@ -257,7 +257,7 @@ def test_every_flag_of_every_command_has_a_help_line_and_its_default():
 
 
 def test_optimum_prints_v_star_next_to_the_exact_and_continuous_optima(capsys):
-    from sim.physics.stochastic_build import stochastic_model
+    from sim.physics.models.build import stochastic_model
 
     stochastic_model.cache_clear()
     assert main(["optimum", "paper-40", "--rollouts", "2"]) == 0
@@ -290,7 +290,7 @@ def test_train_defaults_to_a_method_that_learns_the_route(capsys):
 
 
 def test_ablation_target_scales_with_the_seeds():
-    from scenarios.experiments.ablation import target_seeds
+    from scenarios.studies.maps.ablation import target_seeds
 
     assert [target_seeds(n) for n in (1, 3, 5, 10, 20)] == [1, 3, 5, 9, 18]
 
@@ -340,7 +340,7 @@ def test_a_copied_scenario_under_a_new_file_name_says_so(capsys, monkeypatch, tm
 def test_the_default_recording_keeps_the_method_name_the_docs_print(tmp_path, monkeypatch):
     """docs/usage.md's tour opens recordings/paper-50-rnh-ql+-grid-s0.rrd: the file a
     default --record of rnh-ql+ writes (it was rnh-ql_)."""
-    from scenarios.cli.paths import RECORD_DEFAULT, record_path
+    from scenarios.sweep.outdir import RECORD_DEFAULT, record_path
 
     monkeypatch.chdir(tmp_path)
     args = type("A", (), {"record": RECORD_DEFAULT})()

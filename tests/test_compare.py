@@ -6,11 +6,11 @@ import json
 
 import pytest
 
-from scenarios.experiments.compare import PARTIAL, make_specs, run_sweep
-from scenarios.runs.backends import SweepError, run_local
 from scenarios.runs.results import summarise
 from scenarios.runs.run import run_one
 from scenarios.runs.spec import RecordOptions, RunSpec
+from scenarios.sweep.backends import SweepError, run_local
+from scenarios.sweep.run import PARTIAL, make_specs, run_sweep
 
 RUN_KEYS = {"method", "seed", "world", "episodes_to_stable_optimal", "episodes_to_optimal",
             "optimal_test_fraction", "final_route_length", "epsilon_route_length",
@@ -203,7 +203,7 @@ def test_resume_into_a_sweep_of_other_settings_is_refused(tmp_path, capsys):
 
 
 def test_an_import_broken_by_ctrl_c_counts_as_ctrl_c():
-    from scenarios.experiments.compare import interrupted
+    from scenarios.sweep.run import interrupted
 
     try:
         try:

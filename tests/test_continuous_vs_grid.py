@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from scenarios.cli import main
-from scenarios.experiments import continuous_vs_grid
+from scenarios.studies.ladder import continuous_vs_grid
 
 
 def test_ladder_study_writes_table_figure_and_one_comparison_per_rung(tmp_path, capsys):

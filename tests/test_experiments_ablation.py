@@ -7,8 +7,8 @@ import math
 
 import pytest
 
-from scenarios.experiments.ablation import compact_table, stable_optimal, verdict
-from scenarios.experiments.suite import build_suite
+from scenarios.studies.maps.ablation import compact_table, stable_optimal, verdict
+from scenarios.studies.maps.suite import build_suite
 
 MAPS = [dict(name="paper-40", held_out=False), dict(name="paper-50", held_out=False),
         dict(name="maze-101", held_out=True)]
@@ -74,8 +74,8 @@ def test_verdict_without_the_open_maps_says_nothing_about_them():
 def test_every_variant_is_a_config_of_its_method_and_the_ablations_rows_need_it():
     """A row runs on rnh-ql+ablation only where it turns a switch rnh-ql+ has not."""
     from learning import METHODS
-    from scenarios.experiments.ablation import VARIANTS
     from scenarios.runs.spec import make_config
+    from scenarios.studies.maps.ablation import VARIANTS
 
     plus = set(METHODS["rnh-ql+"]().fields())
     for label, method, overrides in VARIANTS:
@@ -99,10 +99,10 @@ def _without_wall(data):
 
 def test_ablation_runs_as_a_sweep_and_writes_its_files(tmp_path, capsys):
     """The ablation's files and their shape; each run's figures are its record's."""
-    from scenarios.experiments.ablation import VARIANTS, main
-    from scenarios.experiments.compare import PARTIAL
     from scenarios.runs.run import run_one
     from scenarios.runs.spec import RunSpec, load
+    from scenarios.studies.maps.ablation import VARIANTS, main
+    from scenarios.sweep.run import PARTIAL
 
     out = tmp_path / "abl"
     assert main(["--out", str(out), *TINY]) == 0
@@ -135,9 +135,9 @@ def test_ablation_runs_as_a_sweep_and_writes_its_files(tmp_path, capsys):
 
 
 def test_ablation_interrupted_then_resumed_writes_what_one_pass_writes(tmp_path, monkeypatch):
-    from scenarios.experiments.ablation import main
-    from scenarios.experiments.compare import PARTIAL
-    from scenarios.runs import backends
+    from scenarios.studies.maps.ablation import main
+    from scenarios.sweep import backends
+    from scenarios.sweep.run import PARTIAL
 
     whole = tmp_path / "whole"
     assert main(["--out", str(whole), *TINY]) == 0

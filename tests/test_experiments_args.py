@@ -1,4 +1,4 @@
-"""An experiment's arguments declared as a dataclass (scenarios.experiments.args)."""
+"""An experiment's arguments declared as a dataclass (scenarios.studies.args)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import pytest
 
-from scenarios.experiments.args import arg, parse, parser_of
+from scenarios.studies.args import arg, parse, parser_of
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from scenarios.experiments import heldout
+from scenarios.studies.maps import heldout
 
 
 def test_problems_and_methods_parse():
@@ -46,8 +46,8 @@ def test_the_diagnosis_says_where_an_untrained_test_from_s_hits_a_wall(tmp_path)
     import numpy as np
 
     from learning import RNHQLPlus, train_tabular
-    from scenarios.experiments.test_from_s import describe, where_it_stops
     from scenarios.runs.spec import load
+    from scenarios.studies.maps.test_from_s import describe, where_it_stops
 
     assert where_it_stops([5, 4, 3, 3], np.array([0, 0, 0, 1, 2, 3])) == 2
     toml, route, _ = heldout.write_problem("rooms-64", 0.0, 7, 0.0, tmp_path)

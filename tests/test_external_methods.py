@@ -19,9 +19,9 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 
-from learning import q_learning
+from learning.methods import q_learning
 from learning.config import BaseParams, MethodConfig
-from learning.tally import Tally, new_tally
+from learning.parts.tally import Tally, new_tally
 
 
 @dataclass(frozen=True)
@@ -83,7 +83,7 @@ def test_a_state_numba_cannot_tell_apart_is_refused():
     dispatcher keys on the class's bare name and the field types)."""
     import types
 
-    from learning import q_learning
+    from learning.methods import q_learning
     from learning.registry import register
     from tests import test_new_method as good
 
@@ -93,7 +93,7 @@ def test_a_state_numba_cannot_tell_apart_is_refused():
     twin.State = q_learning.State.__class__("State", (q_learning.State,), {})  # same name
     twin.init_state = lambda cfg, geom, rng: q_learning.init_state(cfg, geom, rng)
     with pytest.raises(ValueError, match=r"twin.State has the class name and the field types "
-                                         r"of learning.q_learning.State.*Give the class a "
+                                         r"of learning.methods.q_learning.State.*Give the class a "
                                          r"name of its own"):
         register(type("T", (good.Throwaway,), {"cli": "t"}), twin)
 

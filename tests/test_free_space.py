@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from learning.free_space import (
+from learning.parts.free_space import (
     back_move,
     bfs_distances,
     distances_change,

@@ -1,6 +1,6 @@
 """HAQL's heuristic from exploration kept up to date wall by wall
-(:func:`learning.haql.rederive_after_wall`) equals the full re-derivation it replaced
-(:func:`learning.haql.rederive`: one BFS from G and every state's move), walls that
+(:func:`learning.methods.haql.rederive_after_wall`) equals the full re-derivation it replaced
+(:func:`learning.methods.haql.rederive`: one BFS from G and every state's move), walls that
 leave states without a route included."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from learning.haql import rederive, rederive_after_wall
+from learning.methods.haql import rederive, rederive_after_wall
 
 
 def grid_neighbours(nx: int, ny: int) -> np.ndarray:
@@ -62,8 +62,8 @@ def test_wall_by_wall_equals_the_full_rederivation(seed, share):
 
 
 def observe_by_full_rederivation(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, clean):
-    """learning.haql.observe as it was: every change re-derives the whole heuristic."""
-    from learning.haql import COUNT_CAP
+    """learning.methods.haql.observe as it was: every change re-derives the whole heuristic."""
+    from learning.methods.haql import COUNT_CAP
 
     if s2 == nb[s, a] and clean:
         bal[s, a] = max(bal[s, a] - 1, -COUNT_CAP)
@@ -83,9 +83,9 @@ def observe_by_full_rederivation(bal, pi_h, nb, blocked, dist, queue, goal, s, a
 def test_noisy_bumps_and_unblocks_equal_the_full_rederivation(seed):
     """A noisy world: moves into wall cells mostly bump, other moves sometimes do, so walls
     appear, move after all (unblocks) and cut states off; the heuristic kept up by
-    :func:`learning.haql.observe` (repairs, lowered distances, cut-off states alone) equals
+    :func:`learning.methods.haql.observe` (repairs, lowered distances, cut-off states alone) equals
     a full re-derivation after every change."""
-    from learning.haql import observe
+    from learning.methods.haql import observe
 
     rng = np.random.default_rng(seed)
     nx, ny = 9, 8
@@ -129,7 +129,7 @@ def test_least_bumped_costs_are_dijkstra_s_over_every_move(seed):
     against a plain Dijkstra over every (state, move) pair, on random bump counts."""
     import heapq
 
-    from learning.haql import BUMP_COST_CAP, least_bumped_costs
+    from learning.methods.haql import BUMP_COST_CAP, least_bumped_costs
 
     rng = np.random.default_rng(seed)
     nb = grid_neighbours(11, 7)

@@ -132,7 +132,7 @@ def test_ctrl_c_stops_a_batched_physics_sweep_and_resume_completes_it(tmp_path):
 
 
 def _take_lock(out: str, barrier, results) -> None:
-    from scenarios.runs.outdir import OutDirError, sweep_lock
+    from scenarios.sweep.outdir import OutDirError, sweep_lock
 
     barrier.wait()
     try:
@@ -212,12 +212,12 @@ def test_workers_end_when_the_parent_is_killed(tmp_path):
 def test_a_worker_orphaned_before_its_initializer_ends_at_once():
     """The death signal is armed in the initializer, after the fork: a parent killed in
     between is caught by the parent-pid check instead."""
-    code = ("import os; from scenarios.runs.backends import _ignore_sigint; "
+    code = ("import os; from scenarios.sweep.backends import _ignore_sigint; "
             "_ignore_sigint(parent=os.getppid() + 1_000_000); print('not ended')")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=60, cwd=Path(__file__).parent.parent)
     assert done.returncode == 1 and "not ended" not in done.stdout, done
-    code = ("import os; from scenarios.runs.backends import _ignore_sigint; "
+    code = ("import os; from scenarios.sweep.backends import _ignore_sigint; "
             "_ignore_sigint(parent=os.getppid()); print('kept')")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=60, cwd=Path(__file__).parent.parent)

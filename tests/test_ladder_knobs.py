@@ -16,11 +16,11 @@ import pytest
 
 from sim.errors import ScenarioError
 from sim.grid.actions import ACTION_HEADINGS
-from sim.physics.batch import RouteBatch
-from sim.physics.controller import PrimitiveController
+from sim.physics.envs.vector import PhysicsRouteVectorEnv
 from sim.physics.fidelity import PRESETS, Fidelity, parse_fidelity
+from sim.physics.kernel.batch import RouteBatch
+from sim.physics.reference.controller import PrimitiveController
 from sim.physics.static import PhysicsConfig
-from sim.physics.vector import PhysicsRouteVectorEnv
 from sim.scenario import Scenario
 
 RIGHT, UP = ACTION_HEADINGS.index(0.0), ACTION_HEADINGS.index(math.pi / 2)

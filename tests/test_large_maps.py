@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from sim.grid.planning import grid_distances
-from sim.map_generators import GENERATORS, generate
+from sim.maps.generators import GENERATORS, generate
 
 
 @pytest.mark.parametrize("kind", [k for k in GENERATORS if k != "city"])
@@ -82,7 +82,7 @@ def test_unknown_kind_names_the_kinds():
 
 
 def test_the_study_runs_and_writes_its_table(tmp_path):
-    from scenarios.experiments.scaling_maps import main
+    from scenarios.studies.maps.scaling_maps import main
 
     out = tmp_path / "sm"
     assert main(["--out", str(out), "--sizes", "32,48", "--kinds", "rooms", "--methods",
@@ -92,7 +92,7 @@ def test_the_study_runs_and_writes_its_table(tmp_path):
     toml = (out / "maps" / "rooms-48.toml").read_text()
     assert "s_start_share = 0.1" in toml
 
-    from scenarios.experiments.scaling_maps_figure import main as figure
+    from scenarios.studies.maps.scaling_maps_figure import main as figure
 
     png = tmp_path / "fig" / "scaling.png"
     assert figure([str(out), "--out", str(png)]) == 0
@@ -102,7 +102,7 @@ def test_the_study_runs_and_writes_its_table(tmp_path):
 
 
 def test_the_figure_names_a_folder_that_is_not_a_study(tmp_path, capsys):
-    from scenarios.experiments.scaling_maps_figure import main as figure
+    from scenarios.studies.maps.scaling_maps_figure import main as figure
 
     assert figure([str(tmp_path), "--out", str(tmp_path / "x.png")]) == 2
     assert "scaling_maps" in capsys.readouterr().err

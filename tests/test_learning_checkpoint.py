@@ -16,8 +16,8 @@ from learning import (
     save_checkpoint,
     train_tabular,
 )
+from learning.compiled.named_state import arrays
 from learning.geometry import geometry_of
-from learning.named_state import arrays
 from learning.registry import family_of
 from learning.train import EPISODE_FIELDS
 from sim.grid import build_model
@@ -208,7 +208,7 @@ def test_more_episodes_than_asked(saved, paper50_model):
 def test_rnh_ql_plus_ablation_keeps_no_rbf_features_it_never_reads_and_loads_older_ones(
         tmp_path, paper50_model):
     from learning import RNHQLPlusAblation
-    from learning.rnh_ql_plus_ablation.features import new_features
+    from learning.methods.rnh_ql_plus_ablation.features import new_features
 
     geom = geometry_of(paper50_model)
     agent = make_agent(RNHQLPlusAblation(), geom, np.random.default_rng(0))

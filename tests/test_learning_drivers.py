@@ -14,9 +14,9 @@ import pytest
 
 import sim.envs  # noqa: F401  (registers rnhql/GridRoute-v0)
 from learning import METHODS, RNHQL, geometry_of, init_state, make_agent, run_env_episodes
-from learning.kernels import run_episodes
-from learning.named_state import arrays
-from learning.rnh_ql_plus_ablation import RNHQLPlusAblation as Ablation
+from learning.compiled.kernels import run_episodes
+from learning.compiled.named_state import arrays
+from learning.methods.rnh_ql_plus_ablation import RNHQLPlusAblation as Ablation
 
 EPISODES = 50
 

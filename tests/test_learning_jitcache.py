@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from learning.jitcache import drop_stale_cache
+from learning.compiled.jitcache import drop_stale_cache
 
 
 def test_cache_dropped_on_source_change(tmp_path, monkeypatch):
@@ -47,7 +47,7 @@ def test_kernels_compile_at_O2_unless_the_user_says_otherwise():
 
 
 def test_kernels_cached_finds_numbas_folder_under_numba_cache_dir(tmp_path, monkeypatch):
-    from learning.jitcache import kernels_cached
+    from learning.compiled.jitcache import kernels_cached
 
     pkg = tmp_path / "src" / "learning"
     pkg.mkdir(parents=True)
@@ -56,8 +56,38 @@ def test_kernels_cached_finds_numbas_folder_under_numba_cache_dir(tmp_path, monk
     assert not kernels_cached(pkg)
     from numba.core.caching import _CacheLocator
 
-    # numba's: <package>_<sha1 of the package's path> (this checkout's, not any learning_*)
-    folder = root / _CacheLocator.get_suitable_cache_subpath(str(pkg / "kernels.py"))
+    # numba's: <folder>_<sha1 of the folder's path> (this checkout's, not any learning_*)
+    folder = root / _CacheLocator.get_suitable_cache_subpath(str(pkg / "compiled" / "kernels.py"))
     folder.mkdir(parents=True)
     (folder / "kernels._episodes-22.py311.nbi").write_bytes(b"")
     assert kernels_cached(pkg)
+
+
+def test_the_physics_cache_is_the_same_mechanism_function_for_function():
+    """``sim`` and ``learning`` may not import each other, so each has its copy of the cache
+    mechanism; they differ only in their constants (which package, which kernel module)."""
+    import inspect
+
+    import learning.compiled.jitcache as learning_cache
+    import sim.physics.jitcache as physics_cache
+
+    for name in ("sources_digest", "drop_stale_cache", "kernel_cache_dirs", "_writable",
+                 "kernels_cached"):
+        assert inspect.getsource(getattr(physics_cache, name)) == \
+            inspect.getsource(getattr(learning_cache, name)), name
+
+
+def test_a_physics_subpackage_edit_drops_the_physics_cache(tmp_path, monkeypatch):
+    from sim.physics.jitcache import drop_stale_cache as drop_physics
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    (tmp_path / "kernel").mkdir()
+    (tmp_path / "kernel" / "sweep.py").write_text("x = 1\n")
+    cache = tmp_path / "kernel" / "__pycache__"
+    cache.mkdir()
+    drop_physics(tmp_path)
+    (cache / "primitive.advance-1.py311.nbi").write_text("")
+    assert not drop_physics(tmp_path)
+    (tmp_path / "kernel" / "sweep.py").write_text("x = 2\n")
+    assert drop_physics(tmp_path)
+    assert not (cache / "primitive.advance-1.py311.nbi").exists()

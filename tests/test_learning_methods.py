@@ -62,7 +62,7 @@ def test_unknown_method():
 
 
 def test_rnh_ql_plus_defaults_packing_and_validation():
-    from learning.rnh_ql_plus import Params, RNHQLPlus
+    from learning.methods.rnh_ql_plus import Params, RNHQLPlus
 
     cfg = RNHQLPlus()
     assert cfg.cli == "rnh-ql+"
@@ -77,7 +77,7 @@ def test_rnh_ql_plus_defaults_packing_and_validation():
 
 
 def test_rnh_ql_plus_ablation_defaults_packing_and_validation():
-    from learning.rnh_ql_plus_ablation import Params, Potential, RNHQLPlusAblation
+    from learning.methods.rnh_ql_plus_ablation import Params, Potential, RNHQLPlusAblation
 
     cfg = RNHQLPlusAblation()
     assert cfg.cli == "rnh-ql+ablation"

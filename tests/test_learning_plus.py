@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from learning import METHODS, RNHQLPlus, RNHQLPlusAblation, geometry_of, train_tabular
-from learning.rnh_ql_plus_ablation.features import sparse_features
+from learning.methods.rnh_ql_plus_ablation.features import sparse_features
 from tests.conftest import corridor_moves
 
 
@@ -50,8 +50,8 @@ def test_leak_free_supports_only_grow_along_seen_moves(paper50_model):
 def test_readout_potential_is_the_potential_the_rules_shape_with():
     """The recorder's potential heat map is Phi as the rules compute it: rnh-ql+'s (the
     optimistic model's value) and a network potential of the ablation's."""
-    from learning.readout import potential
-    from learning.rnh_ql_plus_ablation.potential import potential as rule_potential
+    from learning.compiled.readout import potential
+    from learning.methods.rnh_ql_plus_ablation.potential import potential as rule_potential
     from scenarios.runs.spec import load
 
     _, m = load("paper-40", None, None, "goal-only")
@@ -71,7 +71,7 @@ def test_readout_potential_is_the_potential_the_rules_shape_with():
 def test_optimistic_distances_are_free_space_bfs_then_go_round_a_seen_bump():
     """Before any move the optimistic model is the empty arena: BFS distance = Manhattan
     distance to G; after a bump on the way, the BFS goes round it."""
-    from learning.free_space import bfs_to_goal
+    from learning.parts.free_space import bfs_to_goal
     from learning.state import init_state
     from scenarios.runs.spec import load
 
@@ -93,8 +93,8 @@ def test_bfs_skipped_only_where_no_distance_changes_and_values_match_the_formula
     """Walls of zigzag-50 revealed in a random order: where distances_change says a new wall
     changes nothing, a full BFS agrees bit for bit; the cache of y filled in BFS order
     equals the closed form state by state. Both branches are taken."""
-    from learning.free_space import bfs_to_goal, distances_change
-    from learning.rnh_ql_plus.optimism import goal_reward, refresh_values
+    from learning.methods.rnh_ql_plus.optimism import goal_reward, refresh_values
+    from learning.parts.free_space import bfs_to_goal, distances_change
     from learning.state import init_state
     from scenarios.runs.spec import load
 
@@ -145,8 +145,8 @@ def test_rnh_ql_plus_learns_zigzag_where_rnh_ql_does_not():
 def test_potential_falls_toward_an_unseen_goal_under_the_paper_rewards():
     """With +1 per free move and G not reached yet, Phi must still fall with the distance to
     G (the stand-in goal reward beats wandering forever); a stand-in of 1 made it rise."""
-    from learning.readout import potential
-    from learning.rnh_ql_plus.optimism import goal_reward
+    from learning.compiled.readout import potential
+    from learning.methods.rnh_ql_plus.optimism import goal_reward
     from learning.state import init_state
     from scenarios.runs.spec import load
 
@@ -182,7 +182,7 @@ def test_optimistic_model_needs_a_discount():
 
 
 def test_known_routes_are_bfs_over_moves_seen_to_work():
-    from learning.known_routes import known_distances, known_move, new_known_routes
+    from learning.parts.known_routes import known_distances, known_move, new_known_routes
 
     # a 1 x 4 corridor 0-1-2-3, G = 3; actions: 0 up, 1 down, 2 left, 3 right
     nb = corridor_moves(4)
@@ -203,7 +203,7 @@ def test_a_known_route_uses_moves_that_work_more_often_than_they_fail():
     """With noise a move can work and fail: it carries a route while clean arrivals
     outnumber failures, leaves it when they do not, and comes back (no single failure
     blocks it for ever, no single lucky pass opens it)."""
-    from learning.known_routes import known_distances, new_known_routes
+    from learning.parts.known_routes import known_distances, new_known_routes
 
     nb = np.full((3, 4), -1, np.int32)  # a 1 x 3 corridor 0-1-2, G = 2
     nb[0, 3], nb[1, 3], nb[1, 2], nb[2, 2] = 1, 2, 0, 1
@@ -229,7 +229,7 @@ def test_greedy_test_walks_moves_seen_to_work_once_s_has_a_known_route(paper50, 
     (a fifth of the episodes start at S, so that S has a known route after 100)."""
     import dataclasses
 
-    from learning.known_routes import known_distances
+    from learning.parts.known_routes import known_distances
     from sim.grid import build_model
 
     model = build_model(dataclasses.replace(paper50, s_start_share=0.2))
@@ -258,7 +258,7 @@ def test_model_acting_heads_for_g_in_the_optimistic_model(paper50_model):
     """model_acting (issue 37): the behaviour's greedy move goes to a neighbour one move
     nearer G in the optimistic model, tried or not, never a move it holds blocked, and
     equal moves are drawn (not the lowest index)."""
-    from learning.rnh_ql_plus.rules import act
+    from learning.methods.rnh_ql_plus.rules import act
 
     r = train_tabular(RNHQLPlus(model_acting=1, eps=0.0), paper50_model, 20,
                       np.random.default_rng(3))
@@ -308,7 +308,7 @@ def test_model_test_walks_the_optimistic_models_route_unless_a_known_route_is_as
     """model_test (issue 37): where s has no known route, or a longer one than the model's
     distance, the test's move goes one move nearer G in the optimistic model (a move seen
     to work first among equal ones); where the known route is as short, it is followed."""
-    from learning.rnh_ql_plus.rules import exploit
+    from learning.methods.rnh_ql_plus.rules import exploit
 
     r = train_tabular(RNHQLPlus(model_test=1), paper50_model, 15, np.random.default_rng(2))
     st = r.state
@@ -337,7 +337,7 @@ def test_model_test_walks_the_optimistic_models_route_unless_a_known_route_is_as
 def test_coverage_distances_are_a_bfs_back_from_every_unvisited_cell():
     """unvisited_distances on a 1 x 5 corridor, cells 0-2 visited, 3-4 not: distances
     3, 2, 1, 0, 0; with the move 1->2 blocked, 0 and 1 reach none (-1); G is no source."""
-    from learning.coverage import unvisited_distances
+    from learning.parts.coverage import unvisited_distances
 
     nb = np.full((5, 4), -1, np.int32)  # up, down, left, right
     for s in range(5):

@@ -9,16 +9,16 @@ import numpy as np
 import pytest
 
 from learning import RNHQLPlus, RNHQLPlusAblation, train_tabular
-from learning.named_state import arrays
-from learning.rnh_ql_plus.config import RETIRED
+from learning.compiled.named_state import arrays
+from learning.methods.rnh_ql_plus.config import RETIRED
 
 SWITCHES = ("v_target", "rebase", "leak_free", "lam_q", "spacing", "n_fit", "beta", "lam",
             "freeze_after_episodes", "normalise", "sigma", "cutoff", "k", "trace_min")
 
 
 def test_rnh_ql_plus_has_none_of_the_ablations_switches():
-    import learning.rnh_ql_plus as plus
-    from learning.rnh_ql_plus import rules
+    import learning.methods.rnh_ql_plus as plus
+    from learning.methods.rnh_ql_plus import rules
 
     own = {f.name for f in dataclasses.fields(RNHQLPlus)}
     assert own.isdisjoint(SWITCHES) and set(RETIRED) == set(SWITCHES)

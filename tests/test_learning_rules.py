@@ -15,12 +15,12 @@ import pytest
 from learning import HAQL, PFHRL, RNHQL, RNQL, STQL, DynaQ, QLambda, QOpt, SarsaRS
 from learning.agent import make_agent
 from learning.geometry import Geometry
-from learning.haql import heuristic_actions
-from learning.mlp import add_gradient, net, normalised_inputs
-from learning.pfh_rl import pfh_potential
-from learning.rbf import rbf_features, td_lambda
-from learning.sarsa_rs import abstract_states
-from learning.tabular import argmax_first, argmax_random, eps_greedy, sarsa
+from learning.methods.haql import heuristic_actions
+from learning.methods.pfh_rl import pfh_potential
+from learning.methods.sarsa_rs import abstract_states
+from learning.parts.mlp import add_gradient, net, normalised_inputs
+from learning.parts.rbf import rbf_features, td_lambda
+from learning.parts.tabular import argmax_first, argmax_random, eps_greedy, sarsa
 
 G, A = 0.95, 0.1
 UP, DOWN, LEFT, RIGHT = 0, 1, 2, 3
@@ -273,7 +273,7 @@ def test_rn_ql_first_update_is_one_gradient_step():
 
 
 def test_rbf_lattice_by_spacing_follows_the_map():
-    from learning.rbf import lattice_size
+    from learning.parts.rbf import lattice_size
 
     assert lattice_size((0.0, 0.0, 50.0, 50.0), 10) == (10, 10)  # the paper's, by count
     assert lattice_size((0.0, 0.0, 512.0, 256.0), 10, spacing_m=8.0) == (64, 32)

@@ -1,5 +1,5 @@
 """Model learners in a world where a free move fails now and then (issue: learners that
-survive a stochastic world; :mod:`learning.move_model`, :mod:`learning.haql`).
+survive a stochastic world; :mod:`learning.parts.move_model`, :mod:`learning.methods.haql`).
 
 The hand-made case: a 7 x 5 grid, a wall at x = 3 with a door at (3, 1). S = (0, 1),
 G = (6, 1): 6 moves through the door, 12 around the wall's top end. The move into
@@ -20,7 +20,7 @@ import pytest
 
 from learning import METHODS, geometry_of
 from learning.agent import make_agent
-from learning.move_model import (
+from learning.parts.move_model import (
     never_worked,
     new_move_model,
     observe_outcome,
@@ -114,7 +114,7 @@ def test_optimistic_model_keeps_a_door_that_failed_free_and_a_wall_a_wall():
 
 
 def test_haql_blocks_a_move_while_bumps_are_its_most_likely_outcome():
-    from learning.haql import HAQL, observe
+    from learning.methods.haql import HAQL, observe
     from learning.state import init_state
 
     st = init_state(HAQL(), geometry_of(door_world()), np.random.default_rng(0))

@@ -3,7 +3,7 @@ from __future__ import annotations
 import pytest
 
 from sim.errors import MapError
-from sim.maps import cell_to_movingai, load_map, load_scen, movingai_to_cell, parse_map
+from sim.maps.movingai import cell_to_movingai, load_map, load_scen, movingai_to_cell, parse_map
 from tests.conftest import MAPS
 
 GOOD = "type octile\nheight 2\nwidth 3\nmap\n.@.\n..T\n"
@@ -44,7 +44,7 @@ def test_bad_maps_name_line_and_fix(text, field, words):
 
 def test_unsupported_map_type_and_scen_version_are_refused(tmp_path):
     from sim.errors import InputError
-    from sim.maps import load_scen, parse_map
+    from sim.maps.movingai import load_scen, parse_map
 
     with pytest.raises(InputError, match="'hexagonal' is not supported"):
         parse_map("type hexagonal\nheight 1\nwidth 1\nmap\n.\n", "h.map")

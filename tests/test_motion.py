@@ -10,14 +10,14 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from sim.grid.actions import ACTION_HEADINGS
-from sim.physics.controller import (
+from sim.physics.drive_profiles import DriveLimits, ProfileTable, rate_limit
+from sim.physics.reference.controller import (
     PrimitiveController,
     twist_to_wheels,
     wheels_to_twist,
     wrap_angle,
 )
-from sim.physics.drive_profiles import DriveLimits, ProfileTable, rate_limit
-from sim.physics.world import PhysicsConfig, PhysicsWorld
+from sim.physics.reference.world import PhysicsConfig, PhysicsWorld
 from sim.scenario import Robot, Scenario
 
 speeds = st.floats(-5.0, 5.0, allow_nan=False)

@@ -1,11 +1,11 @@
-"""Reading a bump from a move's reward (:mod:`learning.move_reading`)."""
+"""Reading a bump from a move's reward (:mod:`learning.parts.move_reading`)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from learning.move_reading import UNSEEN, new_move_reading, read_move
+from learning.parts.move_reading import UNSEEN, new_move_reading, read_move
 from sim.scenario import REWARD_SCHEMES
 from tests.conftest import corridor_moves, open_geometry_3x3
 
@@ -56,7 +56,7 @@ def test_a_stay_paid_like_a_free_move_does_not_become_the_bump_reward():
 def test_a_grazing_arrival_is_a_failure_in_the_move_model_and_off_the_known_routes():
     """RNH-QL+'s real step: an arrival paid the bump counts as a failure of the move (the
     model's and the known route's), and does not move the free-move reward."""
-    from learning.rnh_ql_plus import RNHQLPlus, init_state, update
+    from learning.methods.rnh_ql_plus import RNHQLPlus, init_state, update
 
     geom = open_geometry_3x3()
     st = init_state(RNHQLPlus(n_planning=0), geom, np.random.default_rng(0))
@@ -74,7 +74,7 @@ def test_a_grazing_arrival_is_a_failure_in_the_move_model_and_off_the_known_rout
 def test_dyna_q_stores_a_grazing_arrival_as_a_failure_not_as_the_moves_reward():
     """Dyna-Q's model: the move's success outcome keeps the free reward; a grazing arrival
     (paid the bump) is counted among the failures it replays with their frequency."""
-    from learning.dyna_q import DynaQ, init_state, update
+    from learning.methods.dyna_q import DynaQ, init_state, update
 
     geom = open_geometry_3x3()
     st = init_state(DynaQ(n_planning=0), geom, np.random.default_rng(0))
@@ -90,7 +90,7 @@ def test_haql_points_along_the_least_bumped_route_when_bumps_cut_every_route():
     """A 1 x 4 corridor 0-1-2-3 with G = 3: the move 1 -> 2 bumped more often than it
     arrived (blocked), so no route of unblocked moves is left from 0 and 1. The heuristic
     still points right, along the only route, instead of at move 0 (up, off the arena)."""
-    from learning.haql import rederive
+    from learning.methods.haql import rederive
 
     nb = corridor_moves(4)
     blocked = np.zeros((4, 4), np.bool_)

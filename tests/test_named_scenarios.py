@@ -7,8 +7,8 @@ import sys
 
 import numpy as np
 
-from scenarios.experiments.suite import shipped_suite_tomls
-from sim.maps import read_free_grid
+from scenarios.studies.maps.suite import shipped_suite_tomls
+from sim.maps.movingai import read_free_grid
 from sim.scenario_io import builtin_dir, builtin_names, resolve_scenario
 
 

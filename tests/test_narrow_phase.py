@@ -1,4 +1,4 @@
-"""The compiled narrow phase (sim.physics.narrow_phase) is Chipmunk's shape query: the same
+"""The compiled narrow phase (sim.physics.kernel.narrow_phase) is Chipmunk's shape query: the same
 shapes touched, the same new contacts for a resting robot, the same contact points,
 normals and depths, on circles, walls and blocked-cell boxes."""
 
@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from sim.physics.batch import RouteBatch
-from sim.physics.narrow_phase import TOUCH_BAND_M, contact_buffer, contacts_began
+from sim.physics.kernel.batch import RouteBatch
+from sim.physics.kernel.narrow_phase import TOUCH_BAND_M, contact_buffer, contacts_began
 from sim.physics.static import CollisionType, contact_of
 from sim.scenario_io import resolve_scenario
 

@@ -4,7 +4,7 @@ shows in its results and summary.
 
 This module is the throwaway method's module: a config, a ``State`` of its own,
 ``init_state`` and the four hooks (Q-learning's rules, borrowed from
-:mod:`learning.q_learning`, the template a new method starts from). The steps of
+:mod:`learning.methods.q_learning`, the template a new method starts from). The steps of
 :mod:`learning.registry`'s docstring, but for the row in the registry's table, which
 :func:`~learning.registry.register` adds here.
 """
@@ -18,10 +18,10 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 import pytest
 
-from learning import q_learning
 from learning.config import BaseParams, MethodConfig
 from learning.geometry import Geometry
-from learning.tally import Tally, new_tally
+from learning.methods import q_learning
+from learning.parts.tally import Tally, new_tally
 
 
 @dataclass(frozen=True)
@@ -54,7 +54,7 @@ begin, exploit = q_learning.begin, q_learning.exploit
 def throwaway():
     """The method registered for one test, and gone again after it. Its kernels stay out of
     numba's on-disk cache by themselves (a method from outside the package:
-    :func:`learning.jitcache.guard_cache`)."""
+    :func:`learning.compiled.jitcache.guard_cache`)."""
     import sys
 
     from learning.registry import register, unregister

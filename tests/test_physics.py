@@ -7,9 +7,9 @@ import numpy as np
 import pymunk
 import pytest
 
-from sim.physics.controller import PrimitiveController
+from sim.physics.reference.controller import PrimitiveController
+from sim.physics.reference.world import PhysicsWorld
 from sim.physics.static import CollisionType, Contact, PhysicsConfig, merged_boxes
-from sim.physics.world import PhysicsWorld
 from sim.scenario import Circle, Scenario
 
 ROOM = Scenario(name="room", width_m=8.0, height_m=6.0, start=(1, 1), goal=(6, 4),

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from sim.grid import build_model
-from sim.physics.batch import RouteBatch
-from sim.physics.controller import PrimitiveController
 from sim.physics.fidelity import parse_fidelity
+from sim.physics.kernel.batch import RouteBatch
+from sim.physics.reference.controller import PrimitiveController
+from sim.physics.reference.world import PhysicsWorld
 from sim.physics.static import PhysicsConfig
-from sim.physics.world import PhysicsWorld
 from sim.scenario_io import resolve_scenario
 
 # Every fidelity: rounding differences between the kernel's float64 and Chipmunk's (1e-16
@@ -128,7 +128,7 @@ def test_bad_batch_size_is_an_error():
 
 
 def test_a_reused_rollout_env_must_record_trajectories_when_a_path_is_wanted():
-    from sim.physics.rollouts import drive_policy, rollout_env
+    from sim.physics.models.rollouts import drive_policy, rollout_env
 
     sc = resolve_scenario("paper-40")
     fid = parse_fidelity("exact")
@@ -169,7 +169,7 @@ def test_the_noise_buffer_s_chunking_never_changes_a_run(fid, monkeypatch):
     NOISE_BLOCK; a primitive that needs more than its block has left starts the next block.
     Drawing each block whole (the first chunk NOISE_BLOCK long) gives the same run, with
     5 normals a period (localised: wheels and odometry) as with 2."""
-    import sim.physics.batch as batch_module
+    import sim.physics.kernel.batch as batch_module
 
     sc = resolve_scenario("maze-1")
     starts = build_model(sc).start_states

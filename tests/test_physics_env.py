@@ -6,8 +6,8 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import sim.envs  # noqa: F401  (registers the ids)
-from sim.physics.diffdrive_env import DiffDriveEnv
-from sim.physics.envs import PhysicsRouteEnv
+from sim.physics.envs.diffdrive import DiffDriveEnv
+from sim.physics.envs.route import PhysicsRouteEnv
 from sim.physics.static import CollisionType
 
 IDS = ["rnhql/PhysicsRoute-v0", "rnhql/DiffDrive-v0"]

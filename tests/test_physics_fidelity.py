@@ -11,8 +11,8 @@ from scenarios.runs.run import run_one
 from scenarios.runs.spec import RunSpec
 from sim.errors import ScenarioError
 from sim.grid import build_model
-from sim.physics.batch import RouteBatch
 from sim.physics.fidelity import PRESETS, Fidelity, fidelity_from_table, parse_fidelity
+from sim.physics.kernel.batch import RouteBatch
 from sim.scenario_io import resolve_scenario
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from scenarios.runs.spec import load
-from sim.physics.model import cache_dir, physics_model
+from sim.physics.models.transition import cache_dir, physics_model
 from tests.conftest import private_cache_for
 
 

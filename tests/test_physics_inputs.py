@@ -10,9 +10,9 @@ import pytest
 
 import sim.envs  # noqa: F401  (registers the ids)
 from sim.errors import ScenarioError
-from sim.layouts import chain
-from sim.physics.diffdrive_env import DiffDriveEnv
-from sim.physics.envs import PhysicsRouteEnv
+from sim.maps.layouts import chain
+from sim.physics.envs.diffdrive import DiffDriveEnv
+from sim.physics.envs.route import PhysicsRouteEnv
 from sim.physics.static import PhysicsConfig
 from sim.scenario import Circle, Robot, Scenario
 

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from sim.grid import build_model
-from sim.physics.optimum import continuous_optimum_m
+from sim.physics.models.optimum import continuous_optimum_m
 from sim.scenario_io import resolve_scenario
 
 

@@ -1,4 +1,4 @@
-"""Several policies driven in one env (:func:`sim.physics.rollouts.drive_policies`, the
+"""Several policies driven in one env (:func:`sim.physics.models.rollouts.drive_policies`, the
 periodic tests of many runs at once) equal each policy driven alone."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import pytest
 
 from sim.grid import build_model
 from sim.physics.fidelity import parse_fidelity
-from sim.physics.rollouts import drive_policies, drive_policy
+from sim.physics.models.rollouts import drive_policies, drive_policy
 from sim.scenario_io import resolve_scenario
 
 
@@ -39,7 +39,7 @@ def test_policies_driven_together_equal_each_driven_alone(fidelity):
 def test_drive_policies_refuses_an_env_of_another_size():
     sc = resolve_scenario("paper-40")
     model = build_model(sc)
-    from sim.physics.rollouts import rollout_env
+    from sim.physics.models.rollouts import rollout_env
 
     fid = parse_fidelity("noisy")
     env = rollout_env(sc, 3, fid)

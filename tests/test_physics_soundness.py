@@ -12,9 +12,9 @@ import pytest
 
 from sim.grid import build_model
 from sim.grid.planning import bfs_route
-from sim.physics.diffdrive_env import DIFFDRIVE_CONFIG, DiffDriveEnv
-from sim.physics.envs import PhysicsRouteEnv
-from sim.physics.world import PhysicsConfig, PhysicsWorld
+from sim.physics.envs.diffdrive import DIFFDRIVE_CONFIG, DiffDriveEnv
+from sim.physics.envs.route import PhysicsRouteEnv
+from sim.physics.reference.world import PhysicsConfig, PhysicsWorld
 from sim.scenario import Scenario
 from sim.scenario_io import builtin_names, resolve_scenario
 

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from sim.physics.kernel.sweep import Sweeper
+from sim.physics.reference.world import PhysicsWorld
 from sim.physics.static import sweep_alpha
-from sim.physics.sweep import Sweeper
-from sim.physics.world import PhysicsWorld
 from sim.scenario_io import resolve_scenario
 
 

@@ -9,7 +9,7 @@ import pytest
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 import sim  # noqa: F401  (registers the ids)
-from sim.physics.vector import PhysicsRouteVectorEnv
+from sim.physics.envs.vector import PhysicsRouteVectorEnv
 
 
 def _make(n, **kw):

@@ -12,7 +12,7 @@ from sim.grid.planning import (
     grid_distances,
     value_iteration,
 )
-from sim.maps import load_map, load_scen, movingai_to_cell
+from sim.maps.movingai import load_map, load_scen, movingai_to_cell
 from sim.scenario_io import scenario_from_map
 from tests.conftest import MAPS
 

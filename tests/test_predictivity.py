@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from scenarios.experiments.predictivity import (
+from scenarios.studies.ladder.predictivity import (
     deployed_grid,
     deployed_rung,
     ranks,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from learning.priority_queue import new_pair_queue, pop, push
+from learning.parts.priority_queue import new_pair_queue, pop, push
 
 
 def test_pops_come_largest_first_and_a_pair_is_queued_once():

@@ -51,7 +51,7 @@ def test_bad_record_path_exits_2(capsys):
 
 
 def test_comparison_records_first_seeds_in_full_and_the_rest_as_curves(tmp_path):
-    from scenarios.experiments.compare import (
+    from scenarios.sweep.run import (
         SweepRecording,
         gather_parts,
         make_specs,

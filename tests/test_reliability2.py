@@ -178,8 +178,8 @@ def test_a_dead_worker_on_a_full_disk_is_reported_as_the_full_disk(monkeypatch):
     from concurrent.futures.process import BrokenProcessPool
 
     import sim.files
-    from scenarios.runs.backends import disk_full_cause
     from scenarios.runs.spec import RecordOptions, RunSpec
+    from scenarios.sweep.backends import disk_full_cause
 
     spec = RunSpec("paper-40", "st-ql", 0, 5, recording=RecordOptions("/x/c.rrd.parts/a.rrd"))
     monkeypatch.setattr(sim.files, "no_space_left", lambda _p: True)
@@ -281,7 +281,7 @@ def test_a_junk_lock_is_stale_and_taken_over(tmp_path, junk):
 
 
 def test_a_torn_last_line_is_still_run_again_not_refused(tmp_path):
-    from scenarios.runs.resume_state import read_partial
+    from scenarios.sweep.resume_state import read_partial
 
     (tmp_path / "runs.partial.jsonl").write_text('{"key": "a"}\n{"key": "b", "x": [1, ')
     # a study's partial runs hold a few fields each (a comparison's are checked whole)
@@ -292,7 +292,7 @@ def test_a_torn_last_line_is_still_run_again_not_refused(tmp_path):
 @pytest.fixture
 def tiny_physics(tmp_path, monkeypatch):
     """A 6 x 6 map scenario and an empty cache folder of its own."""
-    from sim.physics import model as pm
+    from sim.physics.models import transition as pm
     from sim.scenario_io import scenario_from_map
 
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
@@ -310,7 +310,7 @@ def tiny_physics(tmp_path, monkeypatch):
 
 
 def _rebuilt(sc, path: Path):
-    from sim.physics import model as pm
+    from sim.physics.models import transition as pm
 
     pm.physics_model.cache_clear()
     return pm.physics_model(sc)
@@ -319,7 +319,7 @@ def _rebuilt(sc, path: Path):
 @pytest.mark.parametrize("damage", ["truncate", "junk", "folder", "wrong-digest",
                                     "one-move-route", "wrong-key"])
 def test_a_damaged_or_tampered_cache_is_rebuilt_not_believed(tiny_physics, damage):
-    from sim.physics.disk_cache import content_digest
+    from sim.physics.models.disk_cache import content_digest
 
     sc, fresh, path = tiny_physics
     raw = path.read_bytes()
@@ -352,7 +352,7 @@ def test_a_damaged_or_tampered_cache_is_rebuilt_not_believed(tiny_physics, damag
 
 
 def test_a_sound_cache_is_used_as_is(tiny_physics, monkeypatch):
-    from sim.physics import model as pm
+    from sim.physics.models import transition as pm
 
     sc, fresh, path = tiny_physics
     monkeypatch.setattr(pm, "drive_transitions", lambda *a: pytest.fail("rebuilt a good cache"))
@@ -636,15 +636,15 @@ def test_a_very_long_scenario_name_records_under_a_short_file_name(tmp_path, mon
 
 # ------------------------------------------------------------------ 10: the compile notice
 def test_the_compile_notice_looks_where_numba_caches(tmp_path, monkeypatch):
-    from learning.jitcache import kernel_cache_dirs, kernels_cached
+    from learning.compiled.jitcache import kernel_cache_dirs, kernels_cached
 
     pkg = tmp_path / "learning"
-    (pkg / "__pycache__").mkdir(parents=True)
-    (pkg / "__pycache__" / "kernels.f-1.py311.nbi").write_bytes(b"")
+    (pkg / "compiled" / "__pycache__").mkdir(parents=True)
+    (pkg / "compiled" / "__pycache__" / "kernels.f-1.py311.nbi").write_bytes(b"")
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "nbc"))  # writable, empty
     assert not kernels_cached(pkg)
     (sub,) = kernel_cache_dirs(pkg)
-    assert sub.parent == tmp_path / "nbc" and sub.name.startswith("learning_")
+    assert sub.parent == tmp_path / "nbc" and sub.name.startswith("compiled_")
     sub.mkdir(parents=True)
     (sub / "kernels.f-1.py311.nbi").write_bytes(b"")
     assert kernels_cached(pkg)

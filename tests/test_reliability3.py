@@ -24,10 +24,10 @@ REPO = Path(__file__).resolve().parent.parent
 def small_model(tmp_path, monkeypatch):
     """A small map's stochastic model at ``noisy`` built into an empty cache folder: (the
     model's arguments, the fresh model, its cache file)."""
-    from sim.physics import stochastic_build as sb
     from sim.physics.fidelity import parse_fidelity
+    from sim.physics.models import build as sb
+    from sim.physics.models.stochastic import Sampling
     from sim.physics.static import PhysicsConfig
-    from sim.physics.stochastic_model import Sampling
     from sim.scenario import Circle, Scenario
 
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
@@ -56,8 +56,8 @@ def _same_model(a, b) -> bool:
 def _damage(path: Path, how: str) -> None:
     """Damage a cache file the way ``how`` says; the tampered kinds that keep the file's
     SHA-256 consistent must be caught by the model's own check."""
-    from sim.physics.disk_cache import content_digest
-    from sim.physics.stochastic_build import CACHE
+    from sim.physics.models.build import CACHE
+    from sim.physics.models.disk_cache import content_digest
 
     raw = path.read_bytes()
     if how == "truncate":
@@ -98,7 +98,7 @@ def _damage(path: Path, how: str) -> None:
                                  "other-arena"])
 def test_a_damaged_or_tampered_stochastic_model_cache_is_rebuilt_and_said(small_model, how,
                                                                           capsys):
-    from sim.physics import stochastic_build as sb
+    from sim.physics.models import build as sb
 
     args, fresh, path = small_model
     capsys.readouterr()
@@ -116,7 +116,7 @@ def test_a_damaged_or_tampered_stochastic_model_cache_is_rebuilt_and_said(small_
 
 def test_a_sound_stochastic_model_cache_is_used_as_is_and_quietly(small_model, monkeypatch,
                                                                   capsys):
-    from sim.physics import stochastic_build as sb
+    from sim.physics.models import build as sb
 
     args, fresh, _ = small_model
     capsys.readouterr()
@@ -128,9 +128,11 @@ def test_a_sound_stochastic_model_cache_is_used_as_is_and_quietly(small_model, m
 
 
 def test_the_two_model_caches_share_one_mechanism():
-    """One fact, one home: both caches are kinds of :mod:`sim.physics.disk_cache`, and
+    """One fact, one home: both caches are kinds of :mod:`sim.physics.models.disk_cache`, and
     neither module reads or writes an .npz of its own."""
-    from sim.physics import disk_cache, model, stochastic_build
+    from sim.physics.models import build as stochastic_build
+    from sim.physics.models import disk_cache
+    from sim.physics.models import transition as model
 
     assert {model.CACHE.folder, stochastic_build.CACHE.folder} == {"physics-graph",
                                                                    "stochastic-model"}
@@ -177,7 +179,7 @@ def test_ending_the_pool_while_a_result_is_half_sent_does_not_leave_its_reader_w
     sending a finished run's record left the pool's manager thread waiting for the rest of
     the message for ever (this process holds the result pipe's write end as well, so the
     read never ends), and the interpreter's exit joins that thread."""
-    from scenarios.runs.backends import _end_workers
+    from scenarios.sweep.backends import _end_workers
 
     pool = ProcessPoolExecutor(max_workers=1)
     pool.submit(_stopped_mid_send, 32 * 1024 * 1024)
@@ -213,7 +215,7 @@ def test_a_worker_that_died_holding_the_episode_counter_stalls_nothing():
     import multiprocessing
 
     from scenarios.runs import work
-    from scenarios.runs.backends import Progress
+    from scenarios.sweep.backends import Progress
 
     progress = Progress(4, enabled=False)
     try:
@@ -242,8 +244,8 @@ def test_a_worker_that_died_holding_the_episode_counter_stalls_nothing():
 FORK_SIGNAL = """
 import os, signal, sys
 from scenarios.cli.app import Terminated, _terminate
-from scenarios.experiments.compare import make_specs
-from scenarios.runs.backends import run_local
+from scenarios.sweep.run import make_specs
+from scenarios.sweep.backends import run_local
 
 signal.signal(signal.SIGTERM, _terminate)
 fired = []

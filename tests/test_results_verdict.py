@@ -29,8 +29,8 @@ def test_a_real_win_and_a_loss_are_said_plainly():
 
 
 def test_a_final_policy_is_optimal_at_a_fidelity_when_its_drives_match_v_star():
-    from scenarios.experiments.compare import matches_optimum
     from scenarios.runs.results import summary_markdown
+    from scenarios.sweep.run import matches_optimum
 
     opt = {"expected_primitives": 80.0, "p_goal_within_budget": 1.0, "budget": 600,
            "tolerance": {"p_goal": 0.05, "primitives_relative": 0.05,

@@ -9,7 +9,7 @@ import pytest
 
 from sim.errors import ScenarioError
 from sim.feasibility import validate
-from sim.layouts import random_circles
+from sim.maps.layouts import random_circles
 from sim.scenario import Circle, Robot, Scenario
 from sim.scenario_io import builtin_names, load_scenario, resolve_scenario
 from tests.conftest import MAPS, REPO

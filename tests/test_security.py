@@ -8,7 +8,7 @@ import itertools
 import os
 
 from scenarios import api
-from scenarios.runs.outdir import LOCK_NAME
+from scenarios.sweep.outdir import LOCK_NAME
 
 
 def test_links_planted_in_an_output_folder_are_not_followed(tmp_path):
@@ -61,11 +61,11 @@ def test_report_refresh_runs_only_commands_it_builds_from_study_entry_points():
     assert argv_of("rnhql optimum paper-50 --fidelity noisy --artifact x")[:4] == \
         [sys.executable, "-m", "scenarios.cli", "optimum"]
     for hostile in ["sh -c 'id > PWNED'", "python -m os", "python -c 'import os'",
-                    "rnhql view --version", "python -m scenarios.experiments.nope",
-                    "python -m scenarios.experiments.ablation --out /etc",
-                    "python -m scenarios.experiments.ablation --out ../../x",
-                    "python -m scenarios.experiments.ablation --out $(id)",
-                    "/usr/bin/python -m scenarios.experiments.ablation", ""]:
+                    "rnhql view --version", "python -m scenarios.studies.nope",
+                    "python -m scenarios.studies.maps.ablation --out /etc",
+                    "python -m scenarios.studies.maps.ablation --out ../../x",
+                    "python -m scenarios.studies.maps.ablation --out $(id)",
+                    "/usr/bin/python -m scenarios.studies.maps.ablation", ""]:
         with pytest.raises(ValueError, match="re-run the study by hand"):
             argv_of(hostile)
 
@@ -97,7 +97,7 @@ def _contend(out: str, barrier, log: str, rounds: int, planter: bool) -> None:
     import time
     from pathlib import Path
 
-    from scenarios.runs.outdir import OutDirError, sweep_lock
+    from scenarios.sweep.outdir import OutDirError, sweep_lock
 
     for _ in range(rounds):
         if planter:

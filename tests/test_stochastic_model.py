@@ -3,7 +3,7 @@ and its agreement with driven rollouts.
 
 Tolerance (model vs >= 200 driven rollouts of the same policy, from S, within the
 episode's budget): P(G) within 0.05 and the mean primitives of the episodes that reach G
-within max(1 primitive, 5 %) (:mod:`sim.physics.stochastic_rollouts`). Checked on
+within max(1 primitive, 5 %) (:mod:`sim.physics.models.stochastic_rollouts`). Checked on
 paper-40 at ``noisy`` (slow: the model drives 1.4M primitives) for the model's optimal
 policy and for the exact BFS policy, which grazes an obstacle and gets pinned against it
 in ~7 % of episodes. The fast tests: at ``exact`` the model is the exact physics model;
@@ -20,14 +20,19 @@ import pytest
 
 from scenarios.runs.spec import load
 from sim.physics.fidelity import parse_fidelity
-from sim.physics.model import physics_model
-from sim.physics.stochastic_build import (
+from sim.physics.models.build import (
     build_stochastic_model,
     cache_dir,
     from_samples,
     stochastic_model,
 )
-from sim.physics.stochastic_model import (
+from sim.physics.models.solve import (
+    evaluate_cell_policy,
+    evaluate_policy,
+    shortest_route_policy,
+    solve,
+)
+from sim.physics.models.stochastic import (
     ARRIVED,
     FACING,
     RESTING,
@@ -36,18 +41,13 @@ from sim.physics.stochastic_model import (
     Sampling,
     is_resting,
 )
-from sim.physics.stochastic_rollouts import (
+from sim.physics.models.stochastic_rollouts import (
     P_TOL,
     drive_cell_policy,
     drive_model_policy,
     primitives_tolerance,
 )
-from sim.physics.stochastic_solve import (
-    evaluate_cell_policy,
-    evaluate_policy,
-    shortest_route_policy,
-    solve,
-)
+from sim.physics.models.transition import physics_model
 from sim.scenario import Circle, Scenario
 from tests.conftest import private_cache_for
 

@@ -16,8 +16,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from scenarios.experiments.compare import make_specs, run_sweep
-from scenarios.runs.backends import run_local, run_ray
+from scenarios.sweep.backends import run_local, run_ray
+from scenarios.sweep.run import make_specs, run_sweep
 
 
 def run_bench(cpus: int = 2) -> dict:

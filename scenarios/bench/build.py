@@ -20,7 +20,7 @@ import tempfile
 from pathlib import Path
 
 from sim.grid.planning import far_start_goal
-from sim.maps import read_free_grid
+from sim.maps.movingai import read_free_grid
 from sim.scenario_io import builtin_dir
 
 MAPS = builtin_dir() / "maps"
@@ -35,7 +35,7 @@ t1 = time.perf_counter()
 spec, start, goal = sys.argv[1], eval(sys.argv[2]), eval(sys.argv[3])
 sc, model = load(spec, start, goal)
 t2 = time.perf_counter()
-from sim.physics.world import PhysicsWorld
+from sim.physics.reference.world import PhysicsWorld
 from sim.physics.static import PhysicsConfig
 t3 = time.perf_counter()
 PhysicsWorld(sc, PhysicsConfig())

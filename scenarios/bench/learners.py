@@ -43,7 +43,7 @@ from learning import (
     run_env_episodes,
     train_tabular,
 )
-from learning.kernels import run_episodes
+from learning.compiled.kernels import run_episodes
 from scenarios.bench.grid import python_q_learning_steps_per_s
 from sim.grid import build_model
 from sim.scenario_io import resolve_scenario

@@ -34,12 +34,12 @@ def peak_rss_mb(cmd: list[str], env: dict[str, str]) -> tuple[float, int]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from scenarios.experiments.args import script_parser
-    from scenarios.experiments.scaling_maps import write_problem
+    from scenarios.studies.args import script_parser
+    from scenarios.studies.maps.scaling_maps import write_problem
 
     p = script_parser(__doc__)
     p.add_argument("--sizes", default="64,128,256,512", help="map sizes [cells a side]")
-    p.add_argument("--kind", default="rooms", help="map kind (sim.map_generators)")
+    p.add_argument("--kind", default="rooms", help="map kind (sim.maps.generators)")
     p.add_argument("--methods", default=",".join(METHODS), help="methods")
     p.add_argument("--episodes", type=int, default=20, help="training episodes per run")
     p.add_argument("--map-seed", type=int, default=7, help="generator seed of the maps")

@@ -2,11 +2,11 @@
 
     python -m scenarios.bench.model_repair            # 256 and 512 cells a side
 
-On generated maps of each kind (:mod:`sim.map_generators`, seed 7, G at
+On generated maps of each kind (:mod:`sim.maps.generators`, seed 7, G at
 one end of the diameter), the agent's free space starts empty (every move believed
 free) and learns the map's walls one blocked move at a time, in a seeded random order,
 as bumps would find them. Each new wall that changes a distance is handled twice, by
-:func:`learning.free_space.repair_distances` and by the full BFS it replaces; the
+:func:`learning.parts.free_space.repair_distances` and by the full BFS it replaces; the
 report gives, per map, how many walls changed a distance and the median and mean
 microseconds a wall for each (results are checked equal along the way).
 """
@@ -18,10 +18,10 @@ import time
 
 import numpy as np
 
-from learning.free_space import bfs_distances, distances_change, repair_distances
-from scenarios.experiments.args import script_parser
+from learning.parts.free_space import bfs_distances, distances_change, repair_distances
+from scenarios.studies.args import script_parser
 from sim.grid.planning import far_start_goal
-from sim.map_generators import KINDS, generate
+from sim.maps.generators import KINDS, generate
 
 
 def neighbours(n: int) -> np.ndarray:

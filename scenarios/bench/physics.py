@@ -1,7 +1,7 @@
 """Benchmark of the physics world (measured, never asserted).
 
 * primitives per second on one core, through ``gymnasium.make`` (wrappers
-  included), through the bare env (a batch of one robot: :mod:`sim.physics.batch`),
+  included), through the bare env (a batch of one robot: :mod:`sim.physics.kernel.batch`),
   and through the reference world (every step through ``cpSpaceStep``, the
   Python controller);
 * physics steps (``cpSpaceStep``) per primitive, and the reference world's share
@@ -27,9 +27,9 @@ import gymnasium as gym
 import numpy as np
 
 import sim.envs  # noqa: F401  (registers the ids)
-from sim.physics.controller import PrimitiveController
-from sim.physics.envs import PhysicsRouteEnv
-from sim.physics.world import PhysicsConfig, PhysicsWorld
+from sim.physics.envs.route import PhysicsRouteEnv
+from sim.physics.reference.controller import PrimitiveController
+from sim.physics.reference.world import PhysicsConfig, PhysicsWorld
 from sim.scenario import Scenario
 from sim.scenario_io import resolve_scenario
 

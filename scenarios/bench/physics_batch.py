@@ -26,7 +26,7 @@ import numpy as np
 
 from scenarios.bench.physics import _round
 from sim.grid import build_model
-from sim.physics.batch import RouteBatch
+from sim.physics.kernel.batch import RouteBatch
 from sim.scenario import Scenario
 from sim.scenario_io import resolve_scenario
 
@@ -154,7 +154,7 @@ def figure_from_artifact(name: str, path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from scenarios.experiments.args import script_parser
+    from scenarios.studies.args import script_parser
 
     ap = script_parser(__doc__)
     ap.add_argument("--quick", action="store_true", help="shorter timings, 30 episodes")

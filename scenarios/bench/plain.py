@@ -6,7 +6,7 @@ docs/python-api.md renders). On ``paper-50``, goal-only rewards:
 
 * grid: env steps/s of the Python port of ST-QL (``tests/plain_learners/st_ql.py``, the
   learner every per-run figure of ``st-ql`` is tested against) through
-  :func:`learning.plain_train.train_plain`, and of the compiled ``st-ql`` through the fused
+  :func:`learning.plain.train.train_plain`, and of the compiled ``st-ql`` through the fused
   kernel, the same ``--episodes`` from scratch, best of ``--repeats``;
 * physics at ``exact``: a sweep of ``--seeds`` compiled ``st-ql`` runs alone, then the
   same sweep with as many runs of the Python port beside them (one worker): the compiled
@@ -39,8 +39,8 @@ def _port_importable() -> None:
 
 def grid_steps_per_s(method: str, episodes: int, repeats: int) -> float:
     """Best-of-``repeats`` env steps/s of a fresh learner trained ``episodes`` episodes."""
-    from learning.plain import is_plain
-    from learning.plain_train import train_plain
+    from learning.plain.learner import is_plain
+    from learning.plain.train import train_plain
     from learning.train import train_tabular
     from scenarios.runs.spec import load, make_config
 
@@ -58,8 +58,8 @@ def grid_steps_per_s(method: str, episodes: int, repeats: int) -> float:
 
 def physics_rates(seeds: int, episodes: int, with_port: bool) -> dict[str, float]:
     """Primitives per second of each method's own training time in a physics sweep."""
-    from scenarios.experiments.compare import make_specs
-    from scenarios.runs.backends import run_local
+    from scenarios.sweep.backends import run_local
+    from scenarios.sweep.run import make_specs
 
     methods = ["st-ql", PORT] if with_port else ["st-ql"]
     specs = make_specs(SCENARIO, methods, list(range(seeds)), episodes, ["physics"],

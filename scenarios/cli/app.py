@@ -17,11 +17,10 @@ from collections.abc import Sequence
 
 from learning.registry import comparison_methods
 from scenarios.cli import (
-    aliasing,
     bench,
     catalog,
     compare,
-    optimum,
+    models,
     report,
     route,
     train,
@@ -34,8 +33,8 @@ from scenarios.cli.args import (
     add_training_args,
     add_world_args,
 )
-from scenarios.cli.paths import RECORD_DEFAULT, check_empty_paths
-from scenarios.runs.backends import SweepError
+from scenarios.sweep.backends import SweepError
+from scenarios.sweep.outdir import RECORD_DEFAULT, check_empty_paths
 from sim.errors import InputError
 
 
@@ -159,7 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--artifact", default=None, metavar="NAME",
                    help="also write docs/results/aliasing.NAME.json (the docs' table and "
                         "heat map)")
-    p.set_defaults(func=aliasing.cmd_aliasing)
+    p.set_defaults(func=models.cmd_aliasing)
 
     p = sub.add_parser("optimum", help="V*: the optimum of the physics world at a fidelity "
                                        "(expected primitives, P(G)), from a model built by "
@@ -176,7 +175,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--artifact", default=None, metavar="NAME",
                    help="also write docs/results/optimum.NAME.json (the table docs/fidelity.md "
                         "renders)")
-    p.set_defaults(func=optimum.cmd_optimum)
+    p.set_defaults(func=models.cmd_optimum)
 
     p = sub.add_parser("view", help="open a .rrd recording in the Rerun viewer")
     p.add_argument("file", metavar="FILE.rrd", help="a recording written by --record")

@@ -1,5 +1,5 @@
 """Argument helpers shared by the ``rnhql`` subcommands: cells, lists, overrides, limits
-(output paths: :mod:`scenarios.cli.paths`).
+(output paths: :mod:`scenarios.sweep.outdir`).
 
 Every helper raises :class:`sim.errors.InputError` (one line naming the flag and
 the fix); :mod:`scenarios.cli.app` prints it and exits 2.
@@ -13,7 +13,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from scenarios.cli.paths import RECORD_DEFAULT
 from scenarios.runs.spec import (  # noqa: F401  (physics_budget: re-exported)
     MAX_PHYSICS_STEPS_PER_EPISODE,
     WORLDS,
@@ -21,6 +20,7 @@ from scenarios.runs.spec import (  # noqa: F401  (physics_budget: re-exported)
     load,
     physics_budget,
 )
+from scenarios.sweep.outdir import RECORD_DEFAULT
 from sim.errors import InputError
 
 if TYPE_CHECKING:
@@ -181,7 +181,7 @@ def scenario_from_args(args: argparse.Namespace):  # -> Scenario
 
 def scen_problem(args: argparse.Namespace):  # -> (map path, ScenProblem)
     """The ``.scen`` problem chosen by ``--index`` or ``--bucket``; errors name the fix."""
-    from sim.maps import load_scen
+    from sim.maps.movingai import load_scen
 
     path = Path(args.scen)
     if not path.is_file():
@@ -209,7 +209,7 @@ def scen_problem(args: argparse.Namespace):  # -> (map path, ScenProblem)
             map_path.suffix != ".map" or not map_path.is_file():
         raise CliError(str(path), "map column", f"names {problem.map_name!r}, not a .map file "
                        f"beside the .scen", "put the .map next to the .scen and name it there")
-    from sim.maps import load_map
+    from sim.maps.movingai import load_map
 
     grid = load_map(map_path)
     if (grid.width, grid.height) != (problem.width, problem.height):
@@ -377,7 +377,7 @@ def compile_notice(n_methods: int, physics: bool = False) -> None:
     """Say so when the numba kernels are not on disk yet: the first run compiles them
     (a minute or more on 2 cores) before any progress can show. ``physics``: the command
     drives the physics world, whose kernels compile on its first use (tens of seconds)."""
-    from learning.jitcache import kernels_cached
+    from learning.compiled.jitcache import kernels_cached
     from sim.physics.jitcache import kernels_cached as physics_cached
 
     parts = []

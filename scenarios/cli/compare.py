@@ -22,8 +22,8 @@ from scenarios.cli.args import (
     starts_note,
     unique,
 )
-from scenarios.cli.paths import record_path
 from scenarios.runs.spec import make_config
+from scenarios.sweep.outdir import record_path
 from sim.errors import InputError
 
 
@@ -78,7 +78,7 @@ def _say(text: str) -> None:
     """A line of the command's output, wrapped to the summary's 100 columns."""
     import textwrap
 
-    from scenarios.runs.brief import TERMINAL_COLUMNS
+    from scenarios.sweep.brief import TERMINAL_COLUMNS
 
     print("\n".join(textwrap.wrap(text, TERMINAL_COLUMNS, subsequent_indent="  ",
                                    break_on_hyphens=False, break_long_words=False)))

@@ -14,7 +14,7 @@ from scenarios.cli.args import (
     physics_budget,
     problem_arg,
 )
-from scenarios.cli.paths import check_output_file, record_path
+from scenarios.sweep.outdir import check_output_file, record_path
 
 
 def cmd_route(args: argparse.Namespace) -> int:
@@ -40,11 +40,11 @@ def cmd_route(args: argparse.Namespace) -> int:
     trajectory = driven = None
     print(f"{ckpt.config.name} agent {args.agent} ({ckpt.episodes} episodes) on {sc.name}")
     if args.world == "physics":
-        from learning.readout import greedy_actions
+        from learning.compiled.readout import greedy_actions
         compile_notice(0, physics=True)
         from scenarios.runs.physics_grading import FINAL_ROLLOUTS, FINAL_TAG
         from sim.physics.fidelity import parse_fidelity
-        from sim.physics.rollouts import drive_policy
+        from sim.physics.models.rollouts import drive_policy
 
         fid = parse_fidelity(pb.fidelity or sc.physics)
         n = 1 if fid.is_exact else FINAL_ROLLOUTS
@@ -60,7 +60,7 @@ def cmd_route(args: argparse.Namespace) -> int:
               f"{driven.sim_time_s[0]:.1f} s sim time")
     record = record_path(args, sc.name, f"route-{ckpt.method}-{args.world}")
     if record is not None:
-        from learning.readout import greedy_actions, potential, q_table
+        from learning.compiled.readout import greedy_actions, potential, q_table
         from scenarios.recording.recorder import Recorder
 
         with Recorder.create(record, sc, model, method=ckpt.method, config=ckpt.config,

@@ -22,8 +22,8 @@ from scenarios.cli.args import (
     seed_value,
     starts_note,
 )
-from scenarios.cli.paths import check_output_file, record_path
 from scenarios.runs.spec import ExperimentError, make_config
+from scenarios.sweep.outdir import check_output_file, record_path
 from sim.files import atomic_write_text
 
 

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import VectorWrapper
 
-from learning.readout import greedy_actions, potential, q_table
+from learning.compiled.readout import greedy_actions, potential, q_table
 from scenarios.recording.recorder import Recorder
 
 
@@ -101,7 +101,7 @@ class GridRecorder:
 
 
 class EpisodeTaps(VectorWrapper):
-    """Taps sub-envs of a :class:`sim.physics.vector.PhysicsRouteVectorEnv`: while sub-env
+    """Taps sub-envs of a :class:`sim.physics.envs.vector.PhysicsRouteVectorEnv`: while sub-env
     ``i`` is armed (:meth:`arm`, at the start of an episode to record in full), its states,
     poses, sim time, contact points and every physics step's pose are kept, for
     :meth:`log_to`. Untapped sub-envs cost nothing; the env must keep trajectories."""

@@ -73,7 +73,8 @@ SERIES_COLOURS = {  # a single run's series: the plot titles name them by these 
     "return": (110, 140, 30), "reward_per_step": (0, 140, 150), "wall_time_ms": (90, 90, 90),
     "shaping/mean": (150, 60, 200), "shaping/std": (245, 120, 30),
     "policy_optimal": (20, 140, 60)}
-# the potential a method shapes with, as its value panel names it (learning.readout.potential)
+# the potential a method shapes with, as its value panel names it
+# (learning.compiled.readout.potential)
 POTENTIALS = {"rnh-ql": ("V_NN", "V_NN: the RBF upper layer"),
               "rnh-ql+": ("Φ", "Φ: the optimistic model's value"),
               "rnh-ql+ablation": ("Φ", "Φ: optimistic model's value or V_NN")}

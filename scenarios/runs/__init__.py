@@ -1,5 +1,6 @@
-"""Runs and sweeps: :class:`~scenarios.runs.spec.RunSpec`, one run end to end (grid or
-physics), the local and Ray backends, and the ``results.json`` contract.
+"""One run: :class:`~scenarios.runs.spec.RunSpec`, one run end to end (grid or physics, the
+one physics training loop and its grading), and the ``results.json`` contract.
 
-May import ``recording``, ``sim`` and ``learning``; never ``experiments``, ``bench`` or ``cli``.
+May import ``recording``, ``figures``, ``sim`` and ``learning``; never ``sweep``,
+``studies``, ``bench`` or ``cli``.
 """

@@ -2,7 +2,7 @@
 
 Every physics run, alone or one of a sweep's, recorded or not, is trained by
 :func:`train_physics_runs`: the runs are the sub-envs of one
-:class:`sim.physics.vector.PhysicsRouteVectorEnv` (N robots in one Pymunk Space; a single
+:class:`sim.physics.envs.vector.PhysicsRouteVectorEnv` (N robots in one Pymunk Space; a single
 run is ``num_envs=1``), their learners the rows of one
 :class:`learning.batch_agent.BatchAgent` per method and config. The loop is CleanRL's
 ``act -> step -> update``; the route problem's rules (reward, termination at G, the time
@@ -34,15 +34,15 @@ from gymnasium.vector import AutoresetMode
 
 from learning.agent import StepAgent
 from learning.batch_agent import BatchAgent
-from learning.generator_handle import handles
+from learning.compiled.generator_handle import handles
+from learning.compiled.readout import greedy_actions
 from learning.geometry import geometry_of
-from learning.plain import PlainBatchAgent, is_plain
-from learning.readout import greedy_actions
+from learning.plain.learner import PlainBatchAgent, is_plain
 from scenarios.runs.physics_grading import FinalGrade, Grader
 from scenarios.runs.work import add_episodes
 from scenarios.signals import sigint_handled_by
 from sim.grid import TabularModel
-from sim.physics.vector import PhysicsRouteVectorEnv
+from sim.physics.envs.vector import PhysicsRouteVectorEnv
 from sim.scenario import Scenario
 
 TEST_BATCH = 16  # periodic tests above exact driven together, one env [tests]
@@ -87,13 +87,13 @@ class PhysicsTrainResult:
     optimal_action_fraction: float
     graded: TabularModel  # the physics world's own exact model (moves the disc can drive)
     grader: Grader  # how the run was graded (its world and fidelity)
-    final_rollouts: Any = None  # sim.physics.rollouts.Rollouts of the final policy
+    final_rollouts: Any = None  # sim.physics.models.rollouts.Rollouts of the final policy
     world_extras: dict[str, Any] = field(default_factory=dict)
 
 
 def continuous_optimum_rounded(sc: Scenario) -> float | None:
-    """The disc's any-angle S-G path length [m] (:mod:`sim.physics.optimum`), for records."""
-    from sim.physics.optimum import continuous_optimum_m
+    """The disc's any-angle S-G path length [m] (:mod:`sim.physics.models.optimum`), for records."""
+    from sim.physics.models.optimum import continuous_optimum_m
 
     v = continuous_optimum_m(sc)
     return None if v is None else round(v, 4)
@@ -310,7 +310,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
 def batch_agent(cfg: Any, geom: Any, learner_rngs: list[np.random.Generator],
                 start_rngs: list[np.random.Generator]) -> Any:
     """The learners of one group: compiled rows (:class:`BatchAgent`), or plain-Python
-    learners (:class:`learning.plain.PlainBatchAgent`) with the same calls."""
+    learners (:class:`learning.plain.learner.PlainBatchAgent`) with the same calls."""
     if is_plain(cfg):
         return PlainBatchAgent(cfg, geom, learner_rngs, start_rngs)
     return BatchAgent(cfg, geom, learner_rngs)

@@ -53,8 +53,8 @@ def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
 
 
 def in_python(method: str) -> bool:
-    """Whether ``method`` is a plain-Python learner (:mod:`learning.plain`)."""
-    from learning.plain import PlainConfig
+    """Whether ``method`` is a plain-Python learner (:mod:`learning.plain.learner`)."""
+    from learning.plain.learner import PlainConfig
     from learning.registry import is_located
     from scenarios.runs.spec import method_class
 

@@ -1,13 +1,13 @@
 """A physics run graded in the world it trained in.
 
 At ``exact`` a primitive's outcome is a function of the cell and the action, so the
-physics world is a deterministic model (:func:`sim.physics.model.physics_model`: each
+physics world is a deterministic model (:func:`sim.physics.models.transition.physics_model`: each
 primitive driven once from each reachable cell centre), and a greedy test is a walk on
 it, as on the grid. Above ``exact`` that model is the wrong world: a bump there means
 "stay", so one bump is "no G", while in the run's own world the robot rests against the
 surface and drives on. So above ``exact`` every test drives the greedy policy (one action
-per cell, :func:`learning.readout.greedy_actions`) from S as rollouts at the run's
-fidelity (:func:`sim.physics.rollouts.drive_policy`), each with its own noise stream,
+per cell, :func:`learning.compiled.readout.greedy_actions`) from S as rollouts at the run's
+fidelity (:func:`sim.physics.models.rollouts.drive_policy`), each with its own noise stream,
 common across methods (seeded by the run's seed and the test's episode):
 
 * a periodic test: :data:`TEST_ROLLOUTS` rollouts of at most
@@ -33,11 +33,11 @@ from typing import Any
 
 import numpy as np
 
-from learning.readout import greedy_actions
+from learning.compiled.readout import greedy_actions
 from learning.train import epsilon_route_lengths, greedy_test, shortest_fraction
 from sim.physics.fidelity import Fidelity
-from sim.physics.model import physics_model
-from sim.physics.rollouts import Rollouts, drive_policies, drive_policy, rollout_env
+from sim.physics.models.rollouts import Rollouts, drive_policies, drive_policy, rollout_env
+from sim.physics.models.transition import physics_model
 from sim.scenario import Scenario
 
 TEST_ROLLOUTS = 10  # drives per periodic greedy test above exact
@@ -112,7 +112,7 @@ class Grader:
               ) -> list[tuple[int, list[int]]]:
         """:meth:`test` above ``exact`` of several greedy policies (``int[nS]`` each, the
         policy when its test fell due) at once: one env, one compiled call per primitive
-        for all their drives (:func:`sim.physics.rollouts.drive_policies`), each test's
+        for all their drives (:func:`sim.physics.models.rollouts.drive_policies`), each test's
         drives the same as alone."""
         opt = max(self.exact.optimal_route_length, 0)
         budget = min(self.scenario.steps_per_episode,
@@ -136,7 +136,7 @@ class Grader:
     def finals(self, states: list[Any], seeds: list[int]) -> list[FinalGrade]:
         """:meth:`final` of several runs' learner states; above ``exact`` their rollouts are
         driven :data:`FINAL_BATCH` policies at a time in one env (each policy's drives
-        equal to its own: :func:`sim.physics.rollouts.drive_policies`)."""
+        equal to its own: :func:`sim.physics.models.rollouts.drive_policies`)."""
         if not self.in_rollouts:
             return [self.final(st, seed) for st, seed in zip(states, seeds, strict=True)]
         out: list[FinalGrade] = []

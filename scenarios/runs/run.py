@@ -68,8 +68,8 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
 def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder: Any = None,
            plan: Any = None) -> RunOutcome:
     """A grid run (physics runs go through :mod:`scenarios.runs.physics_batch`)."""
-    from learning.plain import is_plain
-    from learning.plain_train import train_plain
+    from learning.plain.learner import is_plain
+    from learning.plain.train import train_plain
     from learning.streams import streams
     from learning.train import epsilon_route_lengths, train_tabular
 

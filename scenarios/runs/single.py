@@ -33,8 +33,8 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
     """Train ``spec`` (its scenario already loaded as ``sc``, ``model``); its record."""
     from learning.checkpoint import Checkpoint, checkpoint_bytes, load_checkpoint
     from learning.geometry import geometry_of
-    from learning.plain import is_plain
-    from learning.plain_train import train_plain
+    from learning.plain.learner import is_plain
+    from learning.plain.train import train_plain
     from learning.train import epsilon_route_lengths, train_tabular
 
     cfg = make_config(spec.method, spec.overrides)

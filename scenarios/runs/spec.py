@@ -174,7 +174,7 @@ def settable_fields(cls: type) -> list[str]:
 
 def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
     """The method's frozen config with paper defaults, fields overridden by name."""
-    from learning.limits import LIMITS, limit_problem
+    from learning.config import LIMITS, limit_problem
     from learning.registry import METHODS
 
     cls = method_class(method)
@@ -237,7 +237,7 @@ class RunOutcome:
            world_extras: dict[str, Any] | None = None) -> RunOutcome:
         """From a grid :class:`learning.train.TrainResult` or a physics
         :class:`scenarios.runs.physics.PhysicsTrainResult` (which carries its own extras)."""
-        from learning.readout import greedy_actions
+        from learning.compiled.readout import greedy_actions
 
         extras = dict(getattr(result, "world_extras", {}))
         extras.update(world_extras or {})

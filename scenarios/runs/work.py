@@ -4,7 +4,7 @@ A sweep's progress counted in finished runs stands still while a physics batch (
 physics run of a sweep, one task) or a long run trains, and its estimate counted the first
 run's compilation as work. Each training loop adds the episodes it finishes to one
 counter shared by every worker process (:func:`share` in each worker, from the pool's
-initializer), so :class:`scenarios.runs.backends.Progress` can say how much of the
+initializer), so :class:`scenarios.sweep.backends.Progress` can say how much of the
 sweep's episodes are done and estimate the rest from the recent rate.
 
 The same shared block counts the workers that are *warming up*: running the first task

@@ -1,22 +1,26 @@
-"""The Pymunk side of a scenario: config, static shapes, the world, the primitive controller,
-the fast primitive kernel, the batched world, the transition model and the envs.
+"""The Pymunk side of a scenario, in four rooms around the fidelity ladder.
 
-Modules, in import order (each imports only those above it):
+The package's best idea is the split between an **oracle** and a **fast path**: every
+fidelity knob is first written in the reference world, every step through Chipmunk, and
+the compiled kernel is tested against it (``tests/test_physics_kernel*.py``,
+``tests/test_physics_batch.py``) before anything learns on it.
 
-- :mod:`sim.physics.sigint`: Ctrl-C while Chipmunk calls back into Python;
-- :mod:`sim.physics.static`: collision types, :class:`PhysicsConfig`, contacts, static shapes,
-  a Space, a robot's bodies;
-- :mod:`sim.physics.world`: one robot in a ``pymunk.Space``, every step through Chipmunk
-  (the reference world, and ``DiffDrive``'s);
-- :mod:`sim.physics.controller`: diff-drive kinematics, discrete profiles and the leg plan
-  (compiled, shared with the kernel), the reference primitive controller at every fidelity;
-- :mod:`sim.physics.kernel_state`: the kernel's state by name (robot records, constants);
-- :mod:`sim.physics.kernel`: the primitive for many robots in compiled code, free motion
-  integrated as Chipmunk integrates it, contact steps handed back to Chipmunk;
-- :mod:`sim.physics.batch`: N robots in one ``pymunk.Space`` driven by that kernel;
-- :mod:`sim.physics.model`: the physics world's own tabular model (graded tests);
-- :mod:`sim.physics.envs`, :mod:`sim.physics.diffdrive_env`, :mod:`sim.physics.vector`:
-  the gymnasium envs (:mod:`sim.physics.env_parts`: what they share).
+- here: :mod:`~sim.physics.fidelity` (the ladder of named presets, each knob in SI),
+  :mod:`~sim.physics.static` (collision types, :class:`~sim.physics.static.PhysicsConfig`,
+  contacts, static shapes, a Space), :mod:`~sim.physics.drive_profiles` (the drive's limits
+  and its discrete velocity profiles), :mod:`~sim.physics.sigint` (Ctrl-C inside Chipmunk
+  callbacks) and :mod:`~sim.physics.jitcache` (numba's disk cache, dropped when a source
+  changes);
+- :mod:`sim.physics.reference`: the oracle. One robot in a ``pymunk.Space``, every step
+  through Chipmunk, and the primitive controller at every fidelity;
+- :mod:`sim.physics.kernel`: the fast path. The primitive for many robots in compiled code
+  (free motion integrated as Chipmunk integrates it, contact steps handed back to
+  Chipmunk), its geometry queries and named state, and the batch of N robots in one Space;
+- :mod:`sim.physics.envs`: the gymnasium envs and their vector forms, on the fast path;
+- :mod:`sim.physics.models`: what is built by driving: the tabular transition model, the
+  stochastic model at a fidelity (V*), policy rollouts, the continuous optimum.
+
+Each room imports only the rooms above it in this list (``tests/test_architecture.py``).
 """
 
 from sim.physics.jitcache import drop_stale_cache as _drop_stale_cache

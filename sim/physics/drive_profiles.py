@@ -1,6 +1,6 @@
 """The drive's limits and its minimal-time *discrete* velocity profiles (why discrete: see
-:mod:`sim.physics.controller`), as tables for compiled code: what a primitive's plan
-(:func:`sim.physics.controller.plan_leg`) looks up, built once per robot and period.
+:mod:`sim.physics.reference.controller`), as tables for compiled code: what a primitive's plan
+(:func:`sim.physics.reference.controller.plan_leg`) looks up, built once per robot and period.
 """
 
 from __future__ import annotations

@@ -116,7 +116,7 @@ class Fidelity:
     def hidden_state(self) -> bool:
         """Where the robot stands within its cell is not known to what plans its moves (open
         loop), or its cell itself is an estimate (localisation): the world is not Markov in
-        the stochastic model's states, so V* (:mod:`sim.physics.stochastic_model`) is not
+        the stochastic model's states, so V* (:mod:`sim.physics.models.stochastic`) is not
         defined at this rung."""
         return self.open_loop or self.localisation
 

@@ -1,11 +1,15 @@
 """Drop numba's on-disk cache of ``sim/physics`` when any of its sources changed.
 
 numba keys a cached function on its own file's timestamp only; the primitive kernel
-(:mod:`sim.physics.kernel`) inlines the sweep (:mod:`sim.physics.sweep`), so after an
-edit of one the cached other would silently run old code. On import of the package the
-sources are hashed and, if the hash differs from the stamp in ``__pycache__``, the
-package's ``.nbi``/``.nbc`` files are deleted (numba recompiles on demand). The same
-mechanism as :mod:`learning.jitcache` (``sim`` may not import ``learning``).
+(:mod:`sim.physics.kernel.primitive`) inlines the sweep (:mod:`sim.physics.kernel.sweep`),
+so after an edit of one the cached other would silently run old code. On import of the
+package every source (subpackages included) is hashed and, if the hash differs from the
+stamp in ``__pycache__``, the package's ``.nbi``/``.nbc`` files are deleted (numba
+recompiles on demand).
+
+The same mechanism as :mod:`learning.compiled.jitcache`, function for function: ``sim``
+may not import ``learning`` nor the other way round, so the two copies are held equal by
+``tests/test_learning_jitcache.py`` instead.
 """
 
 from __future__ import annotations
@@ -14,22 +18,26 @@ import hashlib
 import os
 from pathlib import Path
 
-from sim.files import atomic_write_text
-
 PACKAGE = Path(__file__).resolve().parent
 STAMP = "physics-sources.sha256"
+KERNELS = Path("kernel") / "primitive.py"  # the module whose cache says "compiled before"
+
+
+def sources_digest(package: Path = PACKAGE) -> str:
+    h = hashlib.sha256()
+    for p in sorted(package.rglob("*.py")):
+        h.update(str(p.relative_to(package)).encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()
 
 
 def drop_stale_cache(package: Path = PACKAGE) -> bool:
-    """Delete the package's numba cache files if the sources changed; True if it did."""
+    """Delete the package's numba cache files (subpackages included) if the sources
+    changed; True if it did."""
     if os.environ.get("NUMBA_CACHE_DIR"):
         return False
-    h = hashlib.sha256()
-    for p in sorted(package.glob("*.py")):
-        h.update(p.name.encode())
-        h.update(p.read_bytes())
-    digest = h.hexdigest()
     cache = package / "__pycache__"
+    digest = sources_digest(package)
     stamp = cache / STAMP
     try:
         if stamp.read_text() == digest:
@@ -38,18 +46,43 @@ def drop_stale_cache(package: Path = PACKAGE) -> bool:
         pass
     try:
         cache.mkdir(exist_ok=True)
-        for f in [*cache.glob("*.nbi"), *cache.glob("*.nbc")]:
+        for f in [*package.rglob("__pycache__/*.nbi"), *package.rglob("__pycache__/*.nbc")]:
             f.unlink(missing_ok=True)
-        atomic_write_text(stamp, digest)
+        tmp = cache / f".{STAMP}.{os.getpid()}"
+        tmp.write_text(digest)
+        os.replace(tmp, stamp)
     except OSError:  # read-only install: numba falls back to its own cache locations
         return False
     return True
 
 
-def kernels_cached(package: Path = PACKAGE) -> bool:
-    """Whether numba has this package's primitive kernel on disk (False on a first run, or
-    after the sources changed): the commands then say compilation is under way."""
+def kernel_cache_dirs(package: Path = PACKAGE) -> list[Path]:
+    """Where numba keeps the compiled kernels of ``package``, as it decides: the folder it
+    names under ``NUMBA_CACHE_DIR`` (``<folder>_<sha1 of the folder's path>``, numba's
+    own naming), or, when that cannot be created or written (or is unset), the kernel
+    module's ``__pycache__``."""
+    from numba.core.caching import _CacheLocator
+
+    kernels = package / KERNELS
     root = os.environ.get("NUMBA_CACHE_DIR")
-    dirs = (list(Path(root).glob(f"{package.name}_*")) if root
-            else [package / "__pycache__"])
-    return any(any(d.glob("kernel.*.nbi")) for d in dirs if d.is_dir())
+    if root:
+        user = Path(root) / _CacheLocator.get_suitable_cache_subpath(str(kernels))
+        if _writable(user):
+            return [user]
+    return [kernels.parent / "__pycache__"]
+
+
+def _writable(path: Path) -> bool:
+    """Whether ``path`` is, or could be created as, a folder this process writes to."""
+    p = path
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    return p.is_dir() and os.access(p, os.W_OK | os.X_OK)
+
+
+def kernels_cached(package: Path = PACKAGE) -> bool:
+    """Whether numba has compiled kernels of this package on disk (False on a first run,
+    or after the sources changed): the CLI then says compilation is under way. Every place
+    numba may have put them counts (a glob over ``NUMBA_CACHE_DIR`` alone missed the
+    fallback, and the notice then printed on every run)."""
+    return any(any(d.glob(f"{KERNELS.stem}.*.nbi")) for d in kernel_cache_dirs(package))

@@ -2,7 +2,7 @@
 contacts, the static shapes, an empty Space (or one shared by several robots' worlds), a
 robot's bodies and joints, and the swept-disc query over static shapes.
 
-Split from :mod:`sim.physics.world` (the robot's drive loop) so each file has one job.
+Split from :mod:`sim.physics.reference.world` (the robot's drive loop) so each file has one job.
 Walls are thick segments whose inner surface is the arena boundary; circles are
 the scenario's obstacles; blocked map cells become boxes, merged into runs along
 each row so a large map adds thousands of shapes, not hundreds of thousands.
@@ -180,7 +180,8 @@ def sweep_alpha(space: pymunk.Space, query_filter: pymunk.ShapeFilter, radius_m:
                 x0: float, y0: float, x1: float, y1: float) -> float | None:
     """Fraction of (x0, y0) -> (x1, y1) a disc of ``radius_m`` sweeps before touching a shape
     that ``query_filter`` lets through; None if it touches none. See
-    :meth:`sim.physics.world.PhysicsWorld.cast_alpha` (one implementation for every world)."""
+    :meth:`sim.physics.reference.world.PhysicsWorld.cast_alpha` (one implementation for every
+    world)."""
     r = radius_m
     bb = pymunk.BB(min(x0, x1) - r, min(y0, y1) - r, max(x0, x1) + r, max(y0, y1) + r)
     alpha = math.inf
@@ -221,7 +222,8 @@ def robot_bodies(sc: Scenario, cfg: PhysicsConfig, x: float, y: float, th: float
 class SharedSpace:
     """One ``pymunk.Space`` with a scenario's static shapes, for several robots' worlds.
 
-    Each :class:`sim.physics.world.PhysicsWorld` built with ``shared=`` adds its robot here
+    Each :class:`sim.physics.reference.world.PhysicsWorld` built with ``shared=`` adds its
+    robot here
     (robots are filtered so they never touch each other) and gets the contacts its own shape
     begins; :meth:`step` advances all of them at once (DiffDrive's vector env).
     """

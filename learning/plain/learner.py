@@ -1,0 +1,265 @@
+"""Your own learner in plain Python: a class, no numba, run by the same machinery as the
+compiled methods.
+
+The protocol (checked by :func:`check_learner`, with a message naming what is missing)::
+
+    class MyLearner:
+        name = "MY-QL"                          # optional: how tables name it
+        eps = 0.1                               # optional: epsilon of the paper's test
+        def __init__(self, n_states, n_actions, rng): ...   # rng: the run's Generator
+        def act(self, state) -> int: ...        # the behaviour policy (may explore)
+        def update(self, state, action, reward, next_state, terminal) -> None: ...
+        def greedy(self, state) -> int: ...     # the policy graded (no exploration)
+        def episode_start(self) -> None: ...    # optional
+
+``rng`` is the run's learner stream (:func:`learning.streams.streams`), and episode
+starts come from the run's start stream, as for every compiled method: a learner that
+draws what a compiled method draws, in the same order, runs the same run (a Python port
+of ST-QL equals ``st-ql`` figure for figure, grid and physics: tests). ``terminal`` is
+True on entering G only; a step cut by the episode's time limit bootstraps like any
+other. ``greedy`` must not draw random numbers: tests of the policy never move a run.
+A learner may expose ``q`` (``float[n_states, n_actions]``); recordings then show it.
+
+A learner is named where it lives, ``"mypkg.mymodule:MyLearner"``
+(``rnhql compare SCENARIO --methods rnh-ql+,mypkg.mymodule:MyLearner``), or passed as the
+class to :mod:`scenarios.api`. Its grid runs go through :func:`learning.plain.train.train_plain`,
+its physics runs through :class:`PlainBatchAgent` in the physics loop; its policy is
+graded as a :mod:`learning.plain.policy`.
+"""
+
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass
+from typing import Any, ClassVar, Protocol
+
+import numpy as np
+
+from learning.config import MethodConfig
+from learning.geometry import Geometry
+from learning.plain.policy import State, policy_state
+
+PAPER_EPS = 0.1  # the paper's epsilon, for the epsilon-greedy test of a learner without one
+
+
+class PlainLearner(Protocol):
+    """What a plain-Python learner provides (see the module's docstring)."""
+
+    def act(self, state: int) -> int: ...
+
+    def update(self, state: int, action: int, reward: float, next_state: int,
+               terminal: bool) -> None: ...
+
+    def greedy(self, state: int) -> int: ...
+
+
+@dataclass(frozen=True)
+class PlainConfig(MethodConfig):
+    """The config of a plain-Python learner: which class, and the epsilon of the paper's
+    epsilon-greedy test (the class's ``eps``, else the paper's 0.1). It has no fields to
+    ``--set``: the learner's own settings are the learner's."""
+
+    learner: ClassVar[type] = object
+
+    @classmethod
+    def settable(cls) -> tuple[str, ...]:
+        return ()
+
+    def record_fields(self) -> dict[str, object]:
+        return {"learner": self.cli, "eps": self.eps}
+
+    @classmethod
+    def from_fields(cls, values: dict[str, object]) -> PlainConfig:
+        return cls(eps=float(values.get("eps", cls().eps)))  # type: ignore[arg-type]
+
+
+_CONFIGS: dict[str, type[PlainConfig]] = {}
+_CLASSES: dict[str, type] = {}  # learner classes passed as objects, by where they live
+
+
+def located_name(cls: type) -> str:
+    """``"module:Qualname"``: how a sweep names a learner class across processes."""
+    return f"{cls.__module__}:{cls.__qualname__}"
+
+
+def remember(cls: type) -> str:
+    """Name a learner class passed as an object (a script's, a notebook's) and keep it, so
+    this process and the workers it forks resolve the name without importing it."""
+    check_learner(cls)
+    where = located_name(cls)
+    _CLASSES[where] = cls
+    _CONFIGS.pop(where, None)
+    return where
+
+
+def known_class(where: str) -> type | None:
+    return _CLASSES.get(where)
+
+
+def check_learner(cls: Any, where: str | None = None) -> None:
+    """Refuse what cannot run as a plain learner, saying what is missing and how to add it."""
+    label = where or getattr(cls, "__qualname__", repr(cls))
+    if not isinstance(cls, type):
+        raise ValueError(f"{label} is not a class: a plain learner is a class built as "
+                         "Cls(n_states, n_actions, rng) with act, update and greedy")
+    missing = [m for m in ("act", "update", "greedy") if not callable(getattr(cls, m, None))]
+    if missing:
+        raise ValueError(f"{label} has no {', '.join(missing)}: a plain learner defines "
+                         "act(state) -> int, update(state, action, reward, next_state, "
+                         "terminal) and greedy(state) -> int")
+    try:
+        inspect.signature(cls).bind(0, 4, None)
+    except TypeError:
+        raise ValueError(f"{label}({inspect.signature(cls)}) cannot be built as "
+                         f"{cls.__name__}(n_states, n_actions, rng)") from None
+    except ValueError:  # no signature to read (a builtin): let the first run say
+        pass
+    for meth, n in (("act", 1), ("update", 5), ("greedy", 1)):
+        try:
+            inspect.signature(getattr(cls, meth)).bind(None, *range(n))
+        except TypeError:
+            raise ValueError(f"{label}.{meth} must take (self, {_PARAMS[meth]})") from None
+        except ValueError:
+            pass
+
+
+_PARAMS = {"act": "state", "greedy": "state",
+           "update": "state, action, reward, next_state, terminal"}
+
+
+def plain_config(cls: Any, where: str) -> type[PlainConfig]:
+    """The config class of the learner class ``cls`` named ``where`` (one per name)."""
+    if where not in _CONFIGS:
+        check_learner(cls, where)
+        eps = float(getattr(cls, "eps", PAPER_EPS))
+        if not 0.0 <= eps <= 1.0:
+            raise ValueError(f"{where}.eps = {eps!r} must be in [0, 1] (the epsilon of the "
+                             "paper's epsilon-greedy test)")
+        name = str(getattr(cls, "name", cls.__name__))
+        _CONFIGS[where] = dataclass(frozen=True)(type(
+            f"{cls.__name__}Config", (PlainConfig,),
+            {"__module__": __name__, "name": name, "cli": where, "learner": cls,
+             "__annotations__": {"eps": float}, "eps": eps}))
+    return _CONFIGS[where]
+
+
+def is_plain(cfg: Any) -> bool:
+    return isinstance(cfg, PlainConfig)
+
+
+def new_learner(cfg: PlainConfig, geometry: Geometry, rng: np.random.Generator) -> Any:
+    return type(cfg).learner(int(geometry.n_states), int(geometry.n_actions), rng)
+
+
+def checked_action(learner: Any, s: int, a: Any, n_actions: int, what: str = "act") -> int:
+    """``a`` as an int action, or a ValueError naming the learner, the state and the value."""
+    try:
+        k = int(a)
+    except (TypeError, ValueError):
+        k = -1
+    if not 0 <= k < n_actions or (isinstance(a, float) and a != k):
+        raise ValueError(f"{type(learner).__qualname__}.{what}({s}) returned {a!r}, not an "
+                         f"action in 0..{n_actions - 1}")
+    return k
+
+
+def greedy_table(learner: Any, n_states: int, n_actions: int) -> np.ndarray:
+    """int64[nS]: the learner's greedy action in every state."""
+    out = np.empty(n_states, dtype=np.int64)
+    greedy = learner.greedy
+    for s in range(n_states):
+        out[s] = checked_action(learner, s, greedy(s), n_actions, "greedy")
+    return out
+
+
+def snapshot(learner: Any, cfg: PlainConfig, n_states: int, n_actions: int) -> State:
+    """The learner's greedy policy now, as a state the compiled readers grade (and its
+    ``q`` for recordings, when it has one of the right shape)."""
+    q = getattr(learner, "q", None)
+    q = np.asarray(q, dtype=np.float64) if isinstance(q, np.ndarray) else None
+    if q is not None and q.shape != (n_states, n_actions):
+        q = None
+    return policy_state(greedy_table(learner, n_states, n_actions), q, n_actions, cfg.eps)
+
+
+def greedy_walk(learner: Any, next_state: np.ndarray, terminal: np.ndarray, start: int,
+                max_steps: int) -> tuple[int, list[int]]:
+    """The greedy test from ``start``, asking the learner only along the route: (length or
+    -1, states). Stops on a revisit as :func:`learning.compiled.kernels.greedy_route` does."""
+    n_actions = next_state.shape[1]
+    s = int(start)
+    route, seen = [s], {s}
+    for t in range(max_steps):
+        s2 = int(next_state[s, checked_action(learner, s, learner.greedy(s), n_actions,
+                                              "greedy")])
+        route.append(s2)
+        if terminal[s2]:
+            return t + 1, route
+        if s2 in seen:
+            return -1, route
+        seen.add(s2)
+        s = s2
+    return -1, route
+
+
+@dataclass(eq=False)
+class PlainAgent:
+    """A trained plain learner and its greedy policy as a gradable state (``state``)."""
+
+    cfg: PlainConfig
+    learner: Any
+    state: State
+
+
+class PlainBatchAgent:
+    """N plain learners in the physics loop, with :class:`learning.batch_agent.BatchAgent`'s
+    calls: each learner draws from its own stream, and each run's starts from its own start
+    stream, in the order the compiled agents draw them."""
+
+    def __init__(self, cfg: PlainConfig, geometry: Geometry, rngs: list[np.random.Generator],
+                 start_rngs: list[np.random.Generator]) -> None:
+        self.cfg, self.geometry = cfg, geometry
+        self.n_states, self.n_actions = int(geometry.n_states), int(geometry.n_actions)
+        self.learners = [new_learner(cfg, geometry, r) for r in rngs]
+        self.start_rngs = list(start_rngs)
+        self.n = len(self.learners)
+        self._out = np.zeros(self.n, dtype=np.int64)
+        self._starts_hook = [getattr(x, "episode_start", None) for x in self.learners]
+
+    def state(self, i: int) -> State:
+        return snapshot(self.learners[i], self.cfg, self.n_states, self.n_actions)
+
+    def step_agent(self, i: int) -> PlainAgent:
+        return PlainAgent(self.cfg, self.learners[i], self.state(i))
+
+    def last_shaping(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.zeros(self.n), np.zeros(self.n)
+
+    def draw_starts(self, _handles: np.ndarray, starts: np.ndarray,
+                    active: np.ndarray) -> np.ndarray:
+        out = np.zeros(self.n, dtype=np.int64)
+        for i in np.flatnonzero(active):
+            out[i] = starts[self.start_rngs[i].integers(0, starts.shape[0])]
+        return out
+
+    def begin_episode(self, active: np.ndarray, s0: np.ndarray) -> None:
+        for i in np.flatnonzero(active):
+            hook = self._starts_hook[i]
+            if hook is not None:
+                hook()
+
+    def act(self, active: np.ndarray, s: np.ndarray) -> np.ndarray:
+        out = self._out
+        for i in np.flatnonzero(active):
+            learner, si = self.learners[i], int(s[i])
+            out[i] = checked_action(learner, si, learner.act(si), self.n_actions)
+        return out
+
+    def update(self, active: np.ndarray, s: np.ndarray, a: np.ndarray, r: np.ndarray,
+               s2: np.ndarray, terminated: np.ndarray, truncated: np.ndarray) -> None:
+        for i in np.flatnonzero(active):
+            self.learners[i].update(int(s[i]), int(a[i]), float(r[i]), int(s2[i]),
+                                    bool(terminated[i]))
+
+    def end_episode(self, active: np.ndarray) -> None:
+        pass

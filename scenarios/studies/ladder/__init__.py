@@ -1,0 +1,3 @@
+"""Studies of the fidelity ladder: continuous vs gridded, predictivity, the
+grading check, aliasing.
+"""

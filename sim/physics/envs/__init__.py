@@ -1,0 +1,3 @@
+"""The gymnasium envs of the physics world: ``rnhql/PhysicsRoute-v0``, ``rnhql/DiffDrive-v0``
+and their vector forms.
+"""

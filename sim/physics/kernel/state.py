@@ -1,0 +1,137 @@
+"""The batched kernel's state by name (:mod:`sim.physics.kernel.primitive`).
+
+Each robot is a record of :data:`ROBOT` (in compiled code ``rb = robots[i]``, a reference:
+``rb.x``; in Python :func:`by_name` gives a :class:`Robots` of 1-D views, ``r.x[i]``). A
+batch's constants are one :class:`Params` (numbers only), its tables
+:class:`sim.physics.drive_profiles.Profiles` and :class:`Geometry`, its caches :class:`Scratch`.
+
+Not a NamedTuple of arrays for the robots: numba types a NamedTuple argument by its slow path
+on every call (10-14 us for fifty arrays, measured; a record array 0.4 us), and a batch of one
+makes a call per primitive (~28 us); the tuples cross as plain tuples, rebuilt inside
+(``Params(*pt)``). Arrays stay out of the per-step helpers: numba increfs and decrefs every
+array of every tuple argument at each call (13 arrays per step took the kernel from 0.5 to
+2.4 us per primitive).
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = ["ROBOT", "Geometry", "Params", "Phase", "Robots", "Scratch", "Status", "by_name"]
+
+
+class Status(IntEnum):
+    """Where a robot's primitive stands between calls of
+    :func:`sim.physics.kernel.primitive.advance`."""
+
+    IDLE, RUNNING = 0, 1  # no primitive (placed, never stepped); running
+    NOISE = 2  # the caller refills the robot's normals, then calls again
+    CHECK = 3  # the caller asks Chipmunk whether the last step began a contact
+    CONTACT = 4  # the caller found one (and booked it): the primitive ends in a bump
+    DONE = 5
+
+
+class Phase(IntEnum):
+    """Where a robot stands within its current leg: plan it from the pose, cast its guard,
+    drive its commands."""
+
+    PLAN, GUARD, DRIVE = 0, 1, 2
+
+
+_F, _I, _B = np.float64, np.int64, np.bool_
+ROBOT = np.dtype([
+    # pose [m, m, rad] (heading not wrapped), velocity after the last solve, control twist
+    ("x", _F), ("y", _F), ("th", _F), ("vx", _F), ("vy", _F), ("w", _F),
+    ("cvx", _F), ("cvy", _F), ("cw", _F),
+    ("px", _F), ("py", _F), ("pth", _F),  # pose before the last step
+    # the primitive: action, start cell, target centre [m] and heading [rad]
+    ("action", _I), ("cell_x", _I), ("cell_y", _I), ("tx", _F), ("ty", _F), ("head", _F),
+    ("status", _I), ("state", _I),  # Status; the cell of the final pose (when DONE)
+    ("steps", _I), ("steps0", _I),  # physics steps since placed; at the primitive's start
+    ("bumped", _B), ("reached", _B), ("timeout", _B), ("ncontact", _I),
+    ("resting", _B), ("press", _F),  # at rest against a surface (_held); bumper travel [m]
+    ("forced", _B), ("ntraj", _I),  # the last step pressed the bumper home; poses recorded
+    ("phase", _I),  # the leg (a sim.physics.reference.controller.Leg), where it stands, its guard:
+    ("nturn", _I), ("tsign", _F), ("tscale", _F), ("ndrive", _I), ("dscale", _F), ("ex", _F),
+    ("ey", _F), ("dist", _F),
+    ("cmd", _I), ("sub", _I), ("cmd_set", _I),  # command and substep now; command in cv*
+    ("gx", _F), ("gy", _F), ("limit", _F), ("free", _F),  # leg guard: start, allowance, free
+    # the fidelity's per-run bias (sim.physics.fidelity): each wheel's delivered fraction of
+    # its command, and the true wheelbase over the nominal one (1, 1, 1: none)
+    ("gain_l", _F), ("gain_r", _F), ("base_k", _F),
+    # what the robot believes (open loop, localisation): its pose estimate [m, m, rad]; the
+    # wheels' travel [m] and yaw [rad] this control period (odometry); the period's odometry
+    # normals; the fix's normals (reserved when the primitive starts); primitives since the
+    # last fix; the true cell (state: the believed one); a primitive not yet begun
+    ("bx", _F), ("by", _F), ("bth", _F), ("odo_d", _F), ("odo_th", _F),
+    ("o1", _F), ("o2", _F), ("o3", _F), ("f1", _F), ("f2", _F), ("f3", _F),
+    ("nfix", _I), ("tstate", _I), ("fresh", _B),
+    # a ball the disc's centre may roam without coming near any static shape (above exact:
+    # steps inside it need no sweep; sim.physics.kernel.queries.new_clear_ball) [m];
+    # radius <= 0: none
+    ("clear_x", _F), ("clear_y", _F), ("clear_r", _F),
+], align=True)
+
+# Python's view: every field of ROBOT as a 1-D array of length N (views into the records)
+Robots = NamedTuple("Robots", [(name, np.ndarray) for name in ROBOT.names])  # type: ignore[misc]
+
+
+def by_name(robots: np.ndarray) -> Robots:
+    """``robots`` (records of :data:`ROBOT`) as a :class:`Robots` of views: ``r.x[i]``."""
+    return Robots(*(robots[name] for name in ROBOT.names))
+
+
+
+
+class Params(NamedTuple):
+    """A batch's constants (scenario, :class:`PhysicsConfig`, fidelity), numbers only."""
+
+    dt: float  # physics step [s]
+    substeps: int  # physics steps per control period (of `period` [s])
+    period: float
+    tol_m: float  # a primitive ends this close to the target centre [m]
+    tol_rad: float  # ... and to its heading [rad]
+    timeout_steps: int  # a primitive gives up after this many steps (checked between legs)
+    depth_m: float  # deepest a guarded step carries the disc into a surface [m]
+    dv_max: float  # the pivot joint's impulse limit per step, as a speed change [m/s]
+    dw_max: float  # the gear joint's, as a yaw-rate change [rad/s]
+    cell_m: float  # cell size [m]
+    nx: int  # grid width [cells]
+    ny: int  # grid height [cells]
+    radius_m: float  # robot radius [m]
+    wheel_base_m: float  # [m]
+    wheel_noise: float  # fidelity: relative sigma of each wheel's speed per period [-]
+    carried: bool  # fidelity: carried pose
+    bumper_travel_m: float  # fidelity: bumper travel [m]
+    biased: bool  # fidelity: a per-run wheel bias (the robots' gain_l, gain_r, base_k)
+    open_loop: bool  # fidelity: plan once from the believed pose, no feedback
+    localised: bool  # fidelity: the controller and the state read the pose estimate
+    odo_a1: float  # odometry motion model: rotation variance per rotation^2 [-]
+    odo_a2: float  # ... per distance^2 [rad^2/m^2]
+    odo_a3: float  # translation variance per distance^2 [-]
+    odo_a4: float  # ... per rotation^2 [m^2/rad^2]
+    fix_every: int  # an absolute fix every this many primitives (0: never)
+    fix_sigma_m: float  # the fix's error per axis [m]
+    fix_sigma_rad: float  # ... in heading [rad]
+
+
+class Geometry(NamedTuple):
+    """The static shapes as arrays (:class:`sim.physics.kernel.sweep.StaticGeometry`)."""
+
+    circles: np.ndarray
+    walls: np.ndarray
+    boxes: np.ndarray
+    grid_start: np.ndarray
+    grid_items: np.ndarray
+
+
+class Scratch(NamedTuple):
+    """A batch's mutable helpers in compiled code."""
+
+    guards: np.ndarray  # float64[cells, 4]: free distance of each (cell, action)'s drive leg
+    #   from the cell centre (inf: nothing in the way; nan: not cast yet); shareable
+    seen: np.ndarray  # int64[circles + boxes]: candidate stamps of the sweep
+    counters: np.ndarray  # int64[2]: the sweep's stamp, guard casts so far

@@ -1,0 +1,367 @@
+"""Differential-drive kinematics, the primitive's plan, and the reference controller.
+
+Compiled part (numba, no pymunk): wheel speeds <-> twist, angle wrapping, the cell of a
+pose, minimal-time *discrete* velocity profiles, a leg's plan and commands, the twist the
+wheels deliver under wheel noise, the end-of-leg test: the one definition of each, called
+by :class:`PrimitiveController` (the reference, one robot, every step through Chipmunk) and
+by the batched kernel (:mod:`sim.physics.kernel.primitive`) alike, so their plans agree bit for bit.
+
+Why discrete profiles: the wheel commands change once per control period ``T``, by at
+most ``a_max * T``, never beyond ``v_max``. For a distance ``D`` the profile is the fewest
+periods whose largest admissible trapezoid covers ``D``, scaled down uniformly to cover it
+exactly (scaling keeps every limit). The robot tracks the control body exactly while the
+joints' force limits are not reached (:mod:`sim.physics.reference.world`), so in free space a
+primitive lands on the cell centre to rounding error with no feedback; the controller
+re-plans from the measured pose when something disturbed the robot.
+
+A primitive: turn in place to face the centre of the neighbouring cell (this *is* the
+action's cardinal heading when the robot stands on its cell centre, and it keeps the
+drive a straight line when it does not), stop, drive straight to that centre, stop. It
+ends within ``tolerance_m`` / ``tolerance_rad`` of the centre / the cardinal heading, at
+a contact, or at ``timeout_s`` (checked between legs).
+
+Return to start after a contact (``exact``): the robot is *placed* back on the centre of
+the cell it started from, at rest, keeping its heading: driving back would retrace the
+segment it just drove, doubling the cost of every bump without telling the learner
+anything; the grid's "the agent stays" is what the placement reproduces (a placement is
+not a reset: the same actions still replay bit for bit). The knobs above ``exact``
+(:mod:`sim.physics.fidelity`) are :meth:`PrimitiveController.run`'s rules.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, NamedTuple
+
+import numpy as np
+from numba import njit
+
+from sim.grid.actions import ACTION_DELTAS, ACTION_HEADINGS
+from sim.grid.discretiser import Discretiser
+from sim.physics.drive_profiles import DriveLimits, profile_index, profiles
+from sim.physics.fidelity import Fidelity
+from sim.physics.static import DEEPER_M
+
+if TYPE_CHECKING:
+    from sim.physics.reference.world import PhysicsConfig, PhysicsWorld
+    from sim.scenario import Scenario
+
+# Turns smaller than this are skipped [rad]: after a drive the heading equals the
+# bearing up to rounding (~1e-13 rad), and a "turn" of that size would still cost
+# two control periods (command + stop).
+MIN_TURN_RAD = 1e-9
+
+
+# ------------------------------------------------------------------ kinematics
+
+
+@njit(cache=True)
+def wheels_to_twist(v_left_m_s: float, v_right_m_s: float,
+                    wheel_base_m: float) -> tuple[float, float]:
+    """Wheel rim speeds [m/s] -> (forward speed [m/s], yaw rate [rad/s])."""
+    return 0.5 * (v_left_m_s + v_right_m_s), (v_right_m_s - v_left_m_s) / wheel_base_m
+
+
+@njit(cache=True)
+def twist_to_wheels(v_m_s: float, omega_rad_s: float,
+                    wheel_base_m: float) -> tuple[float, float]:
+    """(forward speed [m/s], yaw rate [rad/s]) -> (left, right) wheel rim speeds [m/s]."""
+    half = 0.5 * omega_rad_s * wheel_base_m
+    return v_m_s - half, v_m_s + half
+
+
+@njit(cache=True, inline="always")
+def wrap_angle(a_rad: float) -> float:
+    """Angle wrapped into [-pi, pi)."""
+    return (a_rad + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@njit(cache=True, inline="always")
+def cell_of(x_m: float, y_m: float, cell_m: float, nx: int, ny: int) -> tuple[int, int]:
+    """The cell (ix, iy) holding the point, clamped into the grid (as Discretiser.cell_of)."""
+    ix = min(max(int(math.floor(x_m / cell_m)), 0), nx - 1)  # noqa: RUF046 (numba)
+    iy = min(max(int(math.floor(y_m / cell_m)), 0), ny - 1)  # noqa: RUF046 (numba)
+    return ix, iy
+
+
+@njit(cache=True)
+def wheel_twist(vx: float, vy: float, omega: float, heading: float, e_left: float,
+                e_right: float, wheel_noise: float, wheel_base_m: float,
+                gain_left: float = 1.0, gain_right: float = 1.0, base_k: float = 1.0
+                ) -> tuple[float, float, float]:
+    """A commanded twist as a diff drive delivers it above ``exact``: each wheel's speed times
+    ``1 + wheel_noise * e`` (``e_left``, ``e_right`` the robot's next two normals) and its
+    per-run gain (``gain_left``, ``gain_right``: the wheel-diameter bias), yawing about the
+    true wheelbase (``base_k`` times the nominal one the command was computed with), and the
+    motion along the robot's ``heading`` [rad] (a diff drive cannot move sideways). With
+    gains and ``base_k`` 1 the arithmetic is the unbiased one, bit for bit."""
+    vl, vr = twist_to_wheels(math.hypot(vx, vy), omega, wheel_base_m)
+    if wheel_noise > 0.0:
+        vl *= 1.0 + wheel_noise * e_left
+        vr *= 1.0 + wheel_noise * e_right
+    if gain_left != 1.0 or gain_right != 1.0 or base_k != 1.0:
+        vl *= gain_left
+        vr *= gain_right
+        wheel_base_m *= base_k
+    v, w = wheels_to_twist(vl, vr, wheel_base_m)
+    return v * math.cos(heading), v * math.sin(heading), w
+
+
+# ------------------------------------------------------------------ one leg
+
+
+class Leg(NamedTuple):
+    """One leg of a primitive: turn in place (``nturn`` periods, then a stop period), then
+    drive straight (``ndrive`` periods, then a stop period); either may be absent (0)."""
+
+    nturn: int  # periods of the turn's profile
+    tsign: float  # +1 counter-clockwise, -1 clockwise
+    tscale: float  # scale of the turn table's row
+    ndrive: int  # periods of the drive's profile
+    dscale: float  # scale of the drive table's row
+    ex: float  # drive direction (unit)
+    ey: float
+    dist: float  # drive length [m] (0: no drive)
+
+
+@njit(cache=True, inline="always")
+def plan_leg(x: float, y: float, th: float, tx: float, ty: float, heading: float,
+             tol_m: float, period_s: float, turn_sums: np.ndarray, drive_sums: np.ndarray
+             ) -> Leg:
+    """From the pose (x, y, th): turn to face the target (tx, ty) and drive to it when it is
+    further than ``tol_m``; otherwise only turn to ``heading``. Nothing to do: both 0."""
+    dx, dy = tx - x, ty - y
+    dist = math.hypot(dx, dy)
+    drive = dist > tol_m
+    turn = wrap_angle((math.atan2(dy, dx) if drive else heading) - th)
+    nturn, tsign, tscale = 0, 1.0, 0.0
+    if abs(turn) > MIN_TURN_RAD:
+        total = abs(turn) / period_s
+        n = profile_index(turn_sums, total)
+        if n < 0:
+            raise ValueError("turn longer than the profile table")
+        nturn, tscale = n + 1, total / turn_sums[n]
+        tsign = -1.0 if turn < 0.0 else 1.0
+    if not drive:
+        return Leg(nturn, tsign, tscale, 0, 0.0, 0.0, 0.0, 0.0)
+    total = dist / period_s
+    n = profile_index(drive_sums, total)
+    if n < 0:
+        raise ValueError("drive longer than the profile table")
+    return Leg(nturn, tsign, tscale, n + 1, total / drive_sums[n], dx / dist, dy / dist, dist)
+
+
+@njit(cache=True, inline="always")
+def leg_command(leg: Leg, k: int, turn_caps: np.ndarray, drive_caps: np.ndarray
+                ) -> tuple[float, float, float]:
+    """Control-body twist (vx [m/s], vy [m/s], omega [rad/s]) of period ``k`` of the leg;
+    nan past its end. (Tables as arrays, not :class:`Profiles`: numba increfs every array of
+    a tuple argument at each call, and this runs once per control period.)"""
+    if leg.nturn > 0:
+        if k < leg.nturn:
+            return 0.0, 0.0, leg.tsign * (turn_caps[leg.nturn - 1, k] * leg.tscale)
+        if k == leg.nturn:
+            return 0.0, 0.0, 0.0
+        k -= leg.nturn + 1
+    if leg.ndrive > 0:
+        if k < leg.ndrive:
+            u = drive_caps[leg.ndrive - 1, k] * leg.dscale
+            return u * leg.ex, u * leg.ey, 0.0
+        if k == leg.ndrive:
+            return 0.0, 0.0, 0.0
+    return math.nan, math.nan, math.nan
+
+
+@njit(cache=True)
+def plan_commands(x: float, y: float, th: float, tx: float, ty: float, heading: float,
+                  tol_m: float, period_s: float, turn_caps: np.ndarray, turn_sums: np.ndarray,
+                  drive_caps: np.ndarray, drive_sums: np.ndarray) -> tuple[Leg, np.ndarray]:
+    """:func:`plan_leg` and every :func:`leg_command` of it (float64[n, 3]) in one call."""
+    leg = plan_leg(x, y, th, tx, ty, heading, tol_m, period_s, turn_sums, drive_sums)
+    n = (leg.nturn + 1 if leg.nturn > 0 else 0) + (leg.ndrive + 1 if leg.ndrive > 0 else 0)
+    cmds = np.empty((n, 3))
+    for k in range(cmds.shape[0]):
+        cmds[k, 0], cmds[k, 1], cmds[k, 2] = leg_command(leg, k, turn_caps, drive_caps)
+    return leg, cmds
+
+
+@njit(cache=True, inline="always")
+def at_target(x: float, y: float, th: float, tx: float, ty: float, heading: float,
+              tol_m: float, tol_rad: float) -> bool:
+    """A leg that ends here has reached the primitive's target centre and heading."""
+    return math.hypot(tx - x, ty - y) <= tol_m and abs(wrap_angle(th - heading)) <= tol_rad
+
+
+# ------------------------------------------------------------------ the primitive
+
+
+class PrimitiveOutcome(NamedTuple):
+    """What motion primitives did: one robot's (the reference, :meth:`PrimitiveController.run`:
+    Python scalars) or a batch's (:meth:`sim.physics.kernel.batch.RouteBatch.step`: one entry per
+    robot, arrays; inactive robots zeros). The contact records and the trajectory stay with
+    the world that drove them (``world.contacts``, ``world.trajectory``; ``batch.contacts[i]``,
+    ``batch.trajectory(i)``)."""
+
+    state: Any  # int: Discretiser.state_of the final pose
+    bumped: Any  # bool: a contact began (exact: the robot is back on its start cell centre)
+    reached: Any  # bool: ended within tolerance of the target centre and heading
+    timeout: Any  # bool: gave up at PhysicsConfig.timeout_s
+    steps: Any  # int: physics steps driven
+    contacts: Any  # int: contacts that began
+    cell: Any = None  # int: the true cell of the final pose (``state`` is the believed one
+    #   with localisation; the reference, which has none, gives the state)
+
+
+class PrimitiveController:
+    """Drives grid actions as motion primitives in a
+    :class:`sim.physics.reference.world.PhysicsWorld`:
+    the **reference** every fidelity knob of the batched kernel is tested against (every
+    step through ``cpSpaceStep``). One per scenario, config and fidelity; any world.
+
+    At ``exact`` a leg's commands run in :meth:`PhysicsWorld.drive`'s tight loop, with the
+    leg's swept-disc guard cast once (the time-of-impact clamp that keeps a step from
+    carrying the disc deeper than ``contact_depth_m`` into anything). Above ``exact`` each
+    step is guarded by its own cast and the knobs' rules apply (:meth:`run`).
+    """
+
+    def __init__(self, scenario: Scenario, config: PhysicsConfig,
+                 fidelity: Fidelity | None = None) -> None:
+        self.disc = Discretiser.from_scenario(scenario)
+        self.limits = lim = DriveLimits.from_robot(scenario.robot)
+        self.config = config
+        self.fidelity = fid = fidelity or Fidelity()
+        fid.validate()
+        if fid.biased or fid.open_loop or fid.localisation:
+            raise ValueError(
+                f"the reference controller drives wheel noise and carried pose only, not "
+                f"{fid.label}: the bias, open-loop and localisation knobs live in the batched "
+                "kernel and are tested against their analytic models (tests/test_ladder_knobs.py)")
+        period = config.control_period_s
+        self._period = period
+        self.profiles = profiles(lim, period, scenario.cell_size_m)
+        self._tol_m = config.tolerance_m
+        self._tol_rad = config.tolerance_rad
+        self._timeout_steps = math.ceil(config.timeout_s / config.dt_s - 1e-9)
+
+    def plan_leg(self, pose: tuple[float, float, float], target: tuple[float, float],
+                 heading: float) -> tuple[list[tuple[float, float, float]], float]:
+        """Twists (vx [m/s], vy [m/s], omega [rad/s]) per control period, and the drive length
+        (:func:`plan_leg`, :func:`leg_command`). Each motion ends with a zero twist."""
+        leg, cmds = plan_commands(*pose, *target, heading, self._tol_m, self._period,
+                                  *self.profiles)
+        return [tuple(c) for c in cmds.tolist()], leg.dist
+
+    def run(self, world: PhysicsWorld, action: int,
+            rng: np.random.Generator | None = None) -> PrimitiveOutcome:
+        """Drive grid ``action`` from the robot's current pose; ``world.trajectory`` becomes
+        the start pose, then the pose after every physics step.
+
+        The fidelity's rules (the reference of :func:`sim.physics.kernel.primitive.advance`):
+
+        - wheel noise: each control period's twist is delivered by :func:`wheel_twist` with
+          the next two normals of ``rng`` (left, right), along the heading at the period's
+          start; every step is guarded by its own cast (:meth:`PhysicsWorld.before_step`);
+        - carried pose: a contact stops the robot where it is, at rest, resting against the
+          surface (``world.resting``); see :meth:`_held_step` for the steps that follow.
+          Without it a bump places the robot back on its start cell's centre; above
+          ``exact`` that centre may overlap a shape (noise lets a robot stop within
+          tolerance of a centre that is not clear): then it rests there.
+        """
+        fid, disc = self.fidelity, self.disc
+        if fid.wheel_noise > 0.0 and rng is None:
+            raise ValueError("this fidelity has wheel noise: pass rng")
+        x, y, th = pose = world.pose
+        ix, iy = cell_of(x, y, disc.cell_size_m, disc.nx, disc.ny)
+        dx, dy = ACTION_DELTAS[action]
+        tx, ty = disc.cell_centre(ix + dx, iy + dy)
+        heading = ACTION_HEADINGS[action]
+        world.trajectory = traj = [pose]
+        steps0, n_contacts0 = world.steps, len(world.contacts)
+        world.solve_contacts = fid.is_exact  # above it the rule holds the robot, not the solver
+        self._press = 0.0  # carried pose: the bumper's travel this primitive [m]
+        bumped = reached = False
+        while True:
+            leg, cmds = plan_commands(*pose, tx, ty, heading, self._tol_m, self._period,
+                                      *self.profiles)
+            if not cmds.shape[0]:  # nothing left to do (only when already exactly on target)
+                reached = True
+                break
+            commands = [tuple(c) for c in cmds.tolist()]
+            if fid.is_exact:
+                guard = (world.cast_free_distance(x, y, tx, ty, leg.dist)
+                         if leg.ndrive > 0 else None)
+                bumped = world.drive(commands, guard, traj)
+            else:
+                bumped = self._drive_noisy(world, commands, leg.nturn, rng)
+            x, y, th = pose = world.pose
+            if bumped:
+                if fid.carried_pose:
+                    world.place(x, y, th, resting=True)
+                else:  # above exact a start centre may overlap a shape: it rests there
+                    world.place(*disc.cell_centre(ix, iy), th)
+                    world.resting = not fid.is_exact and world.overlap_m() > 0.0
+                pose = world.pose
+                break
+            if at_target(x, y, th, tx, ty, heading, self._tol_m, self._tol_rad):
+                reached = True
+                break
+            if world.steps - steps0 >= self._timeout_steps:
+                break
+        steps = world.steps - steps0
+        cell = disc.state_of(pose[0], pose[1])
+        return PrimitiveOutcome(
+            state=cell, bumped=bumped, reached=reached, timeout=not (bumped or reached),
+            steps=steps, contacts=len(world.contacts) - n_contacts0, cell=cell)
+
+    def _drive_noisy(self, world: PhysicsWorld, commands: list[tuple[float, float, float]],
+                     nturn: int, rng: np.random.Generator | None) -> bool:
+        """One leg above ``exact``; True when it ended in a bump."""
+        fid, sub = self.fidelity, self.config.substeps
+        sigma, base = fid.wheel_noise, self.limits.wheel_base_m
+        traj = world.trajectory
+        for k, (vx, vy, w) in enumerate(commands):
+            e = rng.standard_normal(2) if sigma > 0.0 else (0.0, 0.0)
+            world.set_twist(*wheel_twist(vx, vy, w, world.pose[2], e[0], e[1], sigma, base))
+            turning = 0 < nturn and k <= nturn  # the turn and the stop after it
+            for _ in range(sub):  # each step guarded by its own cast
+                if (self._held_step(world, turning) if fid.carried_pose or world.resting
+                        else world.advance(1, traj)):
+                    return True
+        return False
+
+    def _held_step(self, world: PhysicsWorld, turning: bool) -> bool:
+        """One guarded step with carried pose, or of a robot resting against a surface;
+        True when a bump ended it.
+
+        While the robot rests against a surface (``world.resting``), a step that leaves it
+        deeper in (by more than 1e-12 m) is held (:meth:`PhysicsWorld.hold`): it keeps only
+        its motion along the surface, and on a drive (not while ``turning``) the part taken
+        away presses the bumper; at ``bumper_travel_m`` it is a bump, and the robot stays
+        where it was before that step. A step that leaves it touching nothing ends the
+        resting. Otherwise a contact begins when Chipmunk's narrow phase finds the disc, at
+        the pose the step leaves, touching a shape it did not touch at the step's start
+        (Chipmunk's own ``begin`` would fire at the pose before the hold).
+        """
+        before = world.touching_shapes() if world.resting else []
+        depth0 = world.deepest(before)
+        x0, y0, th0 = world.pose
+        world.before_step()
+        world.step(None, book=False)
+        if world.resting:
+            depth1 = world.deepest(world.touching_shapes())
+            if depth1 > depth0 + DEEPER_M:
+                into = world.hold(x0, y0)
+                if not turning:
+                    self._press += into
+                    if self._press >= self.fidelity.bumper_travel_m:  # the bumper reports
+                        world.place(x0, y0, th0, resting=True)
+                        world.trajectory.append(world.pose)
+                        world.record_contacts(world.touching_shapes())
+                        return True
+            elif depth1 <= 0.0:
+                world.resting = False
+        world.trajectory.append(world.pose)
+        known = {info.shape for info in before}
+        found = [info for info in world.touching_shapes() if info.shape not in known]
+        world.record_contacts(found)
+        return bool(found)

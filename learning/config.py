@@ -77,7 +77,7 @@ class MethodConfig:
     """Fields every method has. Episodes are 0-based; rewards are the env's."""
 
     name: ClassVar[str] = "?"  # paper/display name
-    cli: ClassVar[str] = "?"  # CLI name, the key in learning.registry.METHODS
+    cli: ClassVar[str] = "?"  # CLI name, the key in learning.methods.registry.METHODS
 
     eps: float = 0.1  # probability of a uniformly random action (epsilon-greedy)
     alpha: float = 0.1  # Q learning rate (step size on the TD error)

@@ -17,6 +17,11 @@ from typing import Protocol
 
 import numpy as np
 
+# the learners' actions, in order: up (+y), down (-y), left (-x), right (+x), as (dx, dy) in
+# cells. The world's own order is sim.grid.actions.ACTION_DELTAS; a model that carries its
+# order (``action_deltas``) is checked against this one where the two meet (geometry_of).
+ACTION_DELTAS = ((0, 1), (0, -1), (-1, 0), (1, 0))
+
 
 class TabularMDP(Protocol):
     """A deterministic episodic MDP over grid cells (see ``sim.grid.TabularModel``)."""
@@ -64,7 +69,12 @@ class Geometry:
 
 
 def geometry_of(model: TabularMDP) -> Geometry:
-    """The :class:`Geometry` of a tabular model (what a step agent on its env may know)."""
+    """The :class:`Geometry` of a tabular model (what a step agent on its env may know).
+    A model whose actions run in another order than the learners' is refused."""
+    deltas = getattr(model, "action_deltas", ACTION_DELTAS)
+    if tuple(map(tuple, deltas)) != ACTION_DELTAS:
+        raise ValueError(f"the model's actions {deltas} are not the learners' order "
+                         f"{ACTION_DELTAS} (up, down, left, right as (dx, dy))")
     return Geometry(coords=np.asarray(model.coords, dtype=np.float64), goal=int(model.goal),
                     bounds_m=tuple(float(b) for b in model.bounds_m),
                     n_states=int(model.next_state.shape[0]),

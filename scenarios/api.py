@@ -57,6 +57,7 @@ from scenarios.api_args import (
 from scenarios.runs.spec import WORLDS, ExperimentError, RunSpec
 from scenarios.values import Comparison, Grade, Optimum, Run
 from sim.errors import InputError
+from sim.physics.fidelity import PRESETS, Fidelity
 from sim.scenario import Cell, Scenario
 
 __all__ = ["Comparison", "Grade", "InputError", "Optimum", "Run", "compare", "grade",
@@ -90,7 +91,7 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
                       MAX_EPISODES, 300)
     seed = whole(fn, "seed", seed, 0, MAX_SEED, 0)
     rewards_text = rewards_arg(fn, rewards)
-    fid_text = fidelity_arg(fn, fidelity, world == "physics")
+    fid = fidelity_arg(fn, fidelity, world == "physics")
     overrides = settings_arg(fn, settings)
     start, goal = cell_arg(fn, "start", start), cell_arg(fn, "goal", goal)
     record_every = whole(fn, "record_every", record_every, 1, MAX_EPISODES, 10)
@@ -101,7 +102,7 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
 
     rec_path = record_arg(fn, record, sc.name, f"{name.replace(':', '.')}-{world}-s{seed}")
     spec = RunSpec(scenario, name, seed, episodes, world, overrides, start=start, goal=goal,
-                   rewards=rewards_text, fidelity=fid_text, s_starts=s_starts)
+                   rewards=rewards_text, fidelity=fid, s_starts=s_starts)
     rec = train_single(spec, sc, model, save=save, resume=resume, record=rec_path,
                        record_every=record_every, record_values_every=record_values_every)
     return Run.from_record(rec, None if rec_path is None else Path(rec_path))
@@ -140,7 +141,7 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
     episodes = whole(fn, "episodes", DEFAULT_EPISODES if episodes is None else episodes, 1,
                       MAX_EPISODES, 300)
     rewards_text = rewards_arg(fn, rewards)
-    fid_text = fidelity_arg(fn, fidelity, "physics" in worlds)
+    fid = fidelity_arg(fn, fidelity, "physics" in worlds)
     overrides = settings_arg(fn, settings)
     start, goal = cell_arg(fn, "start", start), cell_arg(fn, "goal", goal)
     if jobs is not None:
@@ -155,7 +156,7 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
 
     specs = make_specs(scenario, names, list(range(seed_base, seed_base + n_seeds)), episodes,
                        worlds, per_method, start=start, goal=goal, rewards=rewards_text,
-                       fidelity=fid_text, s_starts=s_starts)
+                       fidelity=fid, s_starts=s_starts)
     execute, kwargs = _backend(fn, backend, address, jobs, start_method)
     rec_path = record_arg(fn, record, scenario_name(scenario).rsplit("/", 1)[-1]
                        .removesuffix(".toml"), "compare")
@@ -242,19 +243,17 @@ def optimum(scenario: ScenarioLike, *, fidelity: Any = "exact", rewards: Any = N
     driving and cached on disk (``rnhql optimum`` says what it cost)."""
     fn = "optimum"
     scenario = scenario_arg(fn, scenario)
-    fid_text = fidelity_arg(fn, fidelity, True) or "exact"
+    fid = fidelity_arg(fn, fidelity, True) or PRESETS["exact"]
     sc, model = problem_of(fn, scenario, cell_arg(fn, "start", start), cell_arg(fn, "goal", goal),
                          rewards_arg(fn, rewards), None, ["physics"])
-    return _optimum(sc, model, fid_text)
+    return _optimum(sc, model, fid)
 
 
-def _optimum(sc: Scenario, model: Any, fid_text: str) -> Optimum:
+def _optimum(sc: Scenario, model: Any, fid: Fidelity) -> Optimum:
     from scenarios.sweep.run import optimum_at_fidelity
-    from sim.physics.fidelity import parse_fidelity
     from sim.physics.models.optimum import continuous_optimum_m
     from sim.physics.models.transition import physics_model
 
-    fid = parse_fidelity(fid_text)
     exact = physics_model(sc).optimal_route_length
     if fid.is_exact:
         v, p = (float(exact), 1.0) if exact >= 0 else (float("inf"), 0.0)
@@ -295,19 +294,17 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
     """
     fn = "grade"
     scenario = scenario_arg(fn, scenario)
-    fid_text = fidelity_arg(fn, fidelity, True) or "exact"
+    fid = fidelity_arg(fn, fidelity, True) or PRESETS["exact"]
     drives = whole(fn, "drives", drives, 1, MAX_DRIVES, 50)
     seed = whole(fn, "seed", seed, 0, MAX_SEED, 0)
     sc, model = problem_of(fn, scenario, cell_arg(fn, "start", start), cell_arg(fn, "goal", goal),
                          rewards_arg(fn, rewards), None, ["physics"])
     table = policy_table(fn, policy, model.n_states)
+    from learning.drivers.train import greedy_test
     from learning.plain.policy import policy_state
-    from learning.train import greedy_test
     from scenarios.runs.physics_grading import FINAL_TAG, Grader
     from scenarios.sweep.run import matches_optimum
-    from sim.physics.fidelity import parse_fidelity
 
-    fid = parse_fidelity(fid_text)
     grader = Grader(sc, fid)
     st = policy_state(table)
     n = 1 if fid.is_exact else drives
@@ -315,7 +312,7 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
                      else 0, measure_metres=True, keep_routes=True, keep_path=True)
     summary = r.summary()
     walk, _ = greedy_test(st, model)
-    opt = _optimum(sc, model, fid_text) if with_optimum else None
+    opt = _optimum(sc, model, fid) if with_optimum else None
     optimal = None
     if opt is not None and opt.expected_primitives is not None:
         if fid.is_exact:
@@ -338,8 +335,8 @@ def route(agent: str | Path, scenario: ScenarioLike, *, fidelity: Any = "exact",
           rewards: Any = None, drives: int = 50, seed: int = 0) -> Grade:
     """A saved agent (``train(..., save=...)``, ``rnhql train --save``) graded from S: its
     greedy policy through :func:`grade`."""
-    from learning.checkpoint import load_checkpoint
     from learning.compiled.readout import greedy_actions
+    from learning.drivers.checkpoint import load_checkpoint
     from learning.geometry import geometry_of
 
     scenario = scenario_arg("route", scenario)

@@ -5,7 +5,6 @@ naming the function, the argument and the fix (the command's flags are checked b
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -14,6 +13,7 @@ import numpy as np
 
 from scenarios.runs.spec import WORLDS, load
 from sim.errors import InputError
+from sim.physics.fidelity import PRESETS, Fidelity, parse_fidelity
 from sim.scenario import REWARD_SCHEMES, Cell, Rewards, Scenario
 
 DEFAULT_EPISODES = 3000  # the paper's
@@ -86,10 +86,9 @@ def rewards_arg(fn: str, rewards: Any) -> str | None:
     return rewards
 
 
-def fidelity_arg(fn: str, fidelity: Any, physics: bool) -> str | None:
-    """The fidelity as text (what a sweep's specs hold), checked; None: the scenario's own."""
-    from sim.physics.fidelity import PRESETS, Fidelity, parse_fidelity
-
+def fidelity_arg(fn: str, fidelity: Any, physics: bool) -> Fidelity | None:
+    """The fidelity, parsed once and checked: what a sweep's specs hold, carried to the
+    kernel as it is; None: the scenario's own."""
     if fidelity is None:
         return None
     if not physics:
@@ -97,22 +96,11 @@ def fidelity_arg(fn: str, fidelity: Any, physics: bool) -> str | None:
                    "add world='physics' (worlds=('grid', 'physics')), or drop fidelity")
     if isinstance(fidelity, Fidelity):
         fidelity.validate(f"scenarios.api.{fn}: fidelity")
-        if PRESETS.get(fidelity.name) == fidelity:
-            return fidelity.name
-        exact = Fidelity()
-        return ",".join(f"{f.name}={getattr(fidelity, f.name)}"
-                        for f in dataclasses.fields(Fidelity)
-                        if f.name != "name" and getattr(fidelity, f.name) != getattr(exact,
-                                                                                     f.name)) \
-            or "exact"
+        return fidelity
     if not isinstance(fidelity, str):
         raise err(fn, "fidelity", f"is a {type(fidelity).__name__}", "pass a rung's name ("
                    f"{', '.join(PRESETS)}), 'PRESET,knob=value', or a Fidelity")
-    try:
-        parse_fidelity(fidelity, f"scenarios.api.{fn}: fidelity")
-    except InputError:
-        raise
-    return fidelity
+    return parse_fidelity(fidelity, f"scenarios.api.{fn}: fidelity")
 
 
 def method_arg(fn: str, method: Any) -> str:
@@ -124,8 +112,8 @@ def method_arg(fn: str, method: Any) -> str:
 
     if isinstance(method, type):
         if issubclass(method, MethodConfig):
+            from learning.methods.registry import METHODS
             from learning.plain.learner import located_name
-            from learning.registry import METHODS
 
             name = method.cli if METHODS.get(method.cli) is method else located_name(method)
         else:
@@ -147,7 +135,7 @@ def method_arg(fn: str, method: Any) -> str:
 
 
 def methods_arg(fn: str, methods: Any) -> list[str]:
-    from learning.registry import comparison_methods
+    from learning.methods.registry import comparison_methods
 
     if methods is None:
         return list(comparison_methods())

@@ -87,14 +87,16 @@ class Rewards:
                 return replace(self, scheme=name)
         return replace(self, scheme="custom")
 
-    def of_moves(self, bumped, at_goal):
+    def of_moves(self, bumped, at_goal, moved=True):
         """The route problem's reward rule, for one move or an array of them: ``goal`` on
-        entering G, else ``bump`` when a contact began, else ``step``. Every world and model
-        reads it from here. (On the grid and at the ``exact`` fidelity a bump never ends in
-        G: the robot stays. With carried pose a robot can touch a wall on its way into G; the
-        move still reached G, and a model learner that stored it as "G, worth a bump" would
-        replay the goal as a penalty.)"""
-        return np.where(at_goal, self.goal, np.where(bumped, self.bump, self.step))
+        entering G, else ``bump`` when a contact began, else ``step`` for a move that left its
+        cell (``moved``), else 0 (a control period of ``rnhql/DiffDrive-v0`` that stayed in
+        its cell). Every world and model reads it from here. (On the grid and at the
+        ``exact`` fidelity a bump never ends in G: the robot stays. With carried pose a robot
+        can touch a wall on its way into G; the move still reached G, and a model learner
+        that stored it as "G, worth a bump" would replay the goal as a penalty.)"""
+        return np.where(at_goal, self.goal,
+                        np.where(bumped, self.bump, np.where(moved, self.step, 0.0)))
 
     def label(self) -> str:
         return f"{self.scheme} (goal {self.goal:g}, bump {self.bump:g}, free step {self.step:g})"

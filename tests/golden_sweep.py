@@ -1,6 +1,6 @@
 """The fixed sweep whose records must not change when code moves (behaviour unchanged).
 
-Every compared method (:func:`learning.registry.comparison_methods`), grid and physics
+Every compared method (:func:`learning.methods.registry.comparison_methods`), grid and physics
 (exact fidelity), 2 seeds, 100 episodes on ``paper-40`` with goal-only rewards; and the
 three model learners in physics at ``noisy`` (2 seeds, 30 episodes), so a change of the
 noisy world or its grading shows. The digests of these parts are also the behaviour
@@ -34,7 +34,7 @@ READOUT_KEYS = ("greedy_policy",)
 
 
 def sweep_specs() -> list[Any]:
-    from learning.registry import comparison_methods
+    from learning.methods.registry import comparison_methods
     from scenarios.sweep.run import make_specs
 
     return [*make_specs("paper-40", comparison_methods(), SEEDS, EPISODES, ("grid", "physics"),

@@ -182,7 +182,9 @@ def test_objects_stand_for_their_text(tmp_path):
     assert same_runs(dict(a.record), dict(b.record), ("key",)) == []  # (named by its path)
     g = api.grade(a.policy, "paper-40", fidelity=parse_fidelity("noisy,wheel_noise=0.1"),
                   drives=2, with_optimum=False)
-    assert g.fidelity.startswith("custom")
+    text = api.grade(a.policy, "paper-40", fidelity="noisy,wheel_noise=0.1", drives=2,
+                     with_optimum=False)
+    assert g == text and g.fidelity.startswith("noisy+ (wheel_noise=0.1")
 
 
 def test_a_plain_learner_without_greedy_is_refused_with_what_to_add():
@@ -223,7 +225,7 @@ def test_a_sweep_with_spawned_workers_runs_plain_and_external_methods():
     registers the compiled methods this process registered from outside."""
     import sys
 
-    from learning.registry import register, unregister
+    from learning.methods.registry import register, unregister
     from tests import test_new_method as mod
 
     register(mod.Throwaway, sys.modules[mod.__name__], compared=False)

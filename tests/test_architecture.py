@@ -8,6 +8,8 @@ imports, lazy ones inside functions included:
 - inside ``scenarios`` the subpackages are ranked ``cli`` > ``bench`` >
   ``studies`` > ``sweep`` > ``runs`` > ``recording`` > ``figures``: a module imports its
   own subpackage or lower ones only;
+- inside ``learning`` and ``sim.physics`` the rooms are ranked the same way
+  (:data:`ROOMS`): the package's own modules at the bottom, then each room in turn;
 - the module import graph has no cycle.
 """
 
@@ -23,6 +25,14 @@ SCENARIO_RANK = {"figures": 1, "recording": 2, "runs": 3, "sweep": 4, "studies":
 FORBIDDEN = {
     "sim": ("learning", "scenarios", "rerun", "matplotlib"),
     "learning": ("sim", "scenarios", "rerun", "matplotlib", "pymunk"),
+}
+
+
+# rooms of a package, bottom first: a module imports its own room or lower ones only (a
+# package's face, its ``__init__``, may hand on any of its rooms' names)
+ROOMS = {
+    "learning": ("", "parts", "plain", "methods", "compiled", "drivers"),
+    "sim.physics": ("", "reference", "kernel", "envs", "models"),
 }
 
 
@@ -73,6 +83,48 @@ def test_layers_never_import_upward():
     assert bad == [], "\n".join(sorted(bad))
 
 
+def room_of(mod: str, package: str) -> str | None:
+    """The room of ``package`` that ``mod`` stands in ("" for the package's own modules),
+    None outside the package or for the package's face."""
+    if not mod.startswith(package + "."):
+        return None
+    rest = mod[len(package) + 1:].split(".")
+    if len(rest) == 1 and not (REPO / Path(*mod.split("."))).is_dir():
+        return ""
+    return rest[0]
+
+
+def test_rooms_import_only_their_own_room_or_lower_ones():
+    bad = []
+    for package, order in ROOMS.items():
+        rank = {room: i for i, room in enumerate(order)}
+        for mod, deps in graph().items():
+            room = room_of(mod, package)
+            if room is None or mod.endswith(".__init__"):
+                continue
+            for dep in deps:
+                dep_room = room_of(dep, package)
+                if dep_room is not None and rank[dep_room] > rank[room]:
+                    bad.append(f"{mod} ({room or 'the package'}) imports {dep} ({dep_room})")
+    assert bad == [], "\n".join(sorted(bad))
+
+
+def test_every_room_is_ranked():
+    for package, order in ROOMS.items():
+        folder = REPO / Path(*package.split("."))
+        rooms = {p.name for p in folder.iterdir() if (p / "__init__.py").is_file()}
+        assert rooms == set(order) - {""}, package
+
+
+def test_no_folder_holds_more_than_twelve_modules():
+    """A room a reader takes in at a glance: a folder that grows past twelve modules is
+    split into rooms of its own."""
+    crowded = {str(d.relative_to(REPO)): n for pkg in PACKAGES
+               for d in [REPO / pkg, *(REPO / pkg).rglob("*")] if d.is_dir()
+               if (n := len(list(d.glob("*.py")))) > 12}
+    assert crowded == {}
+
+
 def test_every_scenarios_subpackage_is_ranked():
     subs = {p.name for p in (REPO / "scenarios").iterdir()
             if p.is_dir() and (p / "__init__.py").is_file()}
@@ -121,7 +173,7 @@ def test_the_checker_sees_a_cycle():
 def method_modules() -> set[str]:
     """The method modules of ``learning`` (``q_learning``, ``rnh_ql_plus``, ...): the
     registry's (a new method is added there, not here)."""
-    from learning.registry import FAMILY_OF_CONFIG
+    from learning.methods.registry import FAMILY_OF_CONFIG
 
     return {m.__name__.split(".")[2] for m in FAMILY_OF_CONFIG.values()
             if m.__name__.startswith("learning.methods.")}
@@ -152,7 +204,7 @@ def test_each_method_module_imports_no_other_method():
 
 
 def test_every_registered_method_declares_config_state_and_hooks():
-    from learning.registry import FAMILY_OF_CONFIG, HOOKS
+    from learning.methods.registry import FAMILY_OF_CONFIG, HOOKS
 
     for module in set(FAMILY_OF_CONFIG.values()):
         for attr in HOOKS:

@@ -319,7 +319,7 @@ def test_scenario_list_keeps_circles_and_blocked_cells_apart(capsys):
 
 
 def test_subcommand_help_lists_the_methods_and_examples(capsys):
-    from learning.registry import comparison_methods
+    from learning.methods.registry import comparison_methods
 
     with pytest.raises(SystemExit):
         main(["compare", "--help"])

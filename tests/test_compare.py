@@ -127,8 +127,8 @@ def test_atomic_writes_get_the_usual_file_mode(tmp_path):
 
     import numpy as np
 
-    from learning.checkpoint import Checkpoint, save_checkpoint
-    from learning.train import train_tabular
+    from learning.drivers.checkpoint import Checkpoint, save_checkpoint
+    from learning.drivers.train import train_tabular
     from scenarios.runs.spec import load, make_config
     from sim.files import atomic_write_text
 

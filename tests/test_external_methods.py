@@ -84,7 +84,7 @@ def test_a_state_numba_cannot_tell_apart_is_refused():
     import types
 
     from learning.methods import q_learning
-    from learning.registry import register
+    from learning.methods.registry import register
     from tests import test_new_method as good
 
     twin = types.ModuleType("twin")
@@ -99,7 +99,7 @@ def test_a_state_numba_cannot_tell_apart_is_refused():
 
 
 def test_the_package_methods_states_are_told_apart():
-    from learning.registry import FAMILY_OF_CONFIG, state_fingerprint
+    from learning.methods.registry import FAMILY_OF_CONFIG, state_fingerprint
 
     seen: dict[bytes, str] = {}
     for config, module in FAMILY_OF_CONFIG.items():
@@ -110,7 +110,7 @@ def test_the_package_methods_states_are_told_apart():
 def test_register_says_what_is_wrong_with_a_method_module():
     import types
 
-    from learning.registry import register
+    from learning.methods.registry import register
     from tests import test_new_method as good
 
     plain = types.ModuleType("plainhooks")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from learning.geometry import ACTION_DELTAS
 from learning.parts.free_space import (
     back_move,
     bfs_distances,
@@ -18,7 +19,7 @@ def grid_neighbours(n: int) -> np.ndarray:
     nb = np.full((n * n, 4), -1, np.int32)
     for s in range(n * n):
         x, y = s % n, s // n
-        for a, (dx, dy) in enumerate(((0, 1), (0, -1), (-1, 0), (1, 0))):
+        for a, (dx, dy) in enumerate(ACTION_DELTAS):
             if 0 <= x + dx < n and 0 <= y + dy < n:
                 nb[s, a] = (y + dy) * n + x + dx
     return nb

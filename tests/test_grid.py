@@ -65,7 +65,30 @@ def test_the_action_table_agrees_with_itself():
     )
 
     assert ACTION_NAMES == ("up", "down", "left", "right") and N_ACTIONS == 4
-    assert ACTION_DELTAS == ((0, 1), (0, -1), (-1, 0), (1, 0))  # the learners' order
+    from learning.geometry import ACTION_DELTAS as LEARNERS_ORDER
+
+    assert ACTION_DELTAS == LEARNERS_ORDER  # the world's order is the learners'
     for a, (dx, dy) in enumerate(ACTION_DELTAS):
         assert ACTION_HEADINGS[a] == math.atan2(dy, dx)
         assert ACTION_DELTAS[OPPOSITE[a]] == (-dx, -dy) and OPPOSITE[OPPOSITE[a]] == a
+
+
+def test_a_model_whose_actions_run_in_another_order_is_refused_by_the_learners():
+    import dataclasses
+
+    import pytest
+
+    from learning.geometry import geometry_of
+    from sim.grid import build_model
+    from sim.scenario_io import resolve_scenario
+
+    model = build_model(resolve_scenario("paper-40"))
+    geometry_of(model)  # the world's own order: accepted
+
+    class Swapped:
+        def __init__(self, m):
+            self.__dict__.update({f.name: getattr(m, f.name) for f in dataclasses.fields(m)})
+            self.action_deltas = ((0, 1), (0, -1), (1, 0), (-1, 0))
+
+    with pytest.raises(ValueError, match="not the learners' order"):
+        geometry_of(Swapped(model))

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from learning.geometry import ACTION_DELTAS
 from learning.methods.haql import rederive, rederive_after_wall
 
 
@@ -16,7 +17,7 @@ def grid_neighbours(nx: int, ny: int) -> np.ndarray:
     nb = np.full((nx * ny, 4), -1, np.int32)
     for x in range(nx):
         for y in range(ny):
-            for a, (dx, dy) in enumerate(((0, 1), (0, -1), (-1, 0), (1, 0))):
+            for a, (dx, dy) in enumerate(ACTION_DELTAS):
                 if 0 <= x + dx < nx and 0 <= y + dy < ny:
                     nb[x * ny + y, a] = (x + dx) * ny + y + dy
     return nb

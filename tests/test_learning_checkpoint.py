@@ -17,9 +17,9 @@ from learning import (
     train_tabular,
 )
 from learning.compiled.named_state import arrays
+from learning.drivers.train import EPISODE_FIELDS
 from learning.geometry import geometry_of
-from learning.registry import family_of
-from learning.train import EPISODE_FIELDS
+from learning.methods.registry import family_of
 from sim.grid import build_model
 from sim.scenario_io import resolve_scenario
 
@@ -266,7 +266,7 @@ def test_a_checkpoint_from_before_a_methods_added_fields_loads_them_fresh(
         tmp_path, paper50_model, method):
     """A field a method gained later (its ``ADDED``, here the bump reading) is absent from
     older files: they load with a fresh agent's value, and every other field as stored."""
-    from learning.registry import family_of
+    from learning.methods.registry import family_of
 
     m = paper50_model
     cfg = METHODS[method]()

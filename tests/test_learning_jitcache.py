@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from learning.compiled.jitcache import drop_stale_cache
+from learning.jitcache import drop_stale_cache
 
 
 def test_cache_dropped_on_source_change(tmp_path, monkeypatch):
@@ -47,7 +47,7 @@ def test_kernels_compile_at_O2_unless_the_user_says_otherwise():
 
 
 def test_kernels_cached_finds_numbas_folder_under_numba_cache_dir(tmp_path, monkeypatch):
-    from learning.compiled.jitcache import kernels_cached
+    from learning.jitcache import kernels_cached
 
     pkg = tmp_path / "src" / "learning"
     pkg.mkdir(parents=True)
@@ -68,7 +68,7 @@ def test_the_physics_cache_is_the_same_mechanism_function_for_function():
     mechanism; they differ only in their constants (which package, which kernel module)."""
     import inspect
 
-    import learning.compiled.jitcache as learning_cache
+    import learning.jitcache as learning_cache
     import sim.physics.jitcache as physics_cache
 
     for name in ("sources_digest", "drop_stale_cache", "kernel_cache_dirs", "_writable",

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from learning import METHODS, RNHQL, STQL, config_from_fields
-from learning.registry import FAMILY_OF_CONFIG, comparison_methods
+from learning.methods.registry import FAMILY_OF_CONFIG, comparison_methods
 
 
 def test_registry_names():
@@ -97,10 +97,10 @@ def test_haql_route_follows_what_it_learned_about_the_walls():
     first wall of zigzag-50 (G not reached); after training it is the optimal 212-move
     route. The static Manhattan heuristic never changes, so its route never reaches G."""
     from learning import HAQL
+    from learning.drivers.state import init_state
+    from learning.drivers.train import greedy_test, train_tabular
     from learning.geometry import geometry_of
-    from learning.state import init_state
     from learning.streams import streams
-    from learning.train import greedy_test, train_tabular
     from scenarios.runs.spec import load
 
     _, model = load("zigzag-50", None, None, "goal-only")

@@ -71,8 +71,8 @@ def test_readout_potential_is_the_potential_the_rules_shape_with():
 def test_optimistic_distances_are_free_space_bfs_then_go_round_a_seen_bump():
     """Before any move the optimistic model is the empty arena: BFS distance = Manhattan
     distance to G; after a bump on the way, the BFS goes round it."""
+    from learning.drivers.state import init_state
     from learning.parts.free_space import bfs_to_goal
-    from learning.state import init_state
     from scenarios.runs.spec import load
 
     _, m = load("paper-40", None, None, "goal-only")
@@ -93,9 +93,9 @@ def test_bfs_skipped_only_where_no_distance_changes_and_values_match_the_formula
     """Walls of zigzag-50 revealed in a random order: where distances_change says a new wall
     changes nothing, a full BFS agrees bit for bit; the cache of y filled in BFS order
     equals the closed form state by state. Both branches are taken."""
+    from learning.drivers.state import init_state
     from learning.methods.rnh_ql_plus.optimism import goal_reward, refresh_values
     from learning.parts.free_space import bfs_to_goal, distances_change
-    from learning.state import init_state
     from scenarios.runs.spec import load
 
     _, m = load("zigzag-50", None, None, "goal-only")
@@ -146,8 +146,8 @@ def test_potential_falls_toward_an_unseen_goal_under_the_paper_rewards():
     """With +1 per free move and G not reached yet, Phi must still fall with the distance to
     G (the stand-in goal reward beats wandering forever); a stand-in of 1 made it rise."""
     from learning.compiled.readout import potential
+    from learning.drivers.state import init_state
     from learning.methods.rnh_ql_plus.optimism import goal_reward
-    from learning.state import init_state
     from scenarios.runs.spec import load
 
     _, m = load("paper-40", None, None, "paper")

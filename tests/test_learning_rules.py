@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from learning import HAQL, PFHRL, RNHQL, RNQL, STQL, DynaQ, QLambda, QOpt, SarsaRS
-from learning.agent import make_agent
+from learning.drivers.agent import make_agent
 from learning.geometry import Geometry
 from learning.methods.haql import heuristic_actions
 from learning.methods.pfh_rl import pfh_potential

@@ -19,14 +19,15 @@ import numpy as np
 import pytest
 
 from learning import METHODS, geometry_of
-from learning.agent import make_agent
+from learning.drivers.agent import make_agent
+from learning.drivers.train import greedy_test
 from learning.parts.move_model import (
     never_worked,
     new_move_model,
     observe_outcome,
     replay_draws_failure,
 )
-from learning.train import greedy_test
+from sim.grid.actions import ACTION_DELTAS
 
 NX, NY = 7, 5
 WALL = {(3, 0), (3, 2), (3, 3)}
@@ -48,7 +49,7 @@ def door_world():
     nxt = np.zeros((n, 4), dtype=np.int32)
     rew = np.zeros((n, 4))
     for s, (x, y) in enumerate(cells):
-        for a, (dx, dy) in enumerate(((0, 1), (0, -1), (-1, 0), (1, 0))):
+        for a, (dx, dy) in enumerate(ACTION_DELTAS):
             tx, ty = x + dx, y + dy
             ok = 0 <= tx < NX and 0 <= ty < NY and (tx, ty) not in WALL and (x, y) not in WALL
             nxt[s, a] = sid(tx, ty) if ok else s
@@ -114,8 +115,8 @@ def test_optimistic_model_keeps_a_door_that_failed_free_and_a_wall_a_wall():
 
 
 def test_haql_blocks_a_move_while_bumps_are_its_most_likely_outcome():
+    from learning.drivers.state import init_state
     from learning.methods.haql import HAQL, observe
-    from learning.state import init_state
 
     st = init_state(HAQL(), geometry_of(door_world()), np.random.default_rng(0))
     fs = st.free

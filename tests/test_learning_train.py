@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from learning import HAQL, METHODS, RNHQL, STQL, geometry_of, init_state, train_tabular
-from learning.train import greedy_test, shortest_fraction
+from learning.drivers.train import greedy_test, shortest_fraction
+from sim.grid.actions import ACTION_DELTAS
 from sim.grid.planning import value_iteration
 
 
@@ -21,7 +22,7 @@ def tiny_grid():
     rew = np.zeros((9, 4))
     for s in range(9):
         x, y = s % nx, s // nx
-        for a, (dx, dy) in enumerate(((0, 1), (0, -1), (-1, 0), (1, 0))):
+        for a, (dx, dy) in enumerate(ACTION_DELTAS):
             tx, ty = x + dx, y + dy
             t = ty * nx + tx
             ok = 0 <= tx < nx and 0 <= ty < nx and t not in blocked and s not in blocked

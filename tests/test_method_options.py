@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from learning.registry import METHODS
+from learning.methods.registry import METHODS
 
 
 @pytest.mark.parametrize("cli", sorted(METHODS))

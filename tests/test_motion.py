@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from sim.grid.actions import ACTION_HEADINGS
+from sim.grid.actions import ACTION_DELTAS, ACTION_HEADINGS
 from sim.physics.drive_profiles import DriveLimits, ProfileTable, rate_limit
 from sim.physics.reference.controller import (
     PrimitiveController,
@@ -113,7 +113,7 @@ def test_primitive_lands_on_the_neighbouring_centre(action):
     cfg = PhysicsConfig()
     world = PhysicsWorld(EMPTY, cfg, (2.5, 2.5, 0.0))
     res = PrimitiveController(EMPTY, cfg).run(world, action)
-    dx, dy = [(0, 1), (0, -1), (-1, 0), (1, 0)][action]
+    dx, dy = ACTION_DELTAS[action]
     x, y, th = world.pose
     assert (x, y) == pytest.approx((2.5 + dx, 2.5 + dy), abs=1e-9)
     assert wrap_angle(th - ACTION_HEADINGS[action]) == pytest.approx(0.0, abs=1e-9)

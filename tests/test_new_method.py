@@ -5,8 +5,8 @@ shows in its results and summary.
 This module is the throwaway method's module: a config, a ``State`` of its own,
 ``init_state`` and the four hooks (Q-learning's rules, borrowed from
 :mod:`learning.methods.q_learning`, the template a new method starts from). The steps of
-:mod:`learning.registry`'s docstring, but for the row in the registry's table, which
-:func:`~learning.registry.register` adds here.
+:mod:`learning.methods.registry`'s docstring, but for the row in the registry's table, which
+:func:`~learning.methods.registry.register` adds here.
 """
 
 from __future__ import annotations
@@ -54,10 +54,10 @@ begin, exploit = q_learning.begin, q_learning.exploit
 def throwaway():
     """The method registered for one test, and gone again after it. Its kernels stay out of
     numba's on-disk cache by themselves (a method from outside the package:
-    :func:`learning.compiled.jitcache.guard_cache`)."""
+    :func:`learning.jitcache.guard_cache`)."""
     import sys
 
-    from learning.registry import register, unregister
+    from learning.methods.registry import register, unregister
 
     register(Throwaway, sys.modules[__name__])
     try:
@@ -67,7 +67,7 @@ def throwaway():
 
 
 def test_a_registered_method_runs_through_compare(throwaway, tmp_path, capsys):
-    from learning.registry import METHODS, comparison_methods
+    from learning.methods.registry import METHODS, comparison_methods
     from scenarios.cli import main
 
     assert comparison_methods()[-1] == throwaway  # compare's default list has it
@@ -91,7 +91,7 @@ def test_a_registered_method_runs_through_compare(throwaway, tmp_path, capsys):
 
 
 def test_unregister_leaves_the_registry_as_it_was(throwaway):
-    from learning.registry import METHODS, comparison_methods, unregister
+    from learning.methods.registry import METHODS, comparison_methods, unregister
 
     before = comparison_methods()
     unregister(throwaway)
@@ -101,7 +101,7 @@ def test_unregister_leaves_the_registry_as_it_was(throwaway):
     finally:
         import sys
 
-        from learning.registry import register
+        from learning.methods.registry import register
 
         register(Throwaway, sys.modules[__name__])  # for the fixture to remove
 
@@ -110,7 +110,7 @@ def test_register_refuses_a_taken_name_and_a_module_without_hooks(throwaway):
     import sys
     import types
 
-    from learning.registry import register
+    from learning.methods.registry import register
 
     with pytest.raises(ValueError, match="registered already"):
         register(Throwaway, sys.modules[__name__])

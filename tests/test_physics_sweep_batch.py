@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from learning.registry import METHODS
+from learning.methods.registry import METHODS
 from scenarios.runs.physics_batch import MAX_BATCH, plan_tasks, run_physics_batch
 from scenarios.runs.run import run_one
 from scenarios.runs.spec import RecordOptions, RunSpec

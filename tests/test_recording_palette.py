@@ -93,7 +93,7 @@ def test_ciede2000_matches_the_published_pairs(lab1, lab2, expected):
 
 
 def test_every_compared_method_has_its_own_colour():
-    from learning.registry import comparison_methods
+    from learning.methods.registry import comparison_methods
 
     assert set(comparison_methods()) <= set(METHOD_COLOURS)
     assert len(set(METHOD_COLOURS.values())) == len(METHOD_COLOURS)

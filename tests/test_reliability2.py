@@ -636,7 +636,7 @@ def test_a_very_long_scenario_name_records_under_a_short_file_name(tmp_path, mon
 
 # ------------------------------------------------------------------ 10: the compile notice
 def test_the_compile_notice_looks_where_numba_caches(tmp_path, monkeypatch):
-    from learning.compiled.jitcache import kernel_cache_dirs, kernels_cached
+    from learning.jitcache import kernel_cache_dirs, kernels_cached
 
     pkg = tmp_path / "learning"
     (pkg / "compiled" / "__pycache__").mkdir(parents=True)

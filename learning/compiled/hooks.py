@@ -2,7 +2,7 @@
 ``exploit``, ``end`` on any method's state.
 
 Each is a numba ``overload`` that, while compiling, looks up the module whose
-``State`` the argument is (:data:`learning.registry.FAMILY_OF_STATE`) and inlines
+``State`` the argument is (:data:`learning.methods.registry.FAMILY_OF_STATE`) and inlines
 that module's hook. So one source loop (the kernels, the step and batch agents,
 the greedy tests) compiles once per method with only that method's rules in it,
 and numba's on-disk cache (which cannot key on functions passed as arguments)
@@ -24,8 +24,8 @@ from numba import njit, types
 from numba.extending import overload
 
 from learning.compiled.generator_handle import generator_from
+from learning.methods.registry import FAMILY_OF_STATE
 from learning.parts.tally import end_tally
-from learning.registry import FAMILY_OF_STATE
 
 
 def _family(st):

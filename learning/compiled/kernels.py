@@ -4,10 +4,10 @@ Each loop is one source function that numba compiles once per method: the hooks
 it calls (:mod:`learning.compiled.hooks`) resolve to the method whose state is passed,
 so a compiled loop holds only that method's rules and a run compiles only the
 methods it uses. numba cannot read a clock, so wall time is measured from
-Python around calls of :func:`run_episodes` (see :mod:`learning.train`).
+Python around calls of :func:`run_episodes` (see :mod:`learning.drivers.train`).
 
 numba's cache sees only the defining file of each function, and these loops
-inline code from other modules: :mod:`learning.compiled.jitcache` drops the package's
+inline code from other modules: :mod:`learning.jitcache` drops the package's
 cache whenever any ``learning/*.py`` changed.
 """
 

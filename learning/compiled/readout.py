@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from learning.compiled.kernels import policy_table
-from learning.registry import family_of_state, n_states_of
+from learning.methods.registry import family_of_state, n_states_of
 
 
 def greedy_actions(st) -> np.ndarray:

@@ -62,7 +62,7 @@ class State(NamedTuple):
 
 
 # Added after checkpoints were written: a file without them loads the fresh values (no reward
-# seen yet), relearnt at the next stay and clean arrival (see learning.checkpoint).
+# seen yet), relearnt at the next stay and clean arrival (see learning.drivers.checkpoint).
 ADDED = ("reading.r_stay", "reading.r_clean")
 
 

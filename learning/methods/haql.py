@@ -48,7 +48,7 @@ HOOK = dict(cache=True, inline="always")
 COUNT_CAP = 1 << 30  # bumps minus arrivals saturate here (int32)
 BUMP_COST_CAP = 1 << 20  # a move's excess bumps in a route's cost (int64 sums stay finite)
 # Added after checkpoints were written: a file without them loads the fresh values (no reward
-# seen yet), relearnt at the next stay and clean arrival (see learning.checkpoint).
+# seen yet), relearnt at the next stay and clean arrival (see learning.drivers.checkpoint).
 ADDED = ("reading.r_stay", "reading.r_clean")
 
 

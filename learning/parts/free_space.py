@@ -17,9 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from learning.geometry import Geometry
-
-ACTION_DELTAS = ((0, 1), (0, -1), (-1, 0), (1, 0))  # the learners' actions: up, down, left, right
+from learning.geometry import ACTION_DELTAS, Geometry
 
 
 class FreeSpace(NamedTuple):

@@ -22,9 +22,10 @@ A learner may expose ``q`` (``float[n_states, n_actions]``); recordings then sho
 
 A learner is named where it lives, ``"mypkg.mymodule:MyLearner"``
 (``rnhql compare SCENARIO --methods rnh-ql+,mypkg.mymodule:MyLearner``), or passed as the
-class to :mod:`scenarios.api`. Its grid runs go through :func:`learning.plain.train.train_plain`,
-its physics runs through :class:`PlainBatchAgent` in the physics loop; its policy is
-graded as a :mod:`learning.plain.policy`.
+class to :mod:`scenarios.api`. Its grid runs go through
+:func:`learning.drivers.plain_train.train_plain`, its physics runs through
+:class:`PlainBatchAgent` in the physics loop; its policy is graded as a
+:mod:`learning.plain.policy`.
 """
 
 from __future__ import annotations
@@ -212,7 +213,7 @@ class PlainAgent:
 
 
 class PlainBatchAgent:
-    """N plain learners in the physics loop, with :class:`learning.batch_agent.BatchAgent`'s
+    """N plain learners in the physics loop, with :class:`learning.drivers.batch_agent.BatchAgent`'s
     calls: each learner draws from its own stream, and each run's starts from its own start
     stream, in the order the compiled agents draw them."""
 

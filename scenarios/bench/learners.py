@@ -13,7 +13,7 @@ Run: ``python -m scenarios.bench.learners`` (prints JSON). Measures, on paper-50
 * env steps/s of the step-by-step rnh-ql agent driving GridRoute-v0 through
   gymnasium (the driver the physics world uses);
 * seconds per seed of the paper protocol (rnh-ql, 3000 episodes, greedy test
-  every 10 episodes) through :func:`learning.train.train_tabular`;
+  every 10 episodes) through :func:`learning.drivers.train.train_tabular`;
 * env steps/s of rnh-ql+ and dyna-q at several planning budgets;
 * JIT cold start: a fresh process with an empty ``NUMBA_CACHE_DIR`` trains one
   episode of rnh-ql (compile), then a second fresh process does the same with
@@ -176,7 +176,7 @@ def cold_start_s() -> dict[str, float]:
 def train_steps_per_s(method: str, model, episodes: int = EPISODES, seeds: int = 3,
                       **fields) -> float:
     """Median over seeds 0..seeds-1 of env steps / kernel seconds of
-    :func:`learning.train.train_tabular` (greedy tests included, JIT warm)."""
+    :func:`learning.drivers.train.train_tabular` (greedy tests included, JIT warm)."""
     cfg = METHODS[method](**fields)
     train_tabular(cfg, model, 2, np.random.default_rng(0))  # warm the JIT
     rates = []

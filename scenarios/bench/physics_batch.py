@@ -85,7 +85,7 @@ def learning(episodes: int = 300, seeds: int = 10, scenario: str = "paper-50",
              fidelity: str | None = None) -> dict:
     """One batch of ``len(methods) x seeds`` runs, as a physics compare trains them
     (``methods``: by default those ``rnhql compare`` runs)."""
-    from learning.registry import comparison_methods
+    from learning.methods.registry import comparison_methods
     from learning.streams import streams
     from scenarios.runs.physics import RunGroup, train_physics_runs
     from scenarios.runs.spec import load, make_config

@@ -6,7 +6,7 @@ docs/python-api.md renders). On ``paper-50``, goal-only rewards:
 
 * grid: env steps/s of the Python port of ST-QL (``tests/plain_learners/st_ql.py``, the
   learner every per-run figure of ``st-ql`` is tested against) through
-  :func:`learning.plain.train.train_plain`, and of the compiled ``st-ql`` through the fused
+  :func:`learning.drivers.plain_train.train_plain`, and of the compiled ``st-ql`` through the fused
   kernel, the same ``--episodes`` from scratch, best of ``--repeats``;
 * physics at ``exact``: a sweep of ``--seeds`` compiled ``st-ql`` runs alone, then the
   same sweep with as many runs of the Python port beside them (one worker): the compiled
@@ -39,9 +39,9 @@ def _port_importable() -> None:
 
 def grid_steps_per_s(method: str, episodes: int, repeats: int) -> float:
     """Best-of-``repeats`` env steps/s of a fresh learner trained ``episodes`` episodes."""
+    from learning.drivers.plain_train import train_plain
+    from learning.drivers.train import train_tabular
     from learning.plain.learner import is_plain
-    from learning.plain.train import train_plain
-    from learning.train import train_tabular
     from scenarios.runs.spec import load, make_config
 
     _, model = load(SCENARIO, rewards="goal-only")

@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from learning.train import train_tabular
+from learning.drivers.train import train_tabular
 from scenarios.recording.hooks import GridRecorder, RecordPlan
 from scenarios.recording.recorder import Recorder
 from scenarios.runs.spec import load, make_config

@@ -15,7 +15,7 @@ import sys
 import threading
 from collections.abc import Sequence
 
-from learning.registry import comparison_methods
+from learning.methods.registry import comparison_methods
 from scenarios.cli import (
     bench,
     catalog,
@@ -64,7 +64,7 @@ class _Help(argparse.HelpFormatter):
 
 def _methods_epilog(examples: str) -> str:
     """A subcommand's help ends with the methods it can run and examples."""
-    from learning.registry import comparison_methods
+    from learning.methods.registry import comparison_methods
 
     return (f"methods: {', '.join(comparison_methods())} (docs/methods.md)\n\n"
             f"examples:\n  {examples}")
@@ -271,7 +271,7 @@ def main(argv: Sequence[str] | None = None) -> int:
               "--resume keeps the runs already finished", file=sys.stderr)
         return 1
     except Exception as err:
-        from learning.checkpoint import CheckpointError
+        from learning.drivers.checkpoint import CheckpointError
 
         if isinstance(err, CheckpointError):
             print(f"rnhql: error: {err}", file=sys.stderr)

@@ -22,6 +22,7 @@ from scenarios.runs.spec import (  # noqa: F401  (physics_budget: re-exported)
 )
 from scenarios.sweep.outdir import RECORD_DEFAULT
 from sim.errors import InputError
+from sim.physics.fidelity import Fidelity, parse_fidelity
 
 if TYPE_CHECKING:
     from sim.grid import TabularModel
@@ -146,9 +147,10 @@ def add_training_args(p: argparse.ArgumentParser, worlds: str, sweep: bool = Fal
                    else "override a config field, e.g. --set alpha=0.2 (repeatable)")
 
 
-def fidelity_arg(args: argparse.Namespace) -> str | None:
-    """``--fidelity`` checked now (one line, exit 2 on a bad value); None for exact."""
-    from sim.physics.fidelity import parse_fidelity
+def fidelity_arg(args: argparse.Namespace) -> Fidelity | None:
+    """``--fidelity``, parsed and checked now (one line, exit 2 on a bad value): the one
+    parse of the flag, its :class:`Fidelity` carried from here to the kernel; None for
+    ``exact`` (the scenario's own ``[physics]`` table then applies)."""
 
     text = getattr(args, "fidelity", None)
     if text is None:
@@ -159,7 +161,7 @@ def fidelity_arg(args: argparse.Namespace) -> str | None:
                        f"only, and this run is in {worlds!r}",
                        "add --world physics (or grid,physics), or drop --fidelity")
     fid = parse_fidelity(text)
-    return None if fid.is_exact and fid.name == "exact" else text
+    return None if fid.is_exact and fid.name == "exact" else fid
 
 
 def add_record_args(p: argparse.ArgumentParser) -> None:
@@ -322,7 +324,7 @@ class Problem:
     goal: Cell | None
     rewards: str | None  # rewards_arg
     s_starts: float | None  # s_starts_arg
-    fidelity: str | None  # fidelity_arg
+    fidelity: Fidelity | None  # fidelity_arg
     sc: Scenario
     model: TabularModel
 
@@ -377,7 +379,7 @@ def compile_notice(n_methods: int, physics: bool = False) -> None:
     """Say so when the numba kernels are not on disk yet: the first run compiles them
     (a minute or more on 2 cores) before any progress can show. ``physics``: the command
     drives the physics world, whose kernels compile on its first use (tens of seconds)."""
-    from learning.compiled.jitcache import kernels_cached
+    from learning.jitcache import kernels_cached
     from sim.physics.jitcache import kernels_cached as physics_cached
 
     parts = []

@@ -30,7 +30,7 @@ from sim.errors import InputError
 def cmd_compare(args: argparse.Namespace) -> int:
     """Parse, check every flag (errors name the flag), run :func:`scenarios.api.compare`,
     print its summary."""
-    from learning.registry import comparison_methods
+    from learning.methods.registry import comparison_methods
     from scenarios import api
 
     pb = problem_arg(args)  # the scenario checked and loaded before any work

@@ -18,9 +18,9 @@ from scenarios.sweep.outdir import check_output_file, record_path
 
 
 def cmd_route(args: argparse.Namespace) -> int:
-    from learning.checkpoint import load_checkpoint
+    from learning.drivers.checkpoint import load_checkpoint
+    from learning.drivers.train import greedy_test
     from learning.geometry import geometry_of
-    from learning.train import greedy_test
     from scenarios.figures.routes import ascii_routes, route_png
     from scenarios.runs.spec import layout_digest
     from sim.grid.planning import bfs_route
@@ -46,7 +46,7 @@ def cmd_route(args: argparse.Namespace) -> int:
         from sim.physics.fidelity import parse_fidelity
         from sim.physics.models.rollouts import drive_policy
 
-        fid = parse_fidelity(pb.fidelity or sc.physics)
+        fid = pb.fidelity or parse_fidelity(sc.physics)
         n = 1 if fid.is_exact else FINAL_ROLLOUTS
         driven = drive_policy(sc, greedy_actions(ckpt.state), fid, n, 0, FINAL_TAG,
                               measure_metres=True, keep_routes=True, keep_path=True)

@@ -50,11 +50,11 @@ def cmd_train(args: argparse.Namespace) -> int:
     values_every = positive(args.record_values_every, "--record-values-every")
     record = record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
     world = (args.world if args.world == "grid" else
-             f"physics at fidelity {parse_fidelity(pb.fidelity or sc.physics).label}")
+             f"physics at fidelity {(pb.fidelity or parse_fidelity(sc.physics)).label}")
     print(f"{cfg.name} on {sc.name} ({world}), seed {args.seed}, {args.episodes} episodes, "
           f"rewards {sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
     if args.resume:  # say what it resumes from (the checks run again in the run itself)
-        from learning.checkpoint import load_checkpoint
+        from learning.drivers.checkpoint import load_checkpoint
         from learning.geometry import geometry_of
 
         ck = load_checkpoint(args.resume, args.method, model.n_states, geometry_of(model))

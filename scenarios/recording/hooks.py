@@ -79,7 +79,7 @@ class ChunkLogger:
 
 
 class GridRecorder:
-    """A :class:`learning.train.TrainObserver` that records a fused-kernel run."""
+    """A :class:`learning.drivers.train.TrainObserver` that records a fused-kernel run."""
 
     def __init__(self, rec: Recorder, plan: RecordPlan) -> None:
         self.rec, self.plan = rec, plan

@@ -4,7 +4,7 @@ Every physics run, alone or one of a sweep's, recorded or not, is trained by
 :func:`train_physics_runs`: the runs are the sub-envs of one
 :class:`sim.physics.envs.vector.PhysicsRouteVectorEnv` (N robots in one Pymunk Space; a single
 run is ``num_envs=1``), their learners the rows of one
-:class:`learning.batch_agent.BatchAgent` per method and config. The loop is CleanRL's
+:class:`learning.drivers.batch_agent.BatchAgent` per method and config. The loop is CleanRL's
 ``act -> step -> update``; the route problem's rules (reward, termination at G, the time
 limit, each run's noise stream) are the env's. The env runs with autoreset ``DISABLED``:
 the loop resets a run's sub-env when its episode ends, with a start cell drawn from the
@@ -32,10 +32,10 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
-from learning.agent import StepAgent
-from learning.batch_agent import BatchAgent
 from learning.compiled.generator_handle import handles
 from learning.compiled.readout import greedy_actions
+from learning.drivers.agent import StepAgent
+from learning.drivers.batch_agent import BatchAgent
 from learning.geometry import geometry_of
 from learning.plain.learner import PlainBatchAgent, is_plain
 from scenarios.runs.physics_grading import FinalGrade, Grader

@@ -54,8 +54,8 @@ def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
 
 def in_python(method: str) -> bool:
     """Whether ``method`` is a plain-Python learner (:mod:`learning.plain.learner`)."""
+    from learning.methods.registry import is_located
     from learning.plain.learner import PlainConfig
-    from learning.registry import is_located
     from scenarios.runs.spec import method_class
 
     return is_located(method) and issubclass(method_class(method), PlainConfig)

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from learning.compiled.readout import greedy_actions
-from learning.train import epsilon_route_lengths, greedy_test, shortest_fraction
+from learning.drivers.train import epsilon_route_lengths, greedy_test, shortest_fraction
 from sim.physics.fidelity import Fidelity
 from sim.physics.models.rollouts import Rollouts, drive_policies, drive_policy, rollout_env
 from sim.physics.models.transition import physics_model
@@ -47,7 +47,7 @@ FINAL_ROLLOUTS = 50  # drives of the final policy above exact
 FINAL_BATCH = 16  # final policies above exact driven together, one env [policies]
 FINAL_TAG = 1 << 40  # the final policy's rollout streams (periodic tests use the episode)
 EPSILON_TAG = (1 << 40) + 1  # the epsilon-greedy test's rollout streams
-EPSILON_ROLLOUTS = 20  # as learning.train.epsilon_route_lengths
+EPSILON_ROLLOUTS = 20  # as learning.drivers.train.epsilon_route_lengths
 
 
 @dataclass

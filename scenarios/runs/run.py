@@ -68,10 +68,10 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
 def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder: Any = None,
            plan: Any = None) -> RunOutcome:
     """A grid run (physics runs go through :mod:`scenarios.runs.physics_batch`)."""
+    from learning.drivers.plain_train import train_plain
+    from learning.drivers.train import epsilon_route_lengths, train_tabular
     from learning.plain.learner import is_plain
-    from learning.plain.train import train_plain
     from learning.streams import streams
-    from learning.train import epsilon_route_lengths, train_tabular
 
     rs = streams(spec.seed)  # starts, learner, evaluation: independent (common random numbers)
     rng = rs.learner

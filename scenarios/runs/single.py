@@ -31,11 +31,11 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
                  record: str | None = None, record_every: int = 10,
                  record_values_every: int = 300) -> dict[str, Any]:
     """Train ``spec`` (its scenario already loaded as ``sc``, ``model``); its record."""
-    from learning.checkpoint import Checkpoint, checkpoint_bytes, load_checkpoint
+    from learning.drivers.checkpoint import Checkpoint, checkpoint_bytes, load_checkpoint
+    from learning.drivers.plain_train import train_plain
+    from learning.drivers.train import epsilon_route_lengths, train_tabular
     from learning.geometry import geometry_of
     from learning.plain.learner import is_plain
-    from learning.plain.train import train_plain
-    from learning.train import epsilon_route_lengths, train_tabular
 
     cfg = make_config(spec.method, spec.overrides)
     plain = is_plain(cfg)

@@ -10,6 +10,7 @@ Ray produce the same records for the same seeds.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import lru_cache
@@ -19,6 +20,7 @@ import numpy as np
 
 from sim.errors import InputError
 from sim.grid import TabularModel, build_model
+from sim.physics.fidelity import Fidelity, parse_fidelity
 from sim.scenario import Cell, Scenario, rewards_from_text, validate_shape
 from sim.scenario_io import resolve_scenario
 
@@ -61,10 +63,15 @@ class RunSpec:
     rewards: str | None = None  # --rewards: a scheme name or goal=..,bump=..,step=.. (None: the
     #                             scenario's own)
     drive_final: bool = False  # grid runs: also drive the final greedy policy in physics
-    fidelity: str | None = None  # --fidelity of the physics world (None: exact)
+    fidelity: Fidelity | None = None  # --fidelity of the physics world (None: the
+    #   scenario's own [physics] table, else exact); text is parsed once, here
     s_starts: float | None = None  # --s-starts: share of episodes starting at S (None: the
     #                                scenario's own s_start_share)
     recording: RecordOptions | None = None  # None: not recorded (never part of the key)
+
+    def __post_init__(self) -> None:
+        if isinstance(self.fidelity, str):  # a study's "noisy": the one parse of the text
+            object.__setattr__(self, "fidelity", parse_fidelity(self.fidelity))
 
     @property
     def scenario_name(self) -> str:
@@ -94,13 +101,12 @@ class RunSpec:
                 f"{cells}|{self.world}{fid}|{self.method}{extra}|t{self.test_every}"
                 f"|s{self.seed}|e{self.episodes}")
 
-    @property
-    def fidelity_spec(self):  # -> sim.physics.fidelity.Fidelity
+    @functools.cached_property
+    def fidelity_spec(self) -> Fidelity:
         """--fidelity, else the scenario's ``[physics]`` table, else exact."""
-        from sim.physics.fidelity import parse_fidelity
-
-        text = self.fidelity if self.fidelity is not None else load(*self.problem)[0].physics
-        return parse_fidelity(text)
+        if self.fidelity is not None:
+            return self.fidelity
+        return parse_fidelity(load(*self.problem)[0].physics)
 
 
 @lru_cache(maxsize=8)
@@ -154,8 +160,8 @@ def layout_digest(scenario: str | Scenario, start: Cell | None = None,
 
 def method_class(method: str) -> type:
     """The config class of ``method``: a registered name, or ``module:Class`` (a compiled
-    method's config or a plain-Python learner: :func:`learning.registry.config_class`)."""
-    from learning.registry import config_class
+    method's config or a plain-Python learner: :func:`learning.methods.registry.config_class`)."""
+    from learning.methods.registry import config_class
 
     try:
         return config_class(method)
@@ -175,7 +181,7 @@ def settable_fields(cls: type) -> list[str]:
 def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
     """The method's frozen config with paper defaults, fields overridden by name."""
     from learning.config import LIMITS, limit_problem
-    from learning.registry import METHODS
+    from learning.methods.registry import METHODS
 
     cls = method_class(method)
     names = {f.name: f for f in dataclasses.fields(cls) if f.name in settable_fields(cls)}
@@ -235,7 +241,7 @@ class RunOutcome:
     @classmethod
     def of(cls, result: Any, epsilon_route_lengths: np.ndarray,
            world_extras: dict[str, Any] | None = None) -> RunOutcome:
-        """From a grid :class:`learning.train.TrainResult` or a physics
+        """From a grid :class:`learning.drivers.train.TrainResult` or a physics
         :class:`scenarios.runs.physics.PhysicsTrainResult` (which carries its own extras)."""
         from learning.compiled.readout import greedy_actions
 

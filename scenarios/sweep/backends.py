@@ -233,7 +233,7 @@ def _init_worker(counter: Any = None, parent: int | None = None,
     _ignore_sigint(parent)
     work.share(counter)
     if external:
-        from learning.registry import restore_external
+        from learning.methods.registry import restore_external
 
         restore_external(external)
 
@@ -343,7 +343,7 @@ def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector,
     counter = getattr(col.progress, "counter", None)
     import multiprocessing
 
-    from learning.registry import EXTERNAL
+    from learning.methods.registry import EXTERNAL
 
     context = None if start_method is None else multiprocessing.get_context(start_method)
     if context is not None and context.get_start_method() != "fork":

@@ -50,6 +50,7 @@ from scenarios.sweep.stop import (
     merge_stopped,
     removed_if_left_empty,
 )
+from sim.physics.fidelity import Fidelity
 
 __all__ = ["PARTIAL", "SweepRecording", "finished_compare", "gather_parts", "interrupted",
            "make_specs", "read_partial", "run_label", "run_sweep", "with_recording"]
@@ -68,7 +69,7 @@ Overrides = tuple[tuple[str, float], ...]
 def make_specs(scenario: str, methods: Sequence[str], seeds: Sequence[int], episodes: int,
                worlds: Sequence[str], overrides: Overrides | dict[str, Overrides] = (),
                start=None, goal=None, drive_final: bool = False,
-               rewards: str | None = None, fidelity: str | None = None,
+               rewards: str | None = None, fidelity: Fidelity | str | None = None,
                s_starts: float | None = None) -> list[RunSpec]:
     """One spec per world x method x seed; ``overrides`` for all methods, or per method."""
     def of(m: str) -> Overrides:

@@ -48,6 +48,11 @@ class TabularModel:
         return int(self.next_state.shape[0])
 
     @property
+    def action_deltas(self) -> tuple[tuple[int, int], ...]:
+        """(dx, dy) of each action, in order (the learners check it: learning.geometry)."""
+        return ACTION_DELTAS
+
+    @property
     def n_actions(self) -> int:
         return int(self.next_state.shape[1])
 
@@ -79,9 +84,9 @@ def build_model(sc: Scenario) -> TabularModel:
     next_state = np.where(ok, states[:, None] + deltas[None, :], states[:, None]).astype(np.int32)
     goal = disc.index(*sc.goal)
     rw = sc.rewards
-    reward = np.where(ok, rw.step, rw.bump)
-    reward[next_state == goal] = rw.goal
-    reward[goal] = 0.0
+    # a blocked move is a bump and stays put, so it never enters G
+    reward = np.asarray(rw.of_moves(bumped=~ok, at_goal=next_state == goal), dtype=np.float64)
+    reward[goal] = 0.0  # G is terminal: nothing is earned from it
     terminal = np.zeros(n, dtype=bool)
     terminal[goal] = True
     next_state[goal] = goal

@@ -2,8 +2,9 @@
 
 The package's best idea is the split between an **oracle** and a **fast path**: every
 fidelity knob is first written in the reference world, every step through Chipmunk, and
-the compiled kernel is tested against it (``tests/test_physics_kernel*.py``,
-``tests/test_physics_batch.py``) before anything learns on it.
+the compiled kernel is tested against it
+(``tests/test_physics_batch.py::test_batch_robot_equals_the_reference_world``) before
+anything learns on it.
 
 - here: :mod:`~sim.physics.fidelity` (the ladder of named presets, each knob in SI),
   :mod:`~sim.physics.static` (collision types, :class:`~sim.physics.static.PhysicsConfig`,

@@ -7,7 +7,7 @@ package every source (subpackages included) is hashed and, if the hash differs f
 stamp in ``__pycache__``, the package's ``.nbi``/``.nbc`` files are deleted (numba
 recompiles on demand).
 
-The same mechanism as :mod:`learning.compiled.jitcache`, function for function: ``sim``
+The same mechanism as :mod:`learning.jitcache`, function for function: ``sim``
 may not import ``learning`` nor the other way round, so the two copies are held equal by
 ``tests/test_learning_jitcache.py`` instead.
 """

@@ -52,7 +52,7 @@ def where_it_stops(route: list[int], distance: np.ndarray) -> int:
 
 
 def describe(seed: int, result, model, state) -> str:
-    from learning.train import greedy_test
+    from learning.drivers.train import greedy_test
 
     dist = np.asarray(model.distance_to_goal)
     length, route = greedy_test(state, model)
@@ -72,7 +72,7 @@ def describe(seed: int, result, model, state) -> str:
                  f"{int(acted[route[:k + 1]].sum())}/{k + 1} cells of the walk acted in")
     free_space = getattr(state, "free", None)
     if free_space is not None:
-        from learning.registry import family_of
+        from learning.methods.registry import family_of
 
         nb, blocked, fd = free_space.neighbour, free_space.blocked, free_space.distance
         a = int(family_of(result.config).exploit(state, cell))
@@ -90,8 +90,8 @@ def main(argv: list[str] | None = None) -> int:
         from scenarios.artifacts import check_artifact_name
 
         check_artifact_name(parser_of(Args, __doc__), args.artifact)
+    from learning.drivers.train import train_tabular
     from learning.streams import streams
-    from learning.train import train_tabular
     from scenarios.runs.spec import load, make_config
     from scenarios.studies.maps.heldout import method_of, share_of, write_problem
 

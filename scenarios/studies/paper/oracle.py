@@ -21,13 +21,13 @@ from pathlib import Path
 import numpy as np
 
 from learning.compiled.kernels import run_episodes
+from learning.drivers.state import init_state
+from learning.drivers.train import KERNEL_OUT, greedy_test
 from learning.geometry import geometry_of
 from learning.methods.pfh_rl import PFHRL
 from learning.metrics import episodes_to_stable_optimal
 from learning.parts.rbf import rbf_features
-from learning.state import init_state
 from learning.streams import streams
-from learning.train import KERNEL_OUT, greedy_test
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
 from scenarios.studies.args import script_parser

@@ -21,7 +21,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from learning.registry import comparison_methods
+from learning.methods.registry import comparison_methods
 from scenarios.studies.args import script_parser
 from scenarios.sweep.backends import Progress, run_local, run_ray
 from scenarios.sweep.run import make_specs, run_sweep

@@ -22,7 +22,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from learning.registry import comparison_methods
+from learning.methods.registry import comparison_methods
 from scenarios.runs.spec import load
 from scenarios.studies.args import script_parser
 from scenarios.studies.paper.reward_facts import RewardFacts, facts_markdown, reward_facts

@@ -237,16 +237,8 @@ class DiffDriveEnv(SpecOwnLimit, gym.Env):
         cell = self.disc.state_of(x, y)
         began = len(world.contacts) - self._contacts_before
         terminated = cell == self.model.goal
-        rw = self.rewards
         in_contact = began > 0 or world.touching()
-        if terminated:
-            reward = rw.goal
-        elif in_contact:
-            reward = rw.bump
-        elif cell != self._cell:
-            reward = rw.step
-        else:
-            reward = 0.0
+        reward = self.rewards.of_moves(in_contact, terminated, cell != self._cell)
         self._cell = cell
         self._elapsed += 1
         if self._trail is not None:

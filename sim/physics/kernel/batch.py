@@ -41,7 +41,7 @@ from sim.physics.fidelity import Fidelity
 from sim.physics.kernel import primitive as K
 from sim.physics.kernel.narrow_phase import contact_buffer
 from sim.physics.kernel.readouts import outcome, path_lengths
-from sim.physics.kernel.state import ROBOT, Geometry, Params, Scratch, Status, by_name
+from sim.physics.kernel.state import ROBOT, Geometry, Scratch, Status, by_name, params_of
 from sim.physics.kernel.sweep import static_geometry
 from sim.physics.reference.controller import PrimitiveOutcome
 from sim.physics.static import (
@@ -109,14 +109,12 @@ class RouteBatch:
         self.geometry = g = static_geometry(sc)
         pivot, gear = robot_bodies(sc, cfg, x0, y0, 0.0)[3:]  # the joints' force limits
         body = self.bodies[0]
-        self.params = Params(
-            cfg.dt_s, cfg.substeps, cfg.control_period_s, cfg.tolerance_m, cfg.tolerance_rad,
-            timeout_steps, cfg.contact_depth_m, pivot.max_force * cfg.dt_s / body.mass,
-            gear.max_force * cfg.dt_s / body.moment, self.cell_m, self.nx, self.ny, self.radius_m,
-            lim.wheel_base_m, fid.wheel_noise, fid.carried_pose, fid.bumper_travel_m,
-            fid.biased, fid.open_loop, fid.localisation, fid.odometry_rot_rot,
-            fid.odometry_rot_trans, fid.odometry_trans_trans, fid.odometry_trans_rot,
-            fid.fix_every, fid.fix_sigma_m, fid.fix_sigma_rad)
+        self.params = params_of(
+            fid, dt=cfg.dt_s, substeps=cfg.substeps, period=cfg.control_period_s,
+            tol_m=cfg.tolerance_m, tol_rad=cfg.tolerance_rad, timeout_steps=timeout_steps,
+            depth_m=cfg.contact_depth_m, dv_max=pivot.max_force * cfg.dt_s / body.mass,
+            dw_max=gear.max_force * cfg.dt_s / body.moment, cell_m=self.cell_m, nx=self.nx,
+            ny=self.ny, radius_m=self.radius_m, wheel_base_m=lim.wheel_base_m)
         self.profiles = prof
         self.static = Geometry(g.circles, g.walls, g.boxes, g.start, g.items)
         n_s = self.nx * self.ny

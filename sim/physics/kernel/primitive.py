@@ -123,9 +123,9 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
     along within 10 um of parallel.
     """
     p, prof, g, s = Params(*pt), Profiles(*prof_t), Geometry(*geo_t), Scratch(*st)
-    noisy = p.wheel_noise > 0.0 or p.carried or p.biased or p.open_loop or p.localised
-    fixes = p.localised and p.fix_every > 0
-    normals = (2 if p.wheel_noise > 0.0 else 0) + (3 if p.localised else 0)  # per command
+    noisy = p.wheel_noise > 0.0 or p.carried_pose or p.biased or p.open_loop or p.localisation
+    fixes = p.localisation and p.fix_every > 0
+    normals = (2 if p.wheel_noise > 0.0 else 0) + (3 if p.localisation else 0)  # per command
     for i in range(robots.shape[0]):
         if not active[i]:
             continue
@@ -177,7 +177,7 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
                             if p.wheel_noise > 0.0:
                                 e_left, e_right = noise[i, j], noise[i, j + 1]
                                 j += 2
-                            if p.localised:  # this period's odometry noise
+                            if p.localisation:  # this period's odometry noise
                                 rb.o1, rb.o2, rb.o3 = noise[i, j], noise[i, j + 1], noise[i, j + 2]
                                 j += 3
                             npos[i] = j
@@ -212,13 +212,13 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
                         depth0 = depth_at(p, g, s, rb.x, rb.y) if held else 0.0
                         integrate(rb, vx, vy, p)
                         check = hit  # the sweep met a surface: ask Chipmunk
-                        if p.localised:  # the wheels turned (a hold slides them; below)
+                        if p.localisation:  # the wheels turned (a hold slides them; below)
                             moved, yaw = math.hypot(vx, vy) * p.dt, rb.th - rb.pth
                             rb.odo_d += moved
                             rb.odo_th += yaw
                         if held and _rest(rb, p, g, s, depth0):
                             check = True  # the bumper pressed home
-                            if p.localised:  # ... before this step's motion: none of it
+                            if p.localisation:  # ... before this step's motion: none of it
                                 rb.odo_d -= moved
                                 rb.odo_th -= yaw
                         elif clear:
@@ -249,7 +249,7 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
                 if rb.status == Status.RUNNING:
                     rb.cmd = k + 1
                     rb.sub = 0
-                    if p.localised:
+                    if p.localisation:
                         odometry(rb, p)
             if rb.status == Status.RUNNING:
                 _finish_leg(rb, p)
@@ -265,7 +265,7 @@ def _plan(rb, p, turn_sums, drive_sums):
     """Plan a leg from the pose (:func:`plan_leg`); False when there is nothing to do. The
     pose is the one the controller knows: the estimate with localisation; in open loop
     without it the start cell's centre and the heading last commanded; else the true one."""
-    if p.localised:
+    if p.localisation:
         x, y, th = rb.bx, rb.by, rb.bth
     elif p.open_loop:
         x, y, th = (rb.cell_x + 0.5) * p.cell_m, (rb.cell_y + 0.5) * p.cell_m, rb.bth
@@ -340,8 +340,8 @@ def _finish_leg(rb, p):
     leg's commands are the primitive: done, "reached" as far as the robot knows."""
     if p.open_loop:
         _done(rb, p, reached=True)
-    elif at_target(rb.bx if p.localised else rb.x, rb.by if p.localised else rb.y,
-                   rb.bth if p.localised else rb.th, rb.tx, rb.ty, rb.head, p.tol_m,
+    elif at_target(rb.bx if p.localisation else rb.x, rb.by if p.localisation else rb.y,
+                   rb.bth if p.localisation else rb.th, rb.tx, rb.ty, rb.head, p.tol_m,
                    p.tol_rad):
         _done(rb, p, reached=True)
     elif rb.steps - rb.steps0 >= p.timeout_steps:
@@ -361,9 +361,9 @@ def _bump(rb, p, g, s):
     rb.vx = rb.vy = rb.w = rb.cvx = rb.cvy = rb.cw = 0.0
     rb.bumped = True
     rb.forced = False
-    if p.localised:  # the travel of the period the contact ended
+    if p.localisation:  # the travel of the period the contact ended
         odometry(rb, p)
-    if p.carried:
+    if p.carried_pose:
         rb.resting = True
     else:
         rb.x = (rb.cell_x + 0.5) * p.cell_m
@@ -381,7 +381,7 @@ def _done(rb, p, reached):
     rb.reached = reached
     ix, iy = cell_of(rb.x, rb.y, p.cell_m, p.nx, p.ny)
     rb.tstate = iy * p.nx + ix
-    if p.localised:
+    if p.localisation:
         rb.nfix += 1
         if p.fix_every > 0 and rb.nfix >= p.fix_every:
             rb.bx = rb.x + p.fix_sigma_m * rb.f1

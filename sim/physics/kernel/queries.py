@@ -40,8 +40,9 @@ def odometry(rb, p):
     d_l, d_r = (rb.odo_d - half) / rb.gain_l, (rb.odo_d + half) / rb.gain_r  # the encoders
     trans = 0.5 * (d_l + d_r)
     rot = 0.5 * (d_r - d_l) / p.wheel_base_m  # half the rotation: before and after
-    s_rot = math.sqrt(p.odo_a1 * rot * rot + p.odo_a2 * trans * trans)
-    s_trans = math.sqrt(p.odo_a3 * trans * trans + p.odo_a4 * 2.0 * rot * rot)
+    s_rot = math.sqrt(p.odometry_rot_rot * rot * rot + p.odometry_rot_trans * trans * trans)
+    s_trans = math.sqrt(p.odometry_trans_trans * trans * trans
+                        + p.odometry_trans_rot * 2.0 * rot * rot)
     r1 = rot + s_rot * rb.o1
     t = trans + s_trans * rb.o2
     r2 = rot + s_rot * rb.o3

@@ -15,12 +15,17 @@ array of every tuple argument at each call (13 arrays per step took the kernel f
 
 from __future__ import annotations
 
+import dataclasses
+import typing
 from enum import IntEnum
 from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["ROBOT", "Geometry", "Params", "Phase", "Robots", "Scratch", "Status", "by_name"]
+from sim.physics.fidelity import Fidelity
+
+__all__ = ["FIDELITY_KNOBS", "ROBOT", "Geometry", "Params", "Phase", "Robots", "Scratch", "Status",
+           "by_name", "params_of"]
 
 
 class Status(IntEnum):
@@ -86,36 +91,38 @@ def by_name(robots: np.ndarray) -> Robots:
 
 
 
-class Params(NamedTuple):
-    """A batch's constants (scenario, :class:`PhysicsConfig`, fidelity), numbers only."""
+# A batch's constants (scenario, PhysicsConfig, fidelity), numbers only: the drive's own,
+# then ``biased`` (a per-run wheel bias is drawn: the robots' gain_l, gain_r, base_k), then
+# every knob of :class:`~sim.physics.fidelity.Fidelity` under its own name and type, read
+# from the dataclass: a new knob reaches the kernel as ``p.<knob>`` with no line here.
+_DRIVE_FIELDS = [
+    ("dt", float),  # physics step [s]
+    ("substeps", int),  # physics steps per control period (of `period` [s])
+    ("period", float),
+    ("tol_m", float),  # a primitive ends this close to the target centre [m]
+    ("tol_rad", float),  # ... and to its heading [rad]
+    ("timeout_steps", int),  # a primitive gives up after this many steps (checked between legs)
+    ("depth_m", float),  # deepest a guarded step carries the disc into a surface [m]
+    ("dv_max", float),  # the pivot joint's impulse limit per step, as a speed change [m/s]
+    ("dw_max", float),  # the gear joint's, as a yaw-rate change [rad/s]
+    ("cell_m", float),  # cell size [m]
+    ("nx", int),  # grid width [cells]
+    ("ny", int),  # grid height [cells]
+    ("radius_m", float),  # robot radius [m]
+    ("wheel_base_m", float),  # [m]
+    ("biased", bool),  # fidelity: a per-run wheel bias is drawn
+]
+_KNOB_TYPES = typing.get_type_hints(Fidelity)
+FIDELITY_KNOBS = tuple(f.name for f in dataclasses.fields(Fidelity) if f.name != "name")
+Params = NamedTuple("Params", [*_DRIVE_FIELDS,  # type: ignore[misc]
+                               *((k, _KNOB_TYPES[k]) for k in FIDELITY_KNOBS)])
 
-    dt: float  # physics step [s]
-    substeps: int  # physics steps per control period (of `period` [s])
-    period: float
-    tol_m: float  # a primitive ends this close to the target centre [m]
-    tol_rad: float  # ... and to its heading [rad]
-    timeout_steps: int  # a primitive gives up after this many steps (checked between legs)
-    depth_m: float  # deepest a guarded step carries the disc into a surface [m]
-    dv_max: float  # the pivot joint's impulse limit per step, as a speed change [m/s]
-    dw_max: float  # the gear joint's, as a yaw-rate change [rad/s]
-    cell_m: float  # cell size [m]
-    nx: int  # grid width [cells]
-    ny: int  # grid height [cells]
-    radius_m: float  # robot radius [m]
-    wheel_base_m: float  # [m]
-    wheel_noise: float  # fidelity: relative sigma of each wheel's speed per period [-]
-    carried: bool  # fidelity: carried pose
-    bumper_travel_m: float  # fidelity: bumper travel [m]
-    biased: bool  # fidelity: a per-run wheel bias (the robots' gain_l, gain_r, base_k)
-    open_loop: bool  # fidelity: plan once from the believed pose, no feedback
-    localised: bool  # fidelity: the controller and the state read the pose estimate
-    odo_a1: float  # odometry motion model: rotation variance per rotation^2 [-]
-    odo_a2: float  # ... per distance^2 [rad^2/m^2]
-    odo_a3: float  # translation variance per distance^2 [-]
-    odo_a4: float  # ... per rotation^2 [m^2/rad^2]
-    fix_every: int  # an absolute fix every this many primitives (0: never)
-    fix_sigma_m: float  # the fix's error per axis [m]
-    fix_sigma_rad: float  # ... in heading [rad]
+
+def params_of(fidelity: Fidelity, **drive: float | int) -> Params:
+    """The kernel's constants: the drive's (``drive``, by name) and the fidelity's knobs,
+    each under its own name."""
+    return Params(**drive, biased=fidelity.biased,
+                  **{k: getattr(fidelity, k) for k in FIDELITY_KNOBS})
 
 
 class Geometry(NamedTuple):

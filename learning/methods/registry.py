@@ -178,7 +178,7 @@ def register(config: type[MethodConfig], module: ModuleType, compared: bool = Tr
     if compared:
         _COMPARED.append(config.cli)
     if not module.__name__.startswith(f"{__package__}."):
-        from learning.compiled.jitcache import FOREIGN_STATES, guard_cache
+        from learning.jitcache import FOREIGN_STATES, guard_cache
 
         guard_cache()
         FOREIGN_STATES.add(module.State)

@@ -16,7 +16,7 @@ import hashlib
 import os
 from pathlib import Path
 
-PACKAGE = Path(__file__).resolve().parent.parent
+PACKAGE = Path(__file__).resolve().parent
 STAMP = "learning-sources.sha256"
 KERNELS = Path("compiled") / "kernels.py"  # the module whose cache says "compiled before"
 OPT_LEVEL = "2"  # LLVM's, for the kernels compiled after `import learning`
@@ -97,7 +97,7 @@ def kernels_cached(package: Path = PACKAGE) -> bool:
 
 # ---------------------------------------------------------------- methods from outside
 
-# State classes of methods registered from outside this package (learning.registry.register)
+# State classes of methods registered from outside this package (learning.methods.registry.register)
 FOREIGN_STATES: set[type] = set()
 _GUARDED = "_rnhql_foreign_guard"
 

@@ -8,7 +8,7 @@ import numpy as np
 from learning.compiled.named_state import copy_state
 from learning.config import MethodConfig
 from learning.geometry import Geometry
-from learning.registry import family_of
+from learning.methods.registry import family_of
 
 
 def init_state(cfg: MethodConfig, geom: Geometry, rng: np.random.Generator):

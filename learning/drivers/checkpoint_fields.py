@@ -3,7 +3,7 @@ header (shape and size against a limit and the file, before anything is allocate
 presence, the generator states, and the metrics so far. Every check raises
 :class:`CheckpointError` naming the file, the field and the fix.
 
-:mod:`learning.checkpoint` reads and writes whole checkpoints with these.
+:mod:`learning.drivers.checkpoint` reads and writes whole checkpoints with these.
 """
 
 from __future__ import annotations

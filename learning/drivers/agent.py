@@ -5,7 +5,7 @@ calls the same compiled hook the kernels inline (:mod:`learning.compiled.hooks`)
 the same generator, so a run through an env
 and a kernel run with the same seed end with identical tables and weights.
 Use this driver where there is no tabular model (the physics env); use
-:func:`learning.train.train_tabular` where there is (100x+ faster).
+:func:`learning.drivers.train.train_tabular` where there is (100x+ faster).
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ from learning.compiled.hooks import draw_start
 from learning.compiled.named_state import episodes_done
 from learning.compiled.state_box import box_of
 from learning.config import MethodConfig
+from learning.drivers.state import init_state
 from learning.geometry import Geometry
-from learning.state import init_state
 
 # Each takes the state's box (learning.compiled.state_box): one reference to unbox per call.
 

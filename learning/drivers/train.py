@@ -15,10 +15,11 @@ from typing import Protocol
 
 import numpy as np
 
-from learning.checkpoint import Checkpoint, CheckpointError
 from learning.compiled.kernels import NO_TRACE, greedy_route, on_shortest_fraction, run_episodes
 from learning.compiled.named_state import copy_state, episodes_done
 from learning.config import MethodConfig
+from learning.drivers.checkpoint import Checkpoint, CheckpointError
+from learning.drivers.state import init_state
 from learning.geometry import TabularMDP, geometry_of
 from learning.metrics import (
     episodes_to_first_optimal,
@@ -26,7 +27,6 @@ from learning.metrics import (
     optimal_test_fraction,
     reward_per_step,
 )
-from learning.state import init_state
 
 EPISODE_FIELDS = ("steps", "success", "returns", "wall_time_s", "shaping_mean", "shaping_std")
 KERNEL_OUT = ("steps", "returns", "success", "shaping_mean", "shaping_std")  # run_episodes' out
@@ -165,7 +165,7 @@ def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np
     ``rng`` is the learner's source of randomness (RN-QL's initial weights,
     exploration, ties, planning); episode starts come from ``start_rng`` when
     given (common random numbers: see :mod:`learning.streams`), else from ``rng``. ``resume`` (a
-    :class:`learning.checkpoint.Checkpoint`) continues a run: its agent state,
+    :class:`learning.drivers.checkpoint.Checkpoint`) continues a run: its agent state,
     metrics and generator state are restored (``rng`` is set to the saved
     state), and training goes on from ``resume.episodes`` to ``n_episodes``,
     ending exactly where an uninterrupted run with the same seed would.

@@ -25,18 +25,18 @@ from pathlib import Path
 
 import numpy as np
 
-from learning.checkpoint_fields import (
+from learning.compiled.named_state import arrays, episodes_done, rebuild
+from learning.config import MAX_MAGNITUDE, FieldMovedError, MethodConfig, config_problem
+from learning.drivers.checkpoint_fields import (
     CheckpointError,
     check_rng_state,
     read_field,
     read_header,
     read_metrics,
 )
-from learning.compiled.named_state import arrays, episodes_done, rebuild
-from learning.config import MAX_MAGNITUDE, FieldMovedError, MethodConfig, config_problem
+from learning.drivers.state import init_state
 from learning.geometry import Geometry
-from learning.registry import METHODS, config_from_fields, family_of, n_states_of
-from learning.state import init_state
+from learning.methods.registry import METHODS, config_from_fields, family_of, n_states_of
 
 FORMAT = "rnhql-checkpoint-2"
 # float state arrays that hold learned values (Q, network weights, V): finite and sane in
@@ -110,7 +110,7 @@ class Checkpoint:
     @classmethod
     def of_result(cls, result, rng: np.random.Generator,
                   start_rng: np.random.Generator | None = None) -> Checkpoint:
-        """From a :class:`learning.train.TrainResult` and the generators that trained it."""
+        """From a :class:`learning.drivers.train.TrainResult` and the generators that trained it."""
         metrics = dict(result.episode_arrays())
         metrics["test_episodes"] = result.test_episodes
         metrics["test_route_length"] = result.test_route_length
@@ -120,7 +120,7 @@ class Checkpoint:
 
     @classmethod
     def of_agent(cls, agent) -> Checkpoint:
-        """From a :class:`learning.agent.StepAgent` (between episodes)."""
+        """From a :class:`learning.drivers.agent.StepAgent` (between episodes)."""
         return cls(agent.cfg, agent.state, agent.rng.bit_generator.state)
 
     def check_compatible(self, cfg: MethodConfig, n_states: int,

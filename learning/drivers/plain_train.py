@@ -1,10 +1,10 @@
 """A plain-Python learner trained on a tabular model: the fused kernel's loop, in Python.
 
-:func:`train_plain` is :func:`learning.train.train_tabular` for a learner of
+:func:`train_plain` is :func:`learning.drivers.train.train_tabular` for a learner of
 :mod:`learning.plain.learner`: the same episodes (starts drawn from the start stream with
 ``integers(0, len(starts))``, as the kernels draw them), the same time limit and
 bootstrapping rule, the same greedy test from S every ``test_every`` episodes, and the
-same :class:`learning.train.TrainResult`. Only the speed differs: each step is two Python
+same :class:`learning.drivers.train.TrainResult`. Only the speed differs: each step is two Python
 calls into the learner (``rnhql bench`` style figures: ``scenarios/bench/plain.py``).
 """
 
@@ -15,6 +15,7 @@ import time
 import numpy as np
 
 from learning.compiled.kernels import NO_TRACE
+from learning.drivers.train import EPISODE_FIELDS, TrainObserver, TrainResult, finished
 from learning.geometry import TabularMDP, geometry_of
 from learning.plain.learner import (
     PlainAgent,
@@ -24,7 +25,6 @@ from learning.plain.learner import (
     new_learner,
     snapshot,
 )
-from learning.train import EPISODE_FIELDS, TrainObserver, TrainResult, finished
 
 _DTYPES = {"steps": np.int32, "success": np.bool_}
 

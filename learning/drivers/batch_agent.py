@@ -16,14 +16,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from learning.agent import StepAgent
 from learning.compiled import hooks
 from learning.compiled.generator_handle import generator_from, handles
 from learning.compiled.named_state import copy_state, row, row_view, stack
 from learning.compiled.state_box import box_of
 from learning.config import MethodConfig
+from learning.drivers.agent import StepAgent
+from learning.drivers.state import init_state
 from learning.geometry import Geometry
-from learning.state import init_state
 
 
 @njit(cache=True)
@@ -73,7 +73,7 @@ class BatchAgent:
     """N agents of one method and geometry, each with its own generator.
 
     ``rngs[i]`` is agent ``i``'s learner stream (RN-QL draws its initial weights from
-    it here, as :func:`learning.agent.make_agent` does). Every event takes an ``active``
+    it here, as :func:`learning.drivers.agent.make_agent` does). Every event takes an ``active``
     mask: agents whose runs have finished sit out.
     """
 

@@ -1,19 +1,34 @@
-"""The Markdown of each kind of artifact (:mod:`scenarios.artifacts`): one function each,
-registered under the kind (the artifact's name up to its first dot)."""
+"""The kinds of artifact (:mod:`scenarios.artifacts`), in one list (:data:`KINDS`): each
+registered under its kind (the artifact's name up to its first dot) by the function that
+renders its Markdown, with what else the tool knows of it (whether its figures are wall
+times; a renderer of several artifacts as one table's rows)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
-RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {}
-ROW_RENDERERS: dict[str, Callable[[list[dict[str, Any]]], str]] = {}
+
+@dataclass(frozen=True)
+class Kind:
+    """One kind of artifact."""
+
+    render: Callable[[dict[str, Any]], str]  # one artifact's data -> Markdown
+    timed: bool = False  # its figures include wall times: a busy machine is named
+    render_rows: Callable[[list[dict[str, Any]]], str] | None = None  # several as one table
 
 
-def renderer(kind: str) -> Callable[[Callable[[dict[str, Any]], str]], Callable]:
+KINDS: dict[str, Kind] = {}  # the one list of artifact kinds
+
+
+def renderer(kind: str, timed: bool = False
+             ) -> Callable[[Callable[[dict[str, Any]], str]], Callable]:
+    """Register ``kind`` with the function that renders one artifact of it."""
     def deco(fn: Callable[[dict[str, Any]], str]) -> Callable:
-        RENDERERS[kind] = fn
+        KINDS[kind] = Kind(fn, timed)
         return fn
     return deco
 
@@ -62,7 +77,7 @@ def reward_design(d: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-@renderer("optimum")
+@renderer("optimum", timed=True)
 def optimum(d: dict[str, Any]) -> str:
     """V* of one scenario at a fidelity, beside the exact optimum and its driven check."""
     v = "inf" if d["v_star"] is None else f"{d['v_star']:.2f}"
@@ -79,7 +94,7 @@ def optimum(d: dict[str, Any]) -> str:
             f"{d['build_s']:.0f} s |\n")
 
 
-@renderer("plain-learner")
+@renderer("plain-learner", timed=True)
 def plain_learner(d: dict[str, Any]) -> str:
     """A plain-Python learner's cost per step, and the compiled runs' pace beside it."""
     g, ph = d["grid"], d["physics"]
@@ -95,7 +110,7 @@ def plain_learner(d: dict[str, Any]) -> str:
             f"{ph['st-ql beside the port']:,.0f} |\n")
 
 
-@renderer("memory")
+@renderer("memory", timed=True)
 def memory(d: dict[str, Any]) -> str:
     """Peak RSS and checkpoint size per method and map size."""
     sizes = d["sizes"]
@@ -260,7 +275,7 @@ def _physics_opt(rows: list[dict[str, Any]], m: str) -> str:
                 "—")
 
 
-@renderer("scaling")
+@renderer("scaling", timed=True)
 def scaling(d: dict[str, Any]) -> str:
     """Arenas of growing size: optimal seeds · median [q25, q75] episodes to a stable optimal
     route · median wall time per run, and each method's growth exponents."""
@@ -301,7 +316,7 @@ def _scaling_sentence(method: str, pts: list[dict[str, Any]], seeds: int) -> str
             f"(median {last['episodes']['median']:.0f} episodes there)")
 
 
-@renderer("scaling-maps")
+@renderer("scaling-maps", timed=True)
 def scaling_maps(d: dict[str, Any]) -> str:
     """Generated maps, one table per size: optimal seeds / seeds · median [q25, q75]
     episodes to a stable optimal route · median wall time per run, per row and map kind."""
@@ -330,7 +345,7 @@ def scaling_maps(d: dict[str, Any]) -> str:
             "route · median wall time per run.\n\n" + "\n\n".join(out) + "\n")
 
 
-@renderer("heldout")
+@renderer("heldout", timed=True)
 def heldout(d: dict[str, Any]) -> str:
     """Held-out maps: a row per method, a column per map and protocol; cells
     optimal seeds / seeds · median episodes to a stable optimal route · median wall time."""
@@ -348,7 +363,7 @@ def test_from_s(d: dict[str, Any]) -> str:
     return "```text\n" + "\n".join(d["lines"]) + "\n```\n"
 
 
-@renderer("paper-claims")
+@renderer("paper-claims", timed=True)
 def paper_claims(d: dict[str, Any]) -> str:
     """The paper's claims, one by one: whether each holds here and what was measured."""
     held = sum(c["holds"] for c in d["claims"])
@@ -376,10 +391,16 @@ def oracle(d: dict[str, Any]) -> str:
 
 
 def row_renderer(kind: str) -> Callable[[Callable[[list[dict[str, Any]]], str]], Callable]:
+    """Give the registered ``kind`` a renderer of several artifacts as one table."""
     def deco(fn: Callable[[list[dict[str, Any]]], str]) -> Callable:
-        ROW_RENDERERS[kind] = fn
+        KINDS[kind] = dataclasses.replace(KINDS[kind], render_rows=fn)
         return fn
     return deco
+
+
+@renderer("aliasing")
+def aliasing_one(d: dict[str, Any]) -> str:
+    return aliasing_rows([d])
 
 
 @row_renderer("aliasing")
@@ -395,12 +416,7 @@ def aliasing_rows(ds: list[dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-@renderer("aliasing")
-def aliasing_one(d: dict[str, Any]) -> str:
-    return aliasing_rows([d])
-
-
-@renderer("physics-batch")
+@renderer("physics-batch", timed=True)
 def physics_batch(d: dict[str, Any]) -> str:
     """The batched physics world's speed: random primitives per second against robots per
     Space, and one learning run's rate and where its time goes."""

@@ -37,6 +37,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from scenarios.artifact_tables import KINDS
 from sim.files import atomic_write_text
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -102,13 +103,10 @@ def machine_load() -> dict[str, Any]:
     return {"cores": os.cpu_count(), "load_1min": load}
 
 
-TIMED_KINDS = {"scaling", "scaling-maps", "heldout", "physics-batch", "paper-claims", "optimum",
-               "memory", "plain-learner"}
-
-
 def busy_note(doc: dict[str, Any]) -> str:
     """`` (machine busy: ...)`` when the study ended with more runnable work than cores."""
-    if doc["name"].split(".")[0] not in TIMED_KINDS:
+    kind = KINDS.get(doc["name"].split(".")[0])
+    if kind is None or not kind.timed:
         return ""
     m = doc.get("machine") or {}
     load, cores = m.get("load_1min"), m.get("cores")
@@ -262,15 +260,12 @@ def provenance(doc: dict[str, Any], now: dict[str, str] | None = None) -> str:
 
 def rendered(name: str) -> str:
     """The Markdown of artifact ``name``: its table, then its provenance (and staleness)."""
-    from scenarios.artifact_tables import RENDERERS
-
     doc = load_artifact(name)
-    kind = doc["name"].split(".")[0]
-    fn = RENDERERS.get(kind)
-    if fn is None:
+    kind = KINDS.get(doc["name"].split(".")[0])
+    if kind is None:
         raise ArtifactError(f"no renderer for artifact {name!r}")
     stale = stale_parts(doc)
-    body = fn(doc["data"]).rstrip("\n")
+    body = kind.render(doc["data"]).rstrip("\n")
     head = provenance(doc).split("\n\n")[0] + "\n\n" if stale else ""
     tail = provenance(doc).split("\n\n")[-1]
     return f"{head}{body}\n\n{tail}\n"
@@ -279,14 +274,14 @@ def rendered(name: str) -> str:
 def rendered_rows(names: Iterable[str]) -> str:
     """One table with a row per artifact (all of one kind, e.g. aliasing at three
     fidelities), then each artifact's provenance; a stale one's banner above the table."""
-    from scenarios.artifact_tables import ROW_RENDERERS
-
     docs = [load_artifact(n) for n in names]
     kinds = {d["name"].split(".")[0] for d in docs}
-    if len(kinds) != 1 or next(iter(kinds)) not in ROW_RENDERERS:
+    rows = KINDS[next(iter(kinds))].render_rows if len(kinds) == 1 and \
+        next(iter(kinds)) in KINDS else None
+    if rows is None:
         raise ArtifactError(f"{list(names)}: give artifacts of one kind with a row renderer")
     now = behaviour_digests()
-    body = ROW_RENDERERS[kinds.pop()]([d["data"] for d in docs]).rstrip("\n")
+    body = rows([d["data"] for d in docs]).rstrip("\n")
     heads = [provenance(d, now).split("\n\n")[0] for d in docs if stale_parts(d, now)]
     tails = [provenance(d, now).split("\n\n")[-1] for d in docs]
     return "".join(h + "\n\n" for h in heads) + body + "\n\n" + "\n\n".join(tails) + "\n"

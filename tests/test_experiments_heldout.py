@@ -61,7 +61,7 @@ def test_the_diagnosis_says_where_an_untrained_test_from_s_hits_a_wall(tmp_path)
 
 
 def test_the_diagnosis_renders_its_lines_as_one_block():
-    from scenarios.artifact_tables import RENDERERS
+    from scenarios.artifact_tables import KINDS
 
-    text = RENDERERS["test-from-s"]({"lines": ["rooms-64@uniform ...", "seed 0: test 92"]})
+    text = KINDS["test-from-s"].render({"lines": ["rooms-64@uniform ...", "seed 0: test 92"]})
     assert text == "```text\nrooms-64@uniform ...\nseed 0: test 92\n```\n"

@@ -37,16 +37,18 @@ def _took(wall_s: float | None) -> str:
 
 
 ARTIFACT_SUBCOMMANDS = ("aliasing", "optimum")  # rnhql subcommands that write artifacts
-STUDY_PACKAGES = ("scenarios.studies", "scenarios.bench")  # where the studies live
+STUDY_PACKAGES = ("scenarios.studies.paper", "scenarios.studies.ladder",  # where the studies
+                  "scenarios.studies.maps", "scenarios.bench")  # live
 SAFE_WORD = re.compile(r"[A-Za-z0-9_.,=:+;@%-]+(/[A-Za-z0-9_.,=:+;@%-]+)*")
 
 
 def argv_of(command: str, source: str = "an artifact") -> list[str]:
     """The argv ``rnhql report --refresh`` runs for an artifact's ``command``, built by this
     tool, never the text itself: the command must be a study entry point of this package
-    (``rnhql aliasing|optimum ...`` or ``python -m scenarios.studies|bench.NAME ...``,
-    NAME a module that exists), run with this interpreter, no shell, and its arguments plain
-    words and relative paths inside the checkout (no ``..``, no absolute path). An artifact
+    (``rnhql aliasing|optimum ...`` or ``python -m PACKAGE.NAME ...``, PACKAGE one of
+    :data:`STUDY_PACKAGES` and NAME a module that exists), run with this interpreter, no
+    shell, and its arguments plain words and relative paths inside the checkout (no ``..``,
+    no absolute path). An artifact
     is data: a JSON file that names anything else is refused (ValueError naming it)."""
     words = shlex.split(command)
 
@@ -67,7 +69,7 @@ def argv_of(command: str, source: str = "an artifact") -> list[str]:
         head, args = [sys.executable, "-m", module], words[3:]
     else:
         raise refuse("is not a study entry point of this package (rnhql aliasing or "
-                     "optimum, python -m scenarios.studies.* or scenarios.bench.*)")
+                     "optimum, python -m scenarios.studies.ROOM.* or scenarios.bench.*)")
     for arg in args:
         if not SAFE_WORD.fullmatch(arg) or ".." in arg.split("/"):
             raise refuse(f"passes {arg!r}, not a plain word or a relative path in the "

@@ -36,6 +36,7 @@ from learning.compiled.generator_handle import handles
 from learning.compiled.readout import greedy_actions
 from learning.drivers.agent import StepAgent
 from learning.drivers.batch_agent import BatchAgent
+from learning.drivers.train import TrainResult
 from learning.geometry import geometry_of
 from learning.plain.learner import PlainBatchAgent, is_plain
 from scenarios.runs.physics_grading import FinalGrade, Grader
@@ -69,24 +70,15 @@ class RecordedRun:
 
 
 @dataclass(eq=False)
-class PhysicsTrainResult:
-    """What a finished physics run measured (see :class:`scenarios.runs.spec.RunOutcome`)."""
+class PhysicsTrainResult(TrainResult):
+    """A finished physics run: the one record of what a run measured
+    (:class:`learning.drivers.train.TrainResult`), with the agent that learned and how the
+    physics world graded it."""
 
-    agent: StepAgent
-    steps: np.ndarray
-    returns: np.ndarray
-    success: np.ndarray
-    shaping_mean: np.ndarray
-    shaping_std: np.ndarray
-    wall_time_s: np.ndarray
-    test_episodes: np.ndarray
-    test_route_length: np.ndarray
-    optimal_length: int
-    final_route: list[int]
-    final_route_length: int
-    optimal_action_fraction: float
-    graded: TabularModel  # the physics world's own exact model (moves the disc can drive)
-    grader: Grader  # how the run was graded (its world and fidelity)
+    agent: StepAgent | None = None  # the learner (its state is ``state``)
+    graded: TabularModel | None = None  # the physics world's own exact model (moves the disc
+    #   can drive)
+    grader: Grader | None = None  # how the run was graded (its world and fidelity)
     final_rollouts: Any = None  # sim.physics.models.rollouts.Rollouts of the final policy
     world_extras: dict[str, Any] = field(default_factory=dict)
 
@@ -324,8 +316,10 @@ def _result(agent: StepAgent, final: FinalGrade, i: int, logs: _Logs, grader: Gr
               "contacts_per_episode": logs.contacts[i].tolist(),
               "sim_time_per_episode_s": np.round(logs.sim_time[i], 4).tolist(),
               **final.extras}
+    steps = logs.steps[i]
     return PhysicsTrainResult(
-        agent=agent, steps=logs.steps[i], returns=logs.returns[i], success=logs.success[i],
+        config=agent.cfg, state=agent.state, episodes=len(steps), env_steps=int(steps.sum()),
+        agent=agent, steps=steps, returns=logs.returns[i], success=logs.success[i],
         shaping_mean=logs.shaping_mean[i], shaping_std=logs.shaping_std[i],
         wall_time_s=logs.wall[i], test_episodes=np.asarray(logs.tests_e[i]),
         test_route_length=np.asarray(logs.tests_l[i]),

@@ -61,7 +61,7 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
                          fidelity=None) as rec:
         outcome = _train(spec, sc, model, cfg, rec, plan)
         if opts.detail:
-            rec.log_route("final route", outcome.final_route)
+            rec.log_route("final route", outcome.result.final_route)
         return run_record(spec, cfg, outcome)
 
 

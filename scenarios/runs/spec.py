@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from learning.drivers.train import TrainResult
 from sim.errors import InputError
 from sim.grid import TabularModel, build_model
 from sim.physics.fidelity import Fidelity, parse_fidelity
@@ -221,43 +222,30 @@ def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
 
 @dataclass(frozen=True)
 class RunOutcome:
-    """What a finished run measured, the same for both worlds: what :func:`run_record`
-    turns into a ``runs[]`` entry. Arrays are per episode unless named ``test_*``."""
+    """A finished run, the same for both worlds: what :func:`run_record` turns into a
+    ``runs[]`` entry. ``result`` is the one record of what a run measured
+    (:class:`learning.drivers.train.TrainResult`; a physics run's
+    :class:`scenarios.runs.physics.PhysicsTrainResult` is one, with what its world graded);
+    the outcome adds what a sweep measures after training."""
 
-    steps: np.ndarray  # int[n]; env steps of each episode
-    returns: np.ndarray  # float[n]; sum of env rewards (no shaping)
-    success: np.ndarray  # bool[n]; reached G
-    wall_time_s: np.ndarray  # float[n]; seconds
-    test_episodes: np.ndarray  # int[m]; episodes trained when each greedy test ran
-    test_route_length: np.ndarray  # int[m]; greedy route S->G [moves], -1: G not reached
-    optimal_length: int  # the optimum S->G on the model the tests ran on [moves]
-    final_route: list[int]  # the final greedy route's states, S first
-    final_route_length: int  # [moves], -1: G not reached
-    optimal_action_fraction: float  # free cells whose greedy move is on a shortest route
+    result: TrainResult
     epsilon_route_lengths: np.ndarray  # int[k]; the paper's test: epsilon-greedy rollouts
     world_extras: dict[str, Any]  # world-specific fields of the record (physics, drives)
     policy: np.ndarray | None = None  # int[nS]; the final greedy action of every cell
 
     @classmethod
-    def of(cls, result: Any, epsilon_route_lengths: np.ndarray,
+    def of(cls, result: TrainResult, epsilon_route_lengths: np.ndarray,
            world_extras: dict[str, Any] | None = None) -> RunOutcome:
-        """From a grid :class:`learning.drivers.train.TrainResult` or a physics
-        :class:`scenarios.runs.physics.PhysicsTrainResult` (which carries its own extras)."""
+        """From a finished run's result (a physics one carries its own extras)."""
         from learning.compiled.readout import greedy_actions
 
         extras = dict(getattr(result, "world_extras", {}))
         extras.update(world_extras or {})
-        state = result.state if hasattr(result, "state") else result.agent.state
-        return cls(np.asarray(result.steps), np.asarray(result.returns),
-                   np.asarray(result.success), np.asarray(result.wall_time_s),
-                   np.asarray(result.test_episodes).astype(int),
-                   np.asarray(result.test_route_length).astype(int),
-                   int(result.optimal_length), [int(s) for s in result.final_route],
-                   int(result.final_route_length), float(result.optimal_action_fraction),
-                   np.asarray(epsilon_route_lengths), extras, greedy_actions(state))
+        return cls(result, np.asarray(epsilon_route_lengths), extras,
+                   greedy_actions(result.state))
 
 
-def run_record(spec: RunSpec, cfg: Any, result: RunOutcome) -> dict[str, Any]:
+def run_record(spec: RunSpec, cfg: Any, outcome: RunOutcome) -> dict[str, Any]:
     """One ``runs[]`` entry of results.json from a finished run.
 
     The figures come from :mod:`learning.metrics` (one definition each); the
@@ -271,12 +259,13 @@ def run_record(spec: RunSpec, cfg: Any, result: RunOutcome) -> dict[str, Any]:
         reward_per_step,
     )
 
-    steps = result.steps
-    returns = result.returns
-    optimal = result.optimal_length
-    final_len = result.final_route_length
-    test_e = result.test_episodes
-    test_l = result.test_route_length
+    result = outcome.result
+    steps = np.asarray(result.steps)
+    returns = np.asarray(result.returns)
+    optimal = int(result.optimal_length)
+    final_len = int(result.final_route_length)
+    test_e = np.asarray(result.test_episodes).astype(int)
+    test_l = np.asarray(result.test_route_length).astype(int)
     tail = max(1, steps.size // 10)
     return {
         "key": spec.key,
@@ -295,8 +284,8 @@ def run_record(spec: RunSpec, cfg: Any, result: RunOutcome) -> dict[str, Any]:
         "final_route_length": final_len,
         "final_route_optimal": final_len == optimal,
         "final_route_excess": None if final_len < 0 else final_len - optimal,
-        "final_route": result.final_route,
-        "epsilon_route_length": _median_route(result.epsilon_route_lengths),
+        "final_route": [int(s) for s in result.final_route],
+        "epsilon_route_length": _median_route(outcome.epsilon_route_lengths),
         "success_rate": float(np.mean(result.success)),
         "reward_per_step": reward_per_step(returns, steps),
         "reward_per_step_last_10pct": reward_per_step(returns[-tail:], steps[-tail:]),
@@ -309,8 +298,8 @@ def run_record(spec: RunSpec, cfg: Any, result: RunOutcome) -> dict[str, Any]:
         "wall_time_per_episode_s": np.round(np.asarray(result.wall_time_s), 9).tolist(),
         "test_episodes": test_e.tolist(),
         "test_route_length": test_l.tolist(),
-        "greedy_policy": policy_text(result.policy),
-        **result.world_extras,
+        "greedy_policy": policy_text(outcome.policy),
+        **outcome.world_extras,
     }
 
 

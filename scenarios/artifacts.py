@@ -117,18 +117,27 @@ def busy_note(doc: dict[str, Any]) -> str:
 
 
 def study_code_digest(source: str) -> str:
-    """A hash of a study's *code*: its syntax tree without its import statements. Imports
-    say where a name comes from, not what the study measures, so moving a module (or
-    hoisting an import) leaves its tables fresh; comments and layout are not code either.
-    A change of a row's settings, a formula or a docstring changes the hash."""
+    """A hash of a study's *code*: its syntax tree without import statements and
+    docstrings. Imports say where a name comes from, and docstrings what the code is for,
+    not what the study measures: moving a module, hoisting an import or rewording a
+    docstring leaves its tables fresh, as comments and layout do. A change of a row's
+    settings, a formula or a printed string changes the hash."""
     tree = ast.parse(source)
     for node in ast.walk(tree):
         for field in ("body", "orelse", "finalbody", "handlers"):
             block = getattr(node, field, None)
-            if isinstance(block, list):
-                setattr(node, field, [n for n in block
-                                      if not isinstance(n, ast.Import | ast.ImportFrom)])
+            if not isinstance(block, list):
+                continue
+            block = [n for n in block if not isinstance(n, ast.Import | ast.ImportFrom)]
+            if field == "body" and isinstance(node, _DOCUMENTED) and block and \
+                    isinstance(block[0], ast.Expr) and isinstance(block[0].value, ast.Constant) \
+                    and isinstance(block[0].value.value, str):
+                block = block[1:]
+            setattr(node, field, block)
     return hashlib.sha256(ast.dump(tree).encode()).hexdigest()
+
+
+_DOCUMENTED = (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)
 
 
 def study_digest(path: str | Path) -> dict[str, str]:

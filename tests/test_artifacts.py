@@ -91,17 +91,19 @@ def test_editing_the_study_script_marks_its_artifact_stale(tmp_path):
 
 
 def test_a_study_moved_or_its_imports_rearranged_stays_fresh(tmp_path):
-    """The study hash is of its code without import statements: moving a module (every
-    import of it rewritten), hoisting an import or editing a comment changes no table, while
-    the code that measures does."""
+    """The study hash is of its code without import statements and docstrings: moving a
+    module (every import of it rewritten), hoisting an import or editing a comment or a
+    docstring changes no table, while the code that measures does."""
     from scenarios.artifacts import study_code_digest
 
     before = ("import math\n\n\ndef rows():\n    from a.b import c  # lazy\n"
               "    return [('a', math.pi, c)]\n")
-    moved = ("import math\n\nfrom a.b.c2 import c\n\n\ndef rows():\n"
-             "    # the rows\n    return [('a', math.pi, c)]\n")
+    moved = ('"""The study."""\n\nimport math\n\nfrom a.b.c2 import c\n\n\ndef rows():\n'
+             '    """Its rows."""\n    # the rows\n    return [(\'a\', math.pi, c)]\n')
     assert study_code_digest(before) == study_code_digest(moved)
     assert study_code_digest(before) != study_code_digest(moved.replace("'a'", "'b'"))
+    edited = before.replace("return", "x = 1\n    return")
+    assert study_code_digest(before) != study_code_digest(edited)
 
 
 def test_an_artifact_written_before_the_code_hash_is_checked_by_its_bytes(tmp_path):

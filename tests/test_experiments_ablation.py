@@ -1,4 +1,4 @@
-"""The ablation script's judgement of issue 10's targets and the suite it runs on."""
+"""The ablation script's judgement of its targets and the suite it runs on."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The held-out study (issue 37): its problems, methods and table."""
+"""The held-out study: its problems, methods and table."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Property: any scenario TOML, ``.map``, ``.scen`` or checkpoint gives either a valid run or
 one line and exit 2, never a traceback.
 
-Hypothesis draws the inputs (values from pools of the hostile kinds issue 39 lists: inf,
+Hypothesis draws the inputs (values from pools of hostile kinds: inf,
 NaN, 1e308, 46-digit integers, negative seeds, deep nesting, stray bytes, truncated
 files, tampered arrays) and the CLI's ``main`` runs each in-process with a two-episode
 budget. A bug shows as an exception escaping ``main`` (what a user would see as a

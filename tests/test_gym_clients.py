@@ -1,7 +1,7 @@
 """Every id through Gymnasium's own clients: its checker, its Sync/Async vector envs (through
 autoresets and terminations at different steps, in every autoreset mode), pickle and
 deepcopy mid-episode, spec JSON round trips, ``rewards=``, ``fidelity=`` and the
-scenario's episode length (issue 35, items 1-6)."""
+scenario's episode length."""
 
 from __future__ import annotations
 

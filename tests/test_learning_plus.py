@@ -255,7 +255,7 @@ def test_known_route_off_is_the_look_ahead_test_and_training_is_unchanged(paper5
 
 
 def test_model_acting_heads_for_g_in_the_optimistic_model(paper50_model):
-    """model_acting (issue 37): the behaviour's greedy move goes to a neighbour one move
+    """model_acting: the behaviour's greedy move goes to a neighbour one move
     nearer G in the optimistic model, tried or not, never a move it holds blocked, and
     equal moves are drawn (not the lowest index)."""
     from learning.methods.rnh_ql_plus.rules import act
@@ -305,7 +305,7 @@ def test_model_acting_needs_look_ahead_on_a_potential():
 
 def test_model_test_walks_the_optimistic_models_route_unless_a_known_route_is_as_short(
         paper50_model):
-    """model_test (issue 37): where s has no known route, or a longer one than the model's
+    """model_test: where s has no known route, or a longer one than the model's
     distance, the test's move goes one move nearer G in the optimistic model (a move seen
     to work first among equal ones); where the known route is as short, it is followed."""
     from learning.methods.rnh_ql_plus.rules import exploit
@@ -358,7 +358,7 @@ def test_coverage_distances_are_a_bfs_back_from_every_unvisited_cell():
 
 
 def test_the_coverage_walk_tries_a_move_in_every_free_cell_and_then_ends(paper50_model):
-    """explore_steps (issue 37): with steps enough, the walk acts in every free cell it can
+    """explore_steps: with steps enough, the walk acts in every free cell it can
     reach (obstacle cells it bumps instead: none has a move tried) and marks itself done;
     the model then knows every wall, and model_test's route is optimal; with 0 it is the
     default, not listed."""
@@ -380,12 +380,12 @@ def test_the_coverage_walk_tries_a_move_in_every_free_cell_and_then_ends(paper50
 
 @pytest.mark.parametrize("field, value", [("explore_steps", -1), ("model_test", 2),
                                           ("model_acting", 3), ("known_route", -1)])
-def test_the_issue_37_options_refuse_values_they_do_not_have(field, value):
+def test_the_model_options_refuse_values_they_do_not_have(field, value):
     with pytest.raises(ValueError, match=rf"RNHQLPlus\.{field} = {value} must be"):
         RNHQLPlus(**{field: value})
 
 
-def test_rnh_ql_plus_explore_is_rnh_ql_plus_with_the_issue_37_options(paper50_model):
+def test_rnh_ql_plus_explore_is_rnh_ql_plus_with_the_model_options(paper50_model):
     """The named variant is rnh-ql+ with explore_steps=1000, model_acting, model_test on
     and no planned updates, run for run; its record lists the options and round-trips."""
     from learning import RNHQLPlusExplore, config_from_fields

@@ -1,4 +1,4 @@
-"""Issue 39's ten classes of hostile input: each ends as a valid run or one clear line, and
+"""Ten classes of hostile input: each ends as a valid run or one clear line, and
 nothing the user had is lost or replaced.
 
 1 outputs at devices, FIFOs and /dev/stdout-style links are written through, never replaced;

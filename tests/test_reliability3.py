@@ -1,4 +1,4 @@
-"""Issue 39, the last three: the stochastic-model cache is checked like the physics-model
+"""Three classes of hostile input: the stochastic-model cache is checked like the physics-model
 cache; an interrupted sweep leaves nothing that ``--resume`` cannot use; a signal ends a
 pooled sweep promptly, whatever the workers were doing (the pool's end could hang).
 """

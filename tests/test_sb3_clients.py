@@ -1,6 +1,6 @@
 """Stable-Baselines3 through its public API only: its ``check_env`` for every id, fidelity
 and reward scheme, the ``model.predict`` -> ``env.step`` loop, and the ``VecEnv`` adapter
-over the native vector envs (issue 35, items 2 and 6). Skipped without ``rnhql[sb3]``."""
+over the native vector envs. Skipped without ``rnhql[sb3]``."""
 
 from __future__ import annotations
 

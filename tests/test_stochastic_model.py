@@ -188,7 +188,7 @@ def test_paper40_noisy_model_agrees_with_driven_rollouts(private_cache):
         assert abs(model.p_goal_within_budget - driven.p_goal) <= P_TOL
         assert abs(model.mean_primitives_within_budget - driven.mean_primitives) <= \
             primitives_tolerance(driven.mean_primitives)
-    # (before the bumper of issue 33 the BFS policy got pinned against walls here, P(G)
+    # (before the bumper the BFS policy got pinned against walls here, P(G)
     # below 0.97; a bump is now an event with travel and it reaches G in every drive, so
     # both checks compare a policy that always arrives; the misses a model must predict
     # are checked in test_value_iteration_avoids_improper_and_dead_end_actions)

@@ -117,3 +117,21 @@ def test_a_scenario_physics_table_sets_the_fidelity(tmp_path):
     assert scenario_digest(str(plain)) != scenario_digest(str(noisy))
     with pytest.raises(ScenarioError, match=r"bad\.toml.*wheel_noise"):
         resolve_scenario(str(bad))
+
+
+def test_every_knob_reaches_the_kernel_under_its_own_name():
+    """Adding a knob is the dataclass field (with its check) in sim/physics/fidelity.py, its
+    rule in the kernel (``p.<knob>``) and in the reference controller: the kernel's
+    constants take every knob from the dataclass by name, with no list to extend."""
+    import dataclasses
+
+    from sim.physics.fidelity import PRESETS, Fidelity
+    from sim.physics.kernel.state import FIDELITY_KNOBS, Params, params_of
+
+    knobs = [f.name for f in dataclasses.fields(Fidelity) if f.name != "name"]
+    assert list(FIDELITY_KNOBS) == knobs and set(knobs) <= set(Params._fields)
+    drive = {f: 0 for f in Params._fields if f not in knobs and f != "biased"}
+    for fid in PRESETS.values():
+        p = params_of(fid, **drive)
+        assert all(getattr(p, k) == getattr(fid, k) for k in knobs), fid.name
+        assert p.biased == fid.biased

@@ -7,7 +7,7 @@ compiled call on a state goes to the module whose ``State`` it is.
 
 Adding a method ``my-ql``:
 
-1. write ``learning/my_ql.py`` after :mod:`learning.methods.q_learning` (the template): a
+1. write ``learning/methods/my_ql.py`` after :mod:`learning.methods.q_learning` (the template): a
    frozen config subclassing :class:`~learning.config.MethodConfig` with ``name``
    (display) and ``cli`` (``"my-ql"``), a ``State`` named tuple whose first fields are
    ``par`` and ``tally``, ``init_state(cfg, geom, rng)``, and the hooks ``act``,

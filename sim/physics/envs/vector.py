@@ -116,6 +116,17 @@ def sub_env_seeds(seed: int | list[int | None] | None, n: int) -> list[int | Non
     return seeds
 
 
+def _vector_setup(env: Any, num_envs: int, render_mode: str | None,
+                  autoreset_mode: AutoresetMode | str) -> None:
+    """What both vector envs check and set first: no rendering, a bounded batch, the
+    autoreset mode in the env's metadata."""
+    if render_mode is not None:
+        raise ValueError(f"{type(env).__name__} does not render; use the single env")
+    check_num_envs(num_envs)
+    env.metadata = {**type(env).metadata, "autoreset_mode": autoreset_mode_arg(autoreset_mode)}
+    env.num_envs = num_envs
+
+
 class PhysicsRouteVectorEnv(VectorEnv):
     """N independent copies of ``PhysicsRoute-v0`` sharing one ``pymunk.Space``.
 
@@ -158,12 +169,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
                  trajectories: bool = False, rewards: str | Rewards = SCENARIO_REWARDS,
                  steps_per_episode: int | None = None, start: str | int = "S",
                  contact_records: bool = True) -> None:
-        if render_mode is not None:
-            raise ValueError("PhysicsRouteVectorEnv does not render; use the single env")
-        check_num_envs(num_envs)
-        mode = autoreset_mode_arg(autoreset_mode)
-        self.metadata = {**type(self).metadata, "autoreset_mode": mode}
-        self.num_envs = num_envs
+        _vector_setup(self, num_envs, render_mode, autoreset_mode)
         # the single env's arguments, resolved as it resolves them (it builds no world
         # until reset): sub-env i is PhysicsRouteEnv with the same kwargs
         proto = PhysicsRouteEnv(scenario, config=config, fidelity=fidelity, rewards=rewards,
@@ -343,12 +349,7 @@ class DiffDriveVectorEnv(VectorEnv):
                  fidelity: Fidelity | str | None = None,
                  rewards: str | Rewards = SCENARIO_REWARDS,
                  steps_per_episode: int | None = None, start: str | int = "S") -> None:
-        if render_mode is not None:
-            raise ValueError("DiffDriveVectorEnv does not render; use the single env")
-        check_num_envs(num_envs)
-        mode = autoreset_mode_arg(autoreset_mode)
-        self.metadata = {**type(self).metadata, "autoreset_mode": mode}
-        self.num_envs = num_envs
+        _vector_setup(self, num_envs, render_mode, autoreset_mode)
         sc = env_scenario(scenario, rewards)
         self.config = config_arg(config, DIFFDRIVE_CONFIG)
         self.shared = SharedSpace(sc, self.config)

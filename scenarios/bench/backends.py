@@ -9,13 +9,14 @@ processes importing numba and loading the JIT cache; Ray starting its runtime).
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
+from scenarios.studies.args import arg, parse
 from scenarios.sweep.backends import run_local, run_ray
 from scenarios.sweep.run import make_specs, run_sweep
 
@@ -35,7 +36,10 @@ def run_bench(cpus: int = 2) -> dict:
     return out
 
 
+@dataclass(frozen=True)
+class Args:
+    cpus: int = arg(2, "CPUs each backend may use")
+
+
 if __name__ == "__main__":
-    p = argparse.ArgumentParser()
-    p.add_argument("--cpus", type=int, default=2)
-    print(json.dumps(run_bench(p.parse_args().cpus), indent=1))
+    print(json.dumps(run_bench(parse(Args, __doc__).cpus), indent=1))

@@ -11,14 +11,15 @@ O(cells + circle area), never O(cells x circles).
 
 from __future__ import annotations
 
-import argparse
 import json
 import statistics
 import subprocess
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
+from scenarios.studies.args import arg, parse
 from sim.grid.planning import far_start_goal
 from sim.maps.movingai import read_free_grid
 from sim.scenario_io import builtin_dir
@@ -93,10 +94,13 @@ def run_bench() -> dict[str, dict]:
     return out
 
 
+@dataclass(frozen=True)
+class Args:
+    json: bool = arg(False, "print the figures as JSON, not a Markdown table")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--json", action="store_true")
-    args = p.parse_args(argv)
+    args = parse(Args, __doc__, argv)
     res = run_bench()
     if args.json:
         print(json.dumps(res, indent=1))

@@ -16,17 +16,18 @@ Run: ``python -m scenarios.bench.physics [--quick] [--scenario NAME]``.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import json
 import math
 import time
+from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 import sim.envs  # noqa: F401  (registers the ids)
+from scenarios.studies.args import arg, parse
 from sim.physics.envs.route import PhysicsRouteEnv
 from sim.physics.reference.controller import PrimitiveController
 from sim.physics.reference.world import PhysicsConfig, PhysicsWorld
@@ -196,10 +197,13 @@ def _round(x: Any) -> Any:
     return x
 
 
+@dataclass(frozen=True)
+class Args:
+    scenario: str = arg("paper-50", "built-in name or .toml path")
+    quick: bool = arg(False, "10x fewer primitives, 100 episodes")
+    seed: int = arg(0, "seed of the random primitives and the learners")
+
+
 if __name__ == "__main__":
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scenario", default="paper-50")
-    ap.add_argument("--quick", action="store_true", help="10x fewer primitives, 100 episodes")
-    ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args()
+    args = parse(Args, __doc__)
     print(json.dumps(_round(run_bench(args.scenario, args.quick, args.seed)), indent=2))

@@ -12,14 +12,15 @@ encoder threads, which need a second core to stay out of the way.
 
 from __future__ import annotations
 
-import argparse
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from scenarios.recording.recorder import Recorder
+from scenarios.studies.args import arg, parse
 from sim.grid import build_model
 from sim.scenario_io import resolve_scenario
 
@@ -40,7 +41,19 @@ def random_walk(model, rng: np.random.Generator, steps: int) -> np.ndarray:
     return out
 
 
-def run(a: argparse.Namespace, record: bool, out: Path) -> dict[str, float]:
+@dataclass(frozen=True)
+class Args:
+    scenario: str = arg("paper-50", "built-in name or .toml path")
+    episodes: int = arg(3000, "stand-in training episodes")
+    every: int = arg(10, "record every N-th episode")
+    steps: int = arg(600, "moves per recorded episode")
+    batch: int = arg(100, "episodes per metric batch")
+    values_every: int = arg(100, "episodes between value maps")
+    flush_every: int = arg(1000, "episodes between flushes")
+    episode_ms: float = arg(0.2, "stand-in training time per episode [ms]")
+
+
+def run(a: Args, record: bool, out: Path) -> dict[str, float]:
     sc = resolve_scenario(a.scenario)
     model = build_model(sc)
     rng = np.random.default_rng(0)
@@ -86,17 +99,7 @@ def run(a: argparse.Namespace, record: bool, out: Path) -> dict[str, float]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--scenario", default="paper-50")
-    ap.add_argument("--episodes", type=int, default=3000)
-    ap.add_argument("--every", type=int, default=10, help="record every N-th episode")
-    ap.add_argument("--steps", type=int, default=600, help="moves per recorded episode")
-    ap.add_argument("--batch", type=int, default=100, help="episodes per metric batch")
-    ap.add_argument("--values-every", type=int, default=100)
-    ap.add_argument("--flush-every", type=int, default=1000, help="episodes between flushes")
-    ap.add_argument("--episode-ms", type=float, default=0.2)
-    a = ap.parse_args()
+    a = parse(Args, __doc__)
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "bench.rrd"
         base = run(a, record=False, out=out)

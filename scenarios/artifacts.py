@@ -16,12 +16,13 @@ artifact unnoticed.
 
 **Staleness shows itself.** The behaviour digests are hashes of the golden sweep's
 records (``tests/data/golden_sweep.json``: every method in the grid, in physics at
-``exact`` and at ``noisy``), one per part a study can depend on: ``grid``,
+``exact`` and at ``noisy``), one per method in each part a study can depend on: ``grid``,
 ``physics-exact``, ``physics-noisy``. A change that alters results must regenerate the
-golden file (its test fails otherwise), which changes the digest of the part it touched;
-every table measured with the old digest then renders with a banner naming what changed
-and the command that re-measures it, until that command is re-run. A refactor that
-keeps every record leaves every table fresh.
+golden file (its test fails otherwise), which changes the digests of the methods it
+touched; every table measured with an old digest then renders with a banner naming what
+changed and the command that re-measures it, until that command is re-run. A refactor that
+keeps every record leaves every table fresh, and so does a new method (no table measured
+it). The study script's own code is hashed too (:func:`study_code_digest`).
 """
 
 from __future__ import annotations
@@ -59,14 +60,42 @@ def part_of(key: str) -> str:
     return "physics-noisy" if "|fid=" in key else "physics-exact"
 
 
-def behaviour_digests(golden: Path = GOLDEN) -> dict[str, str]:
-    """12 hex digits per part: a hash of the golden records of that part."""
+def method_of(key: str) -> str:
+    """The method a golden record's key names (the field after its world and fidelity)."""
+    fields = key.split("|")
+    i = next(i for i, f in enumerate(fields) if f in ("grid", "physics"))
+    rest = [f for f in fields[i + 1:] if not f.startswith("fid=")]
+    return rest[0]
+
+
+def _digest(rows: list) -> str:
+    return hashlib.sha256(json.dumps(rows).encode()).hexdigest()[:12]
+
+
+def behaviour_digests(golden: Path = GOLDEN) -> dict[str, dict[str, str]]:
+    """Per part, 12 hex digits per method: a hash of that method's golden records in the
+    part (and under ``"*"`` one of the whole part, what artifacts written before the
+    per-method digests recorded). A table is stale when a method it measured changed, and
+    stays fresh when a method is added."""
     records = json.loads(golden.read_text())
-    out = {}
+    out: dict[str, dict[str, str]] = {}
     for part in PARTS:
         rows = sorted((k, v) for k, v in records.items() if part_of(k) == part)
-        out[part] = hashlib.sha256(json.dumps(rows).encode()).hexdigest()[:12]
+        methods = sorted({method_of(k) for k, _ in rows})
+        out[part] = {"*": _digest(rows),
+                     **{m: _digest([r for r in rows if method_of(r[0]) == m]) for m in methods}}
     return out
+
+
+def changed_in(recorded: str | dict[str, str], now: object) -> list[str] | None:
+    """What changed in one part since ``recorded``: None (nothing), [] (the part as a
+    whole) or the methods whose records changed or are gone."""
+    if not isinstance(now, dict):
+        return []
+    if isinstance(recorded, str):  # written before the per-method digests
+        return None if now.get("*") == recorded else []
+    methods = sorted(m for m, d in recorded.items() if now.get(m) != d)
+    return methods or None
 
 
 def code_version() -> str:
@@ -172,7 +201,8 @@ def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any
     digests = behaviour_digests()
     doc = {"format": FORMAT, "name": name, "command": command,
            "date": _dt.date.today().isoformat(), "code_version": code_version(),
-           "behaviour": {p: digests[p] for p in parts}, "wall_s": process_wall_s(),
+           "behaviour": {p: {m: d for m, d in digests[p].items() if m != "*"} for p in parts},
+           "wall_s": process_wall_s(),
            "machine": machine_load(), "data": data}
     if study is not None:
         doc["study"] = study_digest(study)
@@ -246,7 +276,11 @@ def stale_parts(doc: dict[str, Any], now: dict[str, str] | None = None) -> list[
     """The parts whose behaviour changed since the artifact was measured, and the study's
     own script when its text changed (artifacts that recorded it)."""
     now = now or behaviour_digests()
-    stale = sorted(p for p, d in doc["behaviour"].items() if now.get(p) != d)
+    stale = []
+    for part, recorded in sorted(doc["behaviour"].items()):
+        methods = changed_in(recorded, now.get(part))
+        if methods is not None:
+            stale.append(f"{part} ({', '.join(methods)})" if methods else part)
     study = doc.get("study")
     if study is not None:
         if study_changed(study):

@@ -27,11 +27,32 @@ def test_behaviour_digests_cover_every_part_and_follow_the_golden_records(tmp_pa
                "m#d|physics|fid=noisy|haql|t10|s0|e30": "c"}
     golden.write_text(json.dumps(records))
     before = behaviour_digests(golden)
-    assert set(before) == set(artifacts.PARTS)
+    assert set(before) == set(artifacts.PARTS) and set(before["grid"]) == {"*", "st-ql"}
     records["m#d|physics|fid=noisy|haql|t10|s0|e30"] = "changed"
     golden.write_text(json.dumps(records))
     after = behaviour_digests(golden)
     assert [p for p in artifacts.PARTS if before[p] != after[p]] == ["physics-noisy"]
+
+
+def test_a_new_method_leaves_every_table_fresh_and_a_changed_one_names_itself(tmp_path):
+    """A table is stale when a method it measured changed; a method added to the golden
+    sweep (a new reference method, say) changes no table measured before it."""
+    golden = tmp_path / "g.json"
+    records = {"m#d|grid|st-ql|t10|s0|e100": "a", "m#d|grid|haql|t10|s0|e100": "b"}
+    golden.write_text(json.dumps(records))
+    doc = {"behaviour": {"grid": {k: v for k, v in behaviour_digests(golden)["grid"].items()
+                                  if k != "*"}}}
+    records["m#d|grid|lrta-star|t10|s0|e100"] = "new"
+    golden.write_text(json.dumps(records))
+    assert stale_parts(doc, behaviour_digests(golden)) == []
+    records["m#d|grid|haql|t10|s0|e100"] = "changed"
+    golden.write_text(json.dumps(records))
+    assert stale_parts(doc, behaviour_digests(golden)) == ["grid (haql)"]
+    legacy = {"behaviour": {"grid": behaviour_digests(golden)["grid"]["*"]}}
+    assert stale_parts(legacy, behaviour_digests(golden)) == []
+    records["m#d|grid|st-ql|t10|s0|e100"] = "changed too"
+    golden.write_text(json.dumps(records))
+    assert stale_parts(legacy, behaviour_digests(golden)) == ["grid"]
 
 
 def test_an_artifact_records_its_provenance_and_turns_stale_with_the_behaviour(tmp_path):

@@ -15,6 +15,7 @@ Subpackages, top to bottom (a package imports only those below it):
 - ``figures``: matplotlib figures and route drawings;
 """
 
+import importlib.util
 from pathlib import Path as _Path
 
 
@@ -23,8 +24,6 @@ def _check_siblings() -> None:
     package of that name (the script's folder comes first on ``sys.path``): without this the
     first sign is an obscure error deep inside an import, or Gymnasium's "Namespace rnhql
     not found"."""
-    import importlib.util
-
     home = _Path(__file__).resolve().parent.parent
     for name in ("sim", "learning"):
         spec = importlib.util.find_spec(name)

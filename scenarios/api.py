@@ -30,6 +30,11 @@ from typing import Any
 
 import numpy as np
 
+from learning.compiled.readout import greedy_actions
+from learning.drivers.checkpoint import load_checkpoint
+from learning.drivers.train import greedy_test
+from learning.geometry import geometry_of
+from learning.plain.policy import policy_state
 from scenarios.api_args import (
     DEFAULT_EPISODES,
     MAX_DRIVES,
@@ -54,10 +59,31 @@ from scenarios.api_args import (
     whole,
     worlds_arg,
 )
-from scenarios.runs.spec import WORLDS, ExperimentError, RunSpec
+from scenarios.runs.physics_grading import FINAL_TAG, Grader
+from scenarios.runs.single import train_single
+from scenarios.runs.spec import (
+    WORLDS,
+    ExperimentError,
+    RunSpec,
+    layout_digest,
+    make_config,
+    method_class,
+    settable_fields,
+)
+from scenarios.sweep.backends import Progress, run_local, run_ray
+from scenarios.sweep.run import (
+    SweepRecording,
+    assemble,
+    make_specs,
+    matches_optimum,
+    optimum_at_fidelity,
+    run_sweep,
+)
 from scenarios.values import Comparison, Grade, Optimum, Run
 from sim.errors import InputError
 from sim.physics.fidelity import PRESETS, Fidelity
+from sim.physics.models.optimum import continuous_optimum_m
+from sim.physics.models.transition import physics_model
 from sim.scenario import Cell, Scenario
 
 __all__ = ["Comparison", "Grade", "InputError", "Optimum", "Run", "compare", "grade",
@@ -98,7 +124,6 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
     record_values_every = whole(fn, "record_values_every", record_values_every, 1,
                                  MAX_EPISODES, 300)
     sc, model = problem_of(fn, scenario, start, goal, rewards_text, s_starts, [world])
-    from scenarios.runs.single import train_single
 
     rec_path = record_arg(fn, record, sc.name, f"{name.replace(':', '.')}-{world}-s{seed}")
     spec = RunSpec(scenario, name, seed, episodes, world, overrides, start=start, goal=goal,
@@ -151,8 +176,6 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
                    "pass out='DIR' as well, or drop resume")
     sc, _ = problem_of(fn, scenario, start, goal, rewards_text, s_starts, worlds)
     per_method = settings_per_method(names, overrides)
-    from scenarios.sweep.backends import Progress
-    from scenarios.sweep.run import SweepRecording, assemble, make_specs, run_sweep
 
     specs = make_specs(scenario, names, list(range(seed_base, seed_base + n_seeds)), episodes,
                        worlds, per_method, start=start, goal=goal, rewards=rewards_text,
@@ -187,8 +210,6 @@ def settings_per_method(methods: Sequence[str], overrides: tuple[tuple[str, floa
                         ) -> dict[str, tuple[tuple[str, float], ...]]:
     """``settings`` (``--set``) for every method that has the field; an error only when none
     has it. Every method's config is built here once, so a bad value fails before any run."""
-    from scenarios.runs.spec import make_config, method_class, settable_fields
-
     out: dict[str, tuple[tuple[str, float], ...]] = {}
     for m in methods:
         make_config(m, ())
@@ -207,8 +228,6 @@ def settings_per_method(methods: Sequence[str], overrides: tuple[tuple[str, floa
 
 def _backend(fn: str, backend: str, address: str | None, jobs: int | None,
              start_method: str | None) -> tuple[Callable[..., Any], dict[str, Any]]:
-    from scenarios.sweep.backends import run_local, run_ray
-
     if backend == "local":
         if address is not None:
             raise err(fn, "address", "only applies with backend='ray'",
@@ -250,10 +269,6 @@ def optimum(scenario: ScenarioLike, *, fidelity: Any = "exact", rewards: Any = N
 
 
 def _optimum(sc: Scenario, model: Any, fid: Fidelity) -> Optimum:
-    from scenarios.sweep.run import optimum_at_fidelity
-    from sim.physics.models.optimum import continuous_optimum_m
-    from sim.physics.models.transition import physics_model
-
     exact = physics_model(sc).optimal_route_length
     if fid.is_exact:
         v, p = (float(exact), 1.0) if exact >= 0 else (float("inf"), 0.0)
@@ -300,10 +315,6 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
     sc, model = problem_of(fn, scenario, cell_arg(fn, "start", start), cell_arg(fn, "goal", goal),
                          rewards_arg(fn, rewards), None, ["physics"])
     table = policy_table(fn, policy, model.n_states)
-    from learning.drivers.train import greedy_test
-    from learning.plain.policy import policy_state
-    from scenarios.runs.physics_grading import FINAL_TAG, Grader
-    from scenarios.sweep.run import matches_optimum
 
     grader = Grader(sc, fid)
     st = policy_state(table)
@@ -318,8 +329,6 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
         if fid.is_exact:
             optimal = bool(r.reached[0]) and int(r.primitives[0]) == opt.physics_route_length
         else:
-            from scenarios.sweep.run import optimum_at_fidelity
-
             with _optimum_always():
                 at = optimum_at_fidelity(sc, fid)
             optimal = None if at is None else matches_optimum(summary, at)
@@ -335,15 +344,10 @@ def route(agent: str | Path, scenario: ScenarioLike, *, fidelity: Any = "exact",
           rewards: Any = None, drives: int = 50, seed: int = 0) -> Grade:
     """A saved agent (``train(..., save=...)``, ``rnhql train --save``) graded from S: its
     greedy policy through :func:`grade`."""
-    from learning.compiled.readout import greedy_actions
-    from learning.drivers.checkpoint import load_checkpoint
-    from learning.geometry import geometry_of
-
     scenario = scenario_arg("route", scenario)
     _, model = problem_of("route", scenario, None, None, rewards_arg("route", rewards), None,
                          ["physics"])
     ck = load_checkpoint(agent, None, model.n_states, geometry_of(model))
-    from scenarios.runs.spec import layout_digest
 
     ck.check_problem({"layout": layout_digest(scenario)})  # trained on this layout
     return grade(greedy_actions(ck.state), scenario, fidelity=fidelity, drives=drives,

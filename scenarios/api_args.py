@@ -5,16 +5,21 @@ naming the function, the argument and the fix (the command's flags are checked b
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from scenarios.runs.spec import WORLDS, load
+from learning.config import MethodConfig
+from learning.methods.registry import METHODS, comparison_methods
+from learning.plain.learner import located_name, remember
+from scenarios.runs.spec import WORLDS, load, method_class, physics_budget
 from sim.errors import InputError
+from sim.files import check_output
 from sim.physics.fidelity import PRESETS, Fidelity, parse_fidelity
-from sim.scenario import REWARD_SCHEMES, Cell, Rewards, Scenario
+from sim.scenario import REWARD_SCHEMES, Cell, Rewards, Scenario, rewards_from_text
 
 DEFAULT_EPISODES = 3000  # the paper's
 DEFAULT_REWARDS = "goal-only"  # as the command: the paper's own is rewards="paper"
@@ -66,8 +71,6 @@ def cell_arg(fn: str, arg: str, value: Any) -> Cell | None:
 
 def rewards_arg(fn: str, rewards: Any) -> str | None:
     """The reward scheme as a sweep holds it: text, or None for the scenario's own."""
-    from sim.scenario import rewards_from_text
-
     if rewards is None:
         return DEFAULT_REWARDS
     if isinstance(rewards, Rewards):
@@ -106,15 +109,8 @@ def fidelity_arg(fn: str, fidelity: Any, physics: bool) -> Fidelity | None:
 def method_arg(fn: str, method: Any) -> str:
     """A method's name in a sweep: a registry name, or ``module:Class`` (a class given as an
     object is remembered in this process and the workers it forks)."""
-    from learning.config import MethodConfig
-    from learning.plain.learner import remember
-    from scenarios.runs.spec import method_class
-
     if isinstance(method, type):
         if issubclass(method, MethodConfig):
-            from learning.methods.registry import METHODS
-            from learning.plain.learner import located_name
-
             name = method.cli if METHODS.get(method.cli) is method else located_name(method)
         else:
             try:
@@ -135,8 +131,6 @@ def method_arg(fn: str, method: Any) -> str:
 
 
 def methods_arg(fn: str, methods: Any) -> list[str]:
-    from learning.methods.registry import comparison_methods
-
     if methods is None:
         return list(comparison_methods())
     if isinstance(methods, str | type):
@@ -180,10 +174,6 @@ def settings_arg(fn: str, settings: Mapping[str, float] | None) -> tuple[tuple[s
 
 def record_arg(fn: str, record: Any, name: str, rest: str) -> str | None:
     """``record``: True for the default path under recordings/, a .rrd path, or None."""
-    import re
-
-    from sim.files import check_output
-
     if record is None or record is False:
         return None
     if record is True:
@@ -201,8 +191,6 @@ def record_arg(fn: str, record: Any, name: str, rest: str) -> str | None:
 
 def problem_of(fn: str, scenario: str | Scenario, start: Cell | None, goal: Cell | None,
              rewards: str | None, s_starts: float | None, worlds: Sequence[str]):
-    from scenarios.runs.spec import physics_budget
-
     if s_starts is not None and not (isinstance(s_starts, int | float) and
                                      0.0 <= s_starts < 1.0):
         raise err(fn, "s_starts", f"must be in [0, 1), got {s_starts!r}",

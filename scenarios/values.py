@@ -22,6 +22,13 @@ from typing import Any
 
 import numpy as np
 
+from learning.config import MethodConfig
+from learning.plain.learner import located_name
+from scenarios.runs.results import summary_markdown, write_results
+from scenarios.runs.spec import load, policy_from_text
+from scenarios.sweep.brief import summary_terminal
+from scenarios.sweep.outdir import check_out_dir
+from scenarios.sweep.run import ctrl_c_held
 from sim.scenario import Scenario
 
 
@@ -40,6 +47,7 @@ def show_recording(path: Path | None, width: int = 1000, height: int = 640) -> A
     if path is None:
         raise ValueError("this value has no recording: pass record=True (or a .rrd path)")
     try:
+        # optional (rnhql[notebook]); 335 ms at import
         from rerun.notebook import Viewer
     except ImportError:
         raise ImportError("showing a recording in a notebook needs Rerun's notebook viewer: "
@@ -77,8 +85,6 @@ class Run:
 
     @classmethod
     def from_record(cls, rec: Mapping[str, Any], recording: Path | None = None) -> Run:
-        from scenarios.runs.spec import policy_from_text
-
         pol = rec.get("final_policy") or {}
         above = rec.get("world") == "physics" and (rec.get("fidelity") or "exact") != "exact"
         length = int(rec["final_route_length"])
@@ -133,25 +139,18 @@ class Comparison:
 
     def summary(self) -> str:
         """The text of ``summary.md``: medians with quartiles and intervals, the verdict."""
-        from scenarios.runs.results import summary_markdown
-
         return summary_markdown(dict(self.results), self.methods)
 
     def brief(self, width: int = 100) -> str:
         """What ``rnhql compare`` prints: a compact table and the verdict's headlines, every
         line within ``width`` columns (:meth:`summary` has the full tables)."""
-        from scenarios.sweep.brief import summary_terminal
-
         return summary_terminal(dict(self.results), self.methods, width)
 
     def save(self, out: str | Path, figures: bool = True) -> Path:
         """Write ``results.json``, ``summary.md`` and (``figures``) the figures to ``out``, as
         ``rnhql compare --out`` does; returns the folder."""
+        # lazy: matplotlib costs 270 ms; save(figures=False) never draws
         from scenarios.figures.plots import all_figures
-        from scenarios.runs.results import write_results
-        from scenarios.runs.spec import load
-        from scenarios.sweep.outdir import check_out_dir
-        from scenarios.sweep.run import ctrl_c_held
 
         out = check_out_dir(Path(out), "out")
         results = dict(self.results)
@@ -171,9 +170,6 @@ class Comparison:
 
 
 def _method_key(cls: type) -> str:
-    from learning.config import MethodConfig
-    from learning.plain.learner import located_name
-
     return cls.cli if issubclass(cls, MethodConfig) else located_name(cls)
 
 

@@ -45,6 +45,7 @@ from learning import (
 )
 from learning.compiled.kernels import run_episodes
 from scenarios.bench.grid import python_q_learning_steps_per_s
+from scenarios.runs.spec import load
 from sim.grid import build_model
 from sim.scenario_io import resolve_scenario
 
@@ -192,8 +193,6 @@ def planning_steps_per_s(scenario: str = "paper-50", rewards: str = "goal-only")
     under the rewards the route-learning targets use: the kernel alone (seed 0, best of
     3) and through train_tabular (median of seeds 0-2), which differ with the seeds'
     mix of long exploring episodes."""
-    from scenarios.runs.spec import load
-
     _, model = load(scenario, None, None, rewards)
     rows = [("rnh_ql_plus", "rnh-ql+", n) for n in (10, 3, 0)]
     rows += [("dyna_q", "dyna-q", n) for n in (5, 10)]

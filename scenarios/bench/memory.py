@@ -19,6 +19,10 @@ import sys
 import tempfile
 from pathlib import Path
 
+from scenarios.artifacts import write_artifact
+from scenarios.studies.args import script_parser
+from scenarios.studies.maps.scaling_maps import write_problem
+
 METHODS = ("rnh-ql+", "haql", "rnh-ql", "dyna-q", "st-ql")
 
 
@@ -34,9 +38,6 @@ def peak_rss_mb(cmd: list[str], env: dict[str, str]) -> tuple[float, int]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from scenarios.studies.args import script_parser
-    from scenarios.studies.maps.scaling_maps import write_problem
-
     p = script_parser(__doc__)
     p.add_argument("--sizes", default="64,128,256,512", help="map sizes [cells a side]")
     p.add_argument("--kind", default="rooms", help="map kind (sim.maps.generators)")
@@ -74,8 +75,6 @@ def main(argv: list[str] | None = None) -> int:
                 cells.append(f"{rss:.0f} MB · {size_mb:.1f} MB")
             print(f"| {m} | " + " | ".join(cells) + " |", flush=True)
     if args.artifact:
-        from scenarios.artifacts import write_artifact
-
         cmd = ("python -m scenarios.bench.memory " + " ".join(argv if argv is not None
                                                                else sys.argv[1:]))
         write_artifact(f"memory.{args.artifact}", cmd.strip(), ["grid"],

@@ -17,6 +17,8 @@ Run: ``python -m scenarios.bench.physics_batch [--quick] [--plot FILE.png]
 from __future__ import annotations
 
 import json
+import os
+import platform
 import tempfile
 import time
 from pathlib import Path
@@ -24,8 +26,17 @@ from typing import Any
 
 import numpy as np
 
+from learning.methods.registry import comparison_methods
+from learning.streams import streams
+from scenarios.artifacts import ROOT, check_artifact_name, load_artifact, write_artifact
+from scenarios.bench.build import arena_toml
 from scenarios.bench.physics import _round
+from scenarios.figures.save import save_figure
+from scenarios.runs.physics import RunGroup, train_physics_runs
+from scenarios.runs.spec import load, make_config
+from scenarios.studies.args import script_parser
 from sim.grid import build_model
+from sim.physics.fidelity import parse_fidelity
 from sim.physics.kernel.batch import RouteBatch
 from sim.scenario import Scenario
 from sim.scenario_io import resolve_scenario
@@ -35,8 +46,6 @@ SIZES = (1, 4, 16, 64, 256, 1024)
 
 def arena_512() -> Scenario:
     """The 512 x 512 arena of ``scenarios.bench.build`` (seeded circles, paper-50 density)."""
-    from scenarios.bench.build import arena_toml
-
     with tempfile.TemporaryDirectory() as d:
         return resolve_scenario(str(arena_toml(512, Path(d))))
 
@@ -85,12 +94,6 @@ def learning(episodes: int = 300, seeds: int = 10, scenario: str = "paper-50",
              fidelity: str | None = None) -> dict:
     """One batch of ``len(methods) x seeds`` runs, as a physics compare trains them
     (``methods``: by default those ``rnhql compare`` runs)."""
-    from learning.methods.registry import comparison_methods
-    from learning.streams import streams
-    from scenarios.runs.physics import RunGroup, train_physics_runs
-    from scenarios.runs.spec import load, make_config
-    from sim.physics.fidelity import parse_fidelity
-
     sc, model = load(scenario, None, None, rewards)
     methods = comparison_methods() if methods is None else methods
     groups = []
@@ -123,12 +126,11 @@ def run_bench(quick: bool = False) -> dict[str, Any]:
 
 
 def plot(figures: dict[str, Any], path: Path) -> None:
+    # lazy: matplotlib costs 270 ms at import; rnhql bench --physics imports this module
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from scenarios.figures.save import save_figure
 
     fig, ax = plt.subplots(figsize=(6, 4))
     for name, rows in figures["scaling"].items():
@@ -148,14 +150,10 @@ def plot(figures: dict[str, Any], path: Path) -> None:
 
 def figure_from_artifact(name: str, path: Path) -> None:
     """Redraw the scaling plot from artifact ``name`` (``rnhql report --figures``)."""
-    from scenarios.artifacts import load_artifact
-
     plot(load_artifact(name)["data"], path)
 
 
 def main(argv: list[str] | None = None) -> int:
-    from scenarios.studies.args import script_parser
-
     ap = script_parser(__doc__)
     ap.add_argument("--quick", action="store_true", help="shorter timings, 30 episodes")
     ap.add_argument("--episodes", type=int, default=None,
@@ -166,10 +164,7 @@ def main(argv: list[str] | None = None) -> int:
                          "and redraw docs/physics_batch.png from it")
     args = ap.parse_args(argv)
     if args.artifact:
-        from scenarios.artifacts import check_artifact_name
-
         check_artifact_name(ap, args.artifact)
-    import os
 
     load_before = os.getloadavg()[0]  # other work on the machine skews every timing
     figs = {"scaling": scaling(0.5 if args.quick else 2.0, (1, 16, 256) if args.quick else SIZES),
@@ -177,10 +172,6 @@ def main(argv: list[str] | None = None) -> int:
     if args.plot is not None:
         plot(figs, args.plot)
     if args.artifact:
-        import platform
-
-        from scenarios.artifacts import ROOT, write_artifact
-
         figs["machine"] = {"cores": os.cpu_count(), "cpu": platform.processor() or
                            platform.machine(), "python": platform.python_version(),
                            "load_1min": [round(load_before, 2), round(os.getloadavg()[0], 2)]}

@@ -26,6 +26,14 @@ from typing import Any
 
 import numpy as np
 
+from learning.drivers.plain_train import train_plain
+from learning.drivers.train import train_tabular
+from learning.plain.learner import is_plain
+from scenarios.artifacts import check_artifact_name, write_artifact
+from scenarios.runs.spec import load, make_config
+from scenarios.sweep.backends import run_local
+from scenarios.sweep.run import make_specs
+
 SCENARIO = "paper-50"
 PORT = "tests.plain_learners.st_ql:STQLPort"
 
@@ -39,11 +47,6 @@ def _port_importable() -> None:
 
 def grid_steps_per_s(method: str, episodes: int, repeats: int) -> float:
     """Best-of-``repeats`` env steps/s of a fresh learner trained ``episodes`` episodes."""
-    from learning.drivers.plain_train import train_plain
-    from learning.drivers.train import train_tabular
-    from learning.plain.learner import is_plain
-    from scenarios.runs.spec import load, make_config
-
     _, model = load(SCENARIO, rewards="goal-only")
     cfg = make_config(method)
     train = train_plain if is_plain(cfg) else train_tabular
@@ -58,9 +61,6 @@ def grid_steps_per_s(method: str, episodes: int, repeats: int) -> float:
 
 def physics_rates(seeds: int, episodes: int, with_port: bool) -> dict[str, float]:
     """Primitives per second of each method's own training time in a physics sweep."""
-    from scenarios.sweep.backends import run_local
-    from scenarios.sweep.run import make_specs
-
     methods = ["st-ql", PORT] if with_port else ["st-ql"]
     specs = make_specs(SCENARIO, methods, list(range(seeds)), episodes, ["physics"],
                        rewards="goal-only")
@@ -99,14 +99,10 @@ def main(argv: list[str] | None = None) -> int:
                    help="also write docs/results/plain-learner.NAME.json")
     a = p.parse_args(argv)
     if a.artifact is not None:
-        from scenarios.artifacts import check_artifact_name
-
         check_artifact_name(p, a.artifact)
     data = measure(a.episodes, a.repeats, a.seeds, a.physics_episodes)
     print(json.dumps(data, indent=1))
     if a.artifact is not None:
-        from scenarios.artifacts import write_artifact
-
         cmd = (f"python -m scenarios.bench.plain --episodes {a.episodes} --repeats {a.repeats} "
                f"--seeds {a.seeds} --physics-episodes {a.physics_episodes} "
                f"--artifact {a.artifact}")

@@ -16,6 +16,7 @@ import functools
 import os
 import signal
 import sys
+import threading
 from collections.abc import Sequence
 
 
@@ -80,9 +81,8 @@ def _import_app():
     ImportError that the library catches and ignores, and the command then ran on as if
     never interrupted (seen once in CI: exit 0). A Ctrl-C pressed meanwhile is raised
     right after, as one."""
-    import threading
-
     if threading.current_thread() is not threading.main_thread():
+        # lazy by design: main() imports the parser itself (the package docstring says why)
         from scenarios.cli.app import main as run
 
         return run
@@ -92,6 +92,7 @@ def _import_app():
         if signal.getsignal(sig) is signal.SIG_DFL:
             held[sig] = signal.signal(sig, lambda s, _f: pressed.append(s))
     try:
+        # lazy by design: main() imports the parser itself (the package docstring says why)
         from scenarios.cli.app import main as run
     finally:
         for sig, old in held.items():

@@ -14,7 +14,9 @@ import signal
 import sys
 import threading
 from collections.abc import Sequence
+from importlib.metadata import PackageNotFoundError, version
 
+from learning.drivers.checkpoint import CheckpointError
 from learning.methods.registry import comparison_methods
 from scenarios.cli import (
     bench,
@@ -64,16 +66,12 @@ class _Help(argparse.HelpFormatter):
 
 def _methods_epilog(examples: str) -> str:
     """A subcommand's help ends with the methods it can run and examples."""
-    from learning.methods.registry import comparison_methods
-
     return (f"methods: {', '.join(comparison_methods())} (docs/methods.md)\n\n"
             f"examples:\n  {examples}")
 
 
 def _version() -> str:
     """The installed package's version (what results.json records)."""
-    from importlib.metadata import PackageNotFoundError, version
-
     try:
         return version("rnhql")
     except PackageNotFoundError:
@@ -271,8 +269,6 @@ def main(argv: Sequence[str] | None = None) -> int:
               "--resume keeps the runs already finished", file=sys.stderr)
         return 1
     except Exception as err:
-        from learning.drivers.checkpoint import CheckpointError
-
         if isinstance(err, CheckpointError):
             print(f"rnhql: error: {err}", file=sys.stderr)
             return 2

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from learning.jitcache import kernels_cached
 from scenarios.runs.spec import (  # noqa: F401  (physics_budget: re-exported)
     MAX_PHYSICS_STEPS_PER_EPISODE,
     WORLDS,
@@ -22,7 +23,10 @@ from scenarios.runs.spec import (  # noqa: F401  (physics_budget: re-exported)
 )
 from scenarios.sweep.outdir import RECORD_DEFAULT
 from sim.errors import InputError
+from sim.maps.movingai import load_map, load_scen
 from sim.physics.fidelity import Fidelity, parse_fidelity
+from sim.physics.jitcache import kernels_cached as physics_cached
+from sim.scenario import REWARD_SCHEMES
 
 if TYPE_CHECKING:
     from sim.grid import TabularModel
@@ -97,8 +101,6 @@ def starts_note(sc) -> str:
 def rewards_arg(args: argparse.Namespace) -> str | None:
     """The reward scheme a training command uses: ``--rewards``, else goal-only; None for
     ``--rewards scenario`` (the scenario file's own scheme)."""
-    from sim.scenario import REWARD_SCHEMES
-
     if args.rewards is None:
         return DEFAULT_REWARDS
     if args.rewards == "scenario":
@@ -183,8 +185,6 @@ def scenario_from_args(args: argparse.Namespace):  # -> Scenario
 
 def scen_problem(args: argparse.Namespace):  # -> (map path, ScenProblem)
     """The ``.scen`` problem chosen by ``--index`` or ``--bucket``; errors name the fix."""
-    from sim.maps.movingai import load_scen
-
     path = Path(args.scen)
     if not path.is_file():
         raise CliError(str(path), "--scen", "is not a file", "pass a Moving AI .scen file")
@@ -211,7 +211,6 @@ def scen_problem(args: argparse.Namespace):  # -> (map path, ScenProblem)
             map_path.suffix != ".map" or not map_path.is_file():
         raise CliError(str(path), "map column", f"names {problem.map_name!r}, not a .map file "
                        f"beside the .scen", "put the .map next to the .scen and name it there")
-    from sim.maps.movingai import load_map
 
     grid = load_map(map_path)
     if (grid.width, grid.height) != (problem.width, problem.height):
@@ -379,9 +378,6 @@ def compile_notice(n_methods: int, physics: bool = False) -> None:
     """Say so when the numba kernels are not on disk yet: the first run compiles them
     (a minute or more on 2 cores) before any progress can show. ``physics``: the command
     drives the physics world, whose kernels compile on its first use (tens of seconds)."""
-    from learning.jitcache import kernels_cached
-    from sim.physics.jitcache import kernels_cached as physics_cached
-
     parts = []
     if n_methods and not kernels_cached():
         parts.append(f"the numba kernels of {n_methods} method{'' if n_methods == 1 else 's'}")

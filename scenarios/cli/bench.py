@@ -6,6 +6,9 @@ from __future__ import annotations
 import argparse
 import json
 
+from scenarios.bench import grid as bench_grid
+from scenarios.bench import learners as bench
+
 
 def _flat(values: dict, prefix: str = ""):
     """(key, value) pairs of a nested dict, nested keys joined with a dot."""
@@ -24,11 +27,9 @@ def _number(v) -> str:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from scenarios.bench import grid as bench_grid
-    from scenarios.bench import learners as bench
-
     figures: dict = {"foundation": bench_grid.run_bench(), "learning": bench.run_bench()}
     if args.physics:
+        # lazy: scenarios.bench.physics and .physics_batch cost 8 ms at startup
         from scenarios.bench import physics as bench_physics
         from scenarios.bench import physics_batch as bench_batch
 

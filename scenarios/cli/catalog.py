@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from scenarios.cli.args import scenario_from_args
 from sim.grid import build_model
 from sim.scenario import Scenario
-from sim.scenario_io import builtin_names, resolve_scenario
+from sim.scenario_io import builtin_dir, builtin_names, resolve_scenario
 
 
 @dataclass(frozen=True)
@@ -62,8 +62,6 @@ def format_table(rows: list[list[str]], header: list[str]) -> str:
 
 def example_toml() -> str:
     """A complete scenario file, every field commented (``rnhql scenarios --example``)."""
-    from sim.scenario_io import builtin_dir
-
     return (builtin_dir() / "example.toml.txt").read_text(encoding="utf-8")
 
 

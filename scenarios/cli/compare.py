@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import argparse
 import os
+import textwrap
 from pathlib import Path
 
+from learning.methods.registry import comparison_methods
 from scenarios.cli.args import (
     MAX_EPISODES,
     MAX_SEEDS,
@@ -23,6 +25,7 @@ from scenarios.cli.args import (
     unique,
 )
 from scenarios.runs.spec import make_config
+from scenarios.sweep.brief import TERMINAL_COLUMNS
 from scenarios.sweep.outdir import record_path
 from sim.errors import InputError
 
@@ -30,7 +33,7 @@ from sim.errors import InputError
 def cmd_compare(args: argparse.Namespace) -> int:
     """Parse, check every flag (errors name the flag), run :func:`scenarios.api.compare`,
     print its summary."""
-    from learning.methods.registry import comparison_methods
+    # lazy: scenarios.api (sweeps, values) costs 22 ms at startup
     from scenarios import api
 
     pb = problem_arg(args)  # the scenario checked and loaded before any work
@@ -76,10 +79,6 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 def _say(text: str) -> None:
     """A line of the command's output, wrapped to the summary's 100 columns."""
-    import textwrap
-
-    from scenarios.sweep.brief import TERMINAL_COLUMNS
-
     print("\n".join(textwrap.wrap(text, TERMINAL_COLUMNS, subsequent_indent="  ",
                                    break_on_hyphens=False, break_long_words=False)))
 

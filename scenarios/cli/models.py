@@ -17,6 +17,7 @@ import math
 import time
 from pathlib import Path
 
+from scenarios.artifacts import check_artifact_target, write_artifact
 from scenarios.cli.args import (
     compile_notice,
     positive,
@@ -26,14 +27,25 @@ from scenarios.cli.args import (
 )
 from scenarios.sweep.outdir import check_output_file
 from sim.grid.actions import ACTION_NAMES
+from sim.physics.fidelity import parse_fidelity
+from sim.physics.models.optimum import continuous_optimum_m
+from sim.physics.models.stochastic import (
+    ARRIVED,
+    FACING,
+    MAX_SAMPLES,
+    REFINE,
+    RESTING,
+    Sampling,
+    is_resting,
+)
+from sim.physics.models.transition import physics_model
+from sim.physics.static import PhysicsConfig
 
 MAX_ROLLOUTS = 100_000
 MAX_REPEATS = 100_000  # aliasing: drives per (cell, action)
 
 
 def _states_line(model) -> str:
-    from sim.physics.models.stochastic import ARRIVED, FACING, RESTING
-
     counts = model.context_counts()
     facing = counts[FACING:FACING + len(ACTION_NAMES)]
     resting = counts[RESTING:RESTING + len(ACTION_NAMES)]
@@ -54,18 +66,12 @@ def _states_line(model) -> str:
 
 
 def cmd_optimum(args: argparse.Namespace) -> int:
-    from sim.physics.fidelity import parse_fidelity
+    # lazy: sim.physics.models.build, .solve, .stochastic_rollouts cost 8 ms at startup
     from sim.physics.models.build import cache_dir, digest, stochastic_model
-    from sim.physics.models.optimum import continuous_optimum_m
     from sim.physics.models.solve import solve
-    from sim.physics.models.stochastic import MAX_SAMPLES, REFINE, Sampling, is_resting
     from sim.physics.models.stochastic_rollouts import drive_model_policy
-    from sim.physics.models.transition import physics_model
-    from sim.physics.static import PhysicsConfig
 
     if getattr(args, "artifact", None):
-        from scenarios.artifacts import check_artifact_target
-
         check_artifact_target(args.artifact)  # before the work: a name, in a checkout
     fid = parse_fidelity(args.fidelity)
     samples = (None if args.samples is None
@@ -118,8 +124,6 @@ def cmd_optimum(args: argparse.Namespace) -> int:
               f"(95 % interval {lo:.3f}-{hi:.3f}), mean {r.mean_primitives:.2f} primitives "
               f"(median {r.median_primitives:g}), {r.mean_contacts:.2f} contacts per rollout")
     if getattr(args, "artifact", None):
-        from scenarios.artifacts import write_artifact
-
         driven = None if not rollouts else {
             "rollouts": rollouts, "p_goal": r.p_goal, "p_goal_ci95": list(r.p_goal_interval),
             "primitives_mean": r.mean_primitives, "contacts_mean": r.mean_contacts}
@@ -139,11 +143,10 @@ def cmd_optimum(args: argparse.Namespace) -> int:
 
 def cmd_aliasing(args: argparse.Namespace) -> int:
     """``rnhql aliasing``: the next-cell distribution of every (cell, action) at a fidelity."""
+    # lazy: the aliasing study (matplotlib) costs 290 ms at startup
     from scenarios.studies.ladder.aliasing import run
 
     if args.artifact:
-        from scenarios.artifacts import check_artifact_target
-
         check_artifact_target(args.artifact)
     name, start, goal = scenario_key(args)
     seed_value(args.seed, "--seed")

@@ -8,23 +8,26 @@ from pathlib import Path
 
 import numpy as np
 
+from learning.compiled.readout import greedy_actions, potential, q_table
+from learning.drivers.checkpoint import load_checkpoint
+from learning.drivers.train import greedy_test
+from learning.geometry import geometry_of
 from scenarios.cli.args import (
     check_world,
     compile_notice,
     physics_budget,
     problem_arg,
 )
+from scenarios.figures.routes import ascii_routes, route_png
+from scenarios.runs.physics_grading import FINAL_ROLLOUTS, FINAL_TAG
+from scenarios.runs.spec import layout_digest
 from scenarios.sweep.outdir import check_output_file, record_path
+from sim.grid.planning import bfs_route
+from sim.physics.fidelity import parse_fidelity
+from sim.physics.models.rollouts import drive_policy
 
 
 def cmd_route(args: argparse.Namespace) -> int:
-    from learning.drivers.checkpoint import load_checkpoint
-    from learning.drivers.train import greedy_test
-    from learning.geometry import geometry_of
-    from scenarios.figures.routes import ascii_routes, route_png
-    from scenarios.runs.spec import layout_digest
-    from sim.grid.planning import bfs_route
-
     pb = problem_arg(args)
     sc, model = pb.sc, pb.model
     check_world(args.world)
@@ -40,11 +43,7 @@ def cmd_route(args: argparse.Namespace) -> int:
     trajectory = driven = None
     print(f"{ckpt.config.name} agent {args.agent} ({ckpt.episodes} episodes) on {sc.name}")
     if args.world == "physics":
-        from learning.compiled.readout import greedy_actions
         compile_notice(0, physics=True)
-        from scenarios.runs.physics_grading import FINAL_ROLLOUTS, FINAL_TAG
-        from sim.physics.fidelity import parse_fidelity
-        from sim.physics.models.rollouts import drive_policy
 
         fid = pb.fidelity or parse_fidelity(sc.physics)
         n = 1 if fid.is_exact else FINAL_ROLLOUTS
@@ -60,7 +59,7 @@ def cmd_route(args: argparse.Namespace) -> int:
               f"{driven.sim_time_s[0]:.1f} s sim time")
     record = record_path(args, sc.name, f"route-{ckpt.method}-{args.world}")
     if record is not None:
-        from learning.compiled.readout import greedy_actions, potential, q_table
+        # lazy: scenarios.recording (rerun) costs 270 ms at startup
         from scenarios.recording.recorder import Recorder
 
         with Recorder.create(record, sc, model, method=ckpt.method, config=ckpt.config,

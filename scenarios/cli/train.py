@@ -9,6 +9,8 @@ import argparse
 import json
 from pathlib import Path
 
+from learning.drivers.checkpoint import load_checkpoint
+from learning.geometry import geometry_of
 from scenarios.cli.args import (
     MAX_EPISODES,
     check_world,
@@ -25,11 +27,12 @@ from scenarios.cli.args import (
 from scenarios.runs.spec import ExperimentError, make_config
 from scenarios.sweep.outdir import check_output_file, record_path
 from sim.files import atomic_write_text
+from sim.physics.fidelity import parse_fidelity
 
 
 def cmd_train(args: argparse.Namespace) -> int:
+    # lazy: scenarios.api (sweeps, values) costs 22 ms at startup
     from scenarios import api
-    from sim.physics.fidelity import parse_fidelity
 
     pb = problem_arg(args)
     sc, model = pb.sc, pb.model
@@ -54,9 +57,6 @@ def cmd_train(args: argparse.Namespace) -> int:
     print(f"{cfg.name} on {sc.name} ({world}), seed {args.seed}, {args.episodes} episodes, "
           f"rewards {sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
     if args.resume:  # say what it resumes from (the checks run again in the run itself)
-        from learning.drivers.checkpoint import load_checkpoint
-        from learning.geometry import geometry_of
-
         ck = load_checkpoint(args.resume, args.method, model.n_states, geometry_of(model))
         print(f"resuming {args.resume}: {ck.episodes} of {args.episodes} episodes done, "
               f"training the other {max(args.episodes - ck.episodes, 0)}")

@@ -27,6 +27,7 @@ def _check_display(path: Path) -> None:
 
 
 def _serve_web(path: Path, port: int | None) -> int:
+    # lazy: scenarios.recording.viewer costs 9 ms at startup
     from scenarios.recording.viewer import ViewerError, WebViewer, ssh_hint
 
     viewer = WebViewer(path, web_port=port or None)
@@ -50,6 +51,8 @@ def _serve_web(path: Path, port: int | None) -> int:
 
 
 def _open_native(path: Path) -> int:
+    # lazy: scenarios.recording.viewer costs 9 ms at startup (and tests/test_security.py
+    # stands in for viewer.spawn: looked up per call)
     from scenarios.recording.viewer import spawn, stop_group
 
     proc = spawn([str(path)])
@@ -61,6 +64,7 @@ def _open_native(path: Path) -> int:
 
 def cmd_view(args: argparse.Namespace) -> int:
     """Open a recording: the native viewer, or the web viewer served on loopback."""
+    # lazy: scenarios.recording.viewer costs 9 ms at startup
     from scenarios.recording.viewer import Stopped, stopping_on_signals
 
     path = Path(args.file)

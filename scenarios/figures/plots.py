@@ -14,8 +14,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.colors import ListedColormap
 from matplotlib.patches import Circle as CirclePatch
 
+from learning.metrics import windowed_reward_per_step
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 from sim.grid import TabularModel
@@ -44,8 +46,6 @@ def _series(run: dict[str, Any], key: str, window: int) -> np.ndarray:
     steps), never a mean of per-episode ratios that one-step episodes would spike.
     """
     if key == "reward_per_step":
-        from learning.metrics import windowed_reward_per_step
-
         return windowed_reward_per_step(np.asarray(run["return_per_episode"]),
                                         np.asarray(run["steps_per_episode"]),
                                         window)[window - 1:]
@@ -138,8 +138,6 @@ def draw_map(ax: plt.Axes, sc: Scenario, model: TabularModel) -> None:
         ax.add_patch(CirclePatch((o.x_m, o.y_m), o.radius_m, color="#464a54", lw=0))
     c = sc.cell_size_m
     if sc.blocked_cells:  # one image, not a patch per cell (a 512² map has ~10^5 of them)
-        from matplotlib.colors import ListedColormap
-
         walls = np.zeros((sc.ny, sc.nx))
         cells = np.asarray(sc.blocked_cells, dtype=np.int64)
         walls[cells[:, 1], cells[:, 0]] = 1.0

@@ -33,6 +33,7 @@ def ascii_routes(model: TabularModel, route: Sequence[int], optimum: Sequence[in
 def route_png(sc: Scenario, model: TabularModel, route: Sequence[int], path: Path,
               title: str, trajectory: np.ndarray | None = None) -> None:
     """The map with the optimum, the learned grid route and (optionally) a driven trajectory."""
+    # lazy: matplotlib costs 270 ms at startup (rnhql route draws only with --png)
     import matplotlib
 
     matplotlib.use("Agg")

@@ -14,6 +14,8 @@ from scenarios.palette import method_colour_mpl
 
 
 def figure(rows: dict[str, list[dict[str, Any]]], path: Path, title: str) -> None:
+    # lazy: matplotlib costs 270 ms at import; the docs' Cog blocks import this module
+    # (through scaling_maps_figure) and never draw
     import matplotlib
 
     matplotlib.use("Agg")

@@ -19,10 +19,12 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import rerun as rr
 
 from scenarios.recording import blueprint
-from scenarios.recording.recorder import RecordingFile, run_prefix, scene
+from scenarios.recording.recorder import Recorder, RecordingFile, run_prefix, scene
+from scenarios.recording.summary import log_summary
 from sim.grid import TabularModel
 from sim.scenario import Scenario
 
@@ -56,8 +58,6 @@ def _log_header(stream: rr.RecordingStream, scenario: Scenario, runs: Sequence[t
     stream.send_property("rnhql", rr.AnyValues(**properties))
     key = None
     if curves:
-        from scenarios.recording.summary import log_summary
-
         log_summary(stream, curves)
         key = scene.log_comparison_key(stream, list(curves))
     stream.send_blueprint(blueprint.comparison_blueprint(runs, scenario, run_prefix, key),
@@ -68,10 +68,6 @@ def log_curves_of(file: RecordingFile, scenario: Scenario, model: TabularModel, 
                   record: dict) -> None:
     """A curves-only run's per-seed curves, from its results.json record, under its subtree:
     what it would have logged itself (every 10th episode), without a stream of its own."""
-    import numpy as np
-
-    from scenarios.recording.recorder import Recorder
-
     rec = Recorder.create(None, scenario, model, method=record["method"],
                           config=record.get("config", {}), seed=int(record["seed"]),
                           world=record.get("world", "grid"), fidelity=record.get("fidelity"),

@@ -9,10 +9,8 @@ import atexit
 import contextlib
 import errno
 import os
-import shutil
 import signal
 import subprocess
-import sys
 import uuid
 import warnings
 from pathlib import Path
@@ -20,6 +18,7 @@ from typing import Protocol
 
 import rerun as rr
 
+from scenarios.recording.viewer import rerun_cli
 from scenarios.signals import sigint_handled_by
 from sim.errors import InputError
 from sim.files import move_into_place, no_space_left
@@ -29,12 +28,6 @@ class _Flushable(Protocol):
     prefix: str
 
     def flush(self) -> None: ...
-
-
-def rerun_cli() -> str:
-    """The ``rerun`` executable of this environment."""
-    local = Path(sys.executable).with_name("rerun")
-    return str(local) if local.exists() else (shutil.which("rerun") or "rerun")
 
 
 def verify_recording(path: str | Path, check_footers: bool = True) -> tuple[bool, str]:

@@ -24,7 +24,9 @@ from __future__ import annotations
 
 import collections
 import contextlib
+import ctypes
 import os
+import shutil
 import signal
 import socket
 import subprocess
@@ -55,14 +57,21 @@ class Stopped(KeyboardInterrupt):
         self.signum = signum
 
 
+def rerun_cli() -> str:
+    """The ``rerun`` command of this environment."""
+    local = Path(sys.executable).with_name("rerun")
+    return str(local) if local.exists() else (shutil.which("rerun") or "rerun")
+
+
 def rerun_binary() -> str:
     """The ``rerun`` executable itself (rerun-sdk ships it inside ``rerun_cli``), so the
     process we stop is the viewer and not a wrapper around it; else the ``rerun`` command."""
     try:
-        import rerun_cli
+        # optional: rerun-sdk may ship no rerun_cli package (then the `rerun` command)
+        import rerun_cli as package
     except ImportError:
         return rerun_cli()
-    exe = Path(rerun_cli.__file__).with_name("rerun.exe" if sys.platform == "win32" else "rerun")
+    exe = Path(package.__file__).with_name("rerun.exe" if sys.platform == "win32" else "rerun")
     return str(exe) if exe.is_file() and os.access(exe, os.X_OK) else rerun_cli()
 
 
@@ -97,8 +106,6 @@ def ssh_hint(web_port: int, grpc_port: int) -> str:
 
 def _die_with_parent() -> None:  # pragma: no cover - runs in the child between fork and exec
     """Linux: SIGTERM this child when the process that started it dies (even by SIGKILL)."""
-    import ctypes
-
     libc = ctypes.CDLL(None, use_errno=True)
     libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 

@@ -39,11 +39,12 @@ from learning.drivers.batch_agent import BatchAgent
 from learning.drivers.train import TrainResult
 from learning.geometry import geometry_of
 from learning.plain.learner import PlainBatchAgent, is_plain
-from scenarios.runs.physics_grading import FinalGrade, Grader
+from scenarios.runs.physics_grading import FinalGrade, Grader, final_policy_label
 from scenarios.runs.work import add_episodes
 from scenarios.signals import sigint_handled_by
 from sim.grid import TabularModel
 from sim.physics.envs.vector import PhysicsRouteVectorEnv
+from sim.physics.models.optimum import continuous_optimum_m
 from sim.scenario import Scenario
 
 TEST_BATCH = 16  # periodic tests above exact driven together, one env [tests]
@@ -85,8 +86,6 @@ class PhysicsTrainResult(TrainResult):
 
 def continuous_optimum_rounded(sc: Scenario) -> float | None:
     """The disc's any-angle S-G path length [m] (:mod:`sim.physics.models.optimum`), for records."""
-    from sim.physics.models.optimum import continuous_optimum_m
-
     v = continuous_optimum_m(sc)
     return None if v is None else round(v, 4)
 
@@ -146,6 +145,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     checks), ``episodes`` (ends, greedy tests, starts), ``driver`` (the rest of the loop)
     and ``final`` (final grading), plus ``primitives``.
     """
+    # lazy: scenarios.recording (rerun) costs 270 ms in every run's process
     from scenarios.recording.hooks import ChunkLogger, EpisodeTaps
 
     recorded = dict(recorded or {})
@@ -351,8 +351,6 @@ def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
 def log_final(recorder: Any, res: PhysicsTrainResult) -> None:
     """The final policy on a recording's map: one drive of it, every physics step, labelled
     with what its rollouts achieved at the run's fidelity."""
-    from scenarios.runs.physics_grading import final_policy_label
-
     r = res.final_rollouts
     path = r.path if r is not None and len(r.path) else None
     recorder.log_route("final route", res.final_route, path_m=path,

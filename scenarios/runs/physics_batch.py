@@ -10,7 +10,11 @@ import contextlib
 from collections.abc import Sequence
 from typing import Any
 
+from learning.methods.registry import is_located
+from learning.plain.learner import PlainConfig
+from learning.streams import streams
 from scenarios.runs.physics import RecordedRun, RunGroup, log_final, train_physics_runs
+from scenarios.runs.spec import RunOutcome, load, make_config, method_class, run_record
 
 # ------------------------------------------------------------------ sweeps
 
@@ -54,19 +58,12 @@ def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
 
 def in_python(method: str) -> bool:
     """Whether ``method`` is a plain-Python learner (:mod:`learning.plain.learner`)."""
-    from learning.methods.registry import is_located
-    from learning.plain.learner import PlainConfig
-    from scenarios.runs.spec import method_class
-
     return is_located(method) and issubclass(method_class(method), PlainConfig)
 
 
 def run_physics_batch(specs: Sequence[Any]) -> list[dict[str, Any]]:
     """Train physics specs (one problem, budget and test cadence) as one batch; their
     results.json records, in spec order."""
-    from learning.streams import streams
-    from scenarios.runs.spec import RunOutcome, load, make_config, run_record
-
     first = specs[0]
     if any((sp.problem, sp.episodes, sp.test_every, sp.fidelity_spec) !=
            (first.problem, first.episodes, first.test_every, first.fidelity_spec)
@@ -119,6 +116,7 @@ def _open_recorder(spec: Any, cfg: Any, sc: Any, model: Any,
     opts = spec.recording
     if opts is None or not opts.detail:
         return None
+    # lazy: scenarios.recording (rerun) costs 270 ms in every run's process
     from scenarios.recording.hooks import RecordPlan
     from scenarios.recording.recorder import Recorder
 

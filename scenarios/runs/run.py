@@ -9,7 +9,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+from learning.drivers.plain_train import train_plain
+from learning.drivers.train import epsilon_route_lengths, train_tabular
+from learning.plain.learner import is_plain
+from learning.streams import streams
 from scenarios.runs.physics_batch import batchable, run_physics_batch
+from scenarios.runs.physics_grading import Grader
 from scenarios.runs.spec import (
     WORLDS,
     ExperimentError,
@@ -19,6 +24,7 @@ from scenarios.runs.spec import (
     make_config,
     run_record,
 )
+from scenarios.runs.work import CountingObserver, warm_up
 from sim.grid import TabularModel
 from sim.scenario import Scenario
 
@@ -26,8 +32,6 @@ from sim.scenario import Scenario
 def run_task(specs: Sequence[Any]) -> list[dict[str, Any]]:
     """One task of :func:`scenarios.runs.physics_batch.plan_tasks`: a single run, or a
     physics batch."""
-    from scenarios.runs.work import warm_up
-
     with warm_up(sp.method for sp in specs):
         if len(specs) == 1 and not batchable(specs[0]):
             return [run_one(specs[0])]
@@ -49,6 +53,7 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
         # curves from this record when it gathers the recording (a stream and a part file
         # per run cost ~0.05 s each, a quarter of a 0.2 s run)
         return run_record(spec, cfg, _train(spec, sc, model, cfg))
+    # lazy: scenarios.recording (rerun) costs 270 ms in every run's process
     from scenarios.recording.hooks import RecordPlan
     from scenarios.recording.recorder import Recorder
 
@@ -68,20 +73,15 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
 def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder: Any = None,
            plan: Any = None) -> RunOutcome:
     """A grid run (physics runs go through :mod:`scenarios.runs.physics_batch`)."""
-    from learning.drivers.plain_train import train_plain
-    from learning.drivers.train import epsilon_route_lengths, train_tabular
-    from learning.plain.learner import is_plain
-    from learning.streams import streams
-
     rs = streams(spec.seed)  # starts, learner, evaluation: independent (common random numbers)
     rng = rs.learner
 
     observer = None
     if recorder is not None:
+        # lazy: scenarios.recording (rerun) costs 270 ms in every run's process
         from scenarios.recording.hooks import GridRecorder
 
         observer = GridRecorder(recorder, plan)
-    from scenarios.runs.work import CountingObserver
 
     train = train_plain if is_plain(cfg) else train_tabular
     result = train(cfg, model, spec.episodes, rng, test_every=spec.test_every,
@@ -90,7 +90,5 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
     eps_routes = epsilon_route_lengths(result.state, model, cfg.eps, rs.evaluation)
     extras = None
     if spec.drive_final:  # the grid-learned policy, graded in the physics world
-        from scenarios.runs.physics_grading import Grader
-
         extras = Grader(sc, spec.fidelity_spec).final(result.state, spec.seed).extras
     return RunOutcome.of(result, eps_routes, extras)

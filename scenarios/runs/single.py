@@ -11,7 +11,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from learning.drivers.checkpoint import Checkpoint, checkpoint_bytes, load_checkpoint
+from learning.drivers.plain_train import train_plain
+from learning.drivers.train import epsilon_route_lengths, train_tabular
+from learning.geometry import geometry_of
+from learning.plain.learner import is_plain
 from learning.streams import streams
+from scenarios.runs.physics import log_final, train_physics
 from scenarios.runs.spec import (
     ExperimentError,
     RunOutcome,
@@ -31,12 +37,6 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
                  record: str | None = None, record_every: int = 10,
                  record_values_every: int = 300) -> dict[str, Any]:
     """Train ``spec`` (its scenario already loaded as ``sc``, ``model``); its record."""
-    from learning.drivers.checkpoint import Checkpoint, checkpoint_bytes, load_checkpoint
-    from learning.drivers.plain_train import train_plain
-    from learning.drivers.train import epsilon_route_lengths, train_tabular
-    from learning.geometry import geometry_of
-    from learning.plain.learner import is_plain
-
     cfg = make_config(spec.method, spec.overrides)
     plain = is_plain(cfg)
     if plain and (save or resume):
@@ -57,6 +57,7 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
         checkpoint.check_problem(problem)
     recorder = plan = observer = None
     if record is not None:
+        # lazy: scenarios.recording (rerun) costs 270 ms at import; only a recorded run needs it
         from scenarios.recording.hooks import GridRecorder, RecordPlan
         from scenarios.recording.recorder import Recorder
 
@@ -80,8 +81,6 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
                 ck.problem = problem
                 atomic_write_bytes(save, checkpoint_bytes(ck))
         else:
-            from scenarios.runs.physics import log_final, train_physics
-
             result = train_physics(cfg, sc, model, spec.episodes, rng, spec.test_every,
                                    recorder=recorder, plan=plan, start_rng=rs.starts,
                                    fidelity=spec.fidelity_spec, noise_rng=rs.physics,

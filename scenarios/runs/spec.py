@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import hashlib
+import json
 from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import lru_cache
@@ -18,7 +20,17 @@ from typing import Any
 
 import numpy as np
 
+from learning.compiled.readout import greedy_actions
+from learning.config import LIMITS, limit_problem
 from learning.drivers.train import TrainResult
+from learning.methods.registry import METHODS, config_class
+from learning.metrics import (
+    episodes_to_first_optimal,
+    episodes_to_stable_optimal,
+    optimal_test_fraction,
+    reward_per_step,
+)
+from scenarios.runs.results import quantile
 from sim.errors import InputError
 from sim.grid import TabularModel, build_model
 from sim.physics.fidelity import Fidelity, parse_fidelity
@@ -130,9 +142,6 @@ def scenario_digest(scenario: str | Scenario, start: Cell | None = None, goal: C
                     rewards: str | None = None, s_starts: float | None = None) -> str:
     """12 hex digits of a hash of what the scenario *is*: its resolved content (geometry,
     robot, rewards, episode length, S, G), not the file it came from."""
-    import hashlib
-    import json
-
     sc, _ = load(scenario, start, goal, rewards, s_starts)
     fields = {k: v for k, v in dataclasses.asdict(sc).items()
               if k not in ("name", "source", "description")
@@ -148,9 +157,6 @@ def layout_digest(scenario: str | Scenario, start: Cell | None = None,
     """12 hex digits of a hash of the route problem's layout alone: arena, obstacles, robot,
     S, G and episode length; not the rewards or the share of starts at S. What a saved
     agent's greedy route depends on, so what ``rnhql route`` checks a checkpoint against."""
-    import hashlib
-    import json
-
     sc, _ = load(scenario, start, goal)
     fields = {k: v for k, v in dataclasses.asdict(sc).items()
               if k not in ("name", "source", "description", "rewards", "s_start_share",
@@ -162,8 +168,6 @@ def layout_digest(scenario: str | Scenario, start: Cell | None = None,
 def method_class(method: str) -> type:
     """The config class of ``method``: a registered name, or ``module:Class`` (a compiled
     method's config or a plain-Python learner: :func:`learning.methods.registry.config_class`)."""
-    from learning.methods.registry import config_class
-
     try:
         return config_class(method)
     except ValueError as exc:
@@ -181,9 +185,6 @@ def settable_fields(cls: type) -> list[str]:
 
 def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
     """The method's frozen config with paper defaults, fields overridden by name."""
-    from learning.config import LIMITS, limit_problem
-    from learning.methods.registry import METHODS
-
     cls = method_class(method)
     names = {f.name: f for f in dataclasses.fields(cls) if f.name in settable_fields(cls)}
     kwargs: dict[str, Any] = {}
@@ -237,8 +238,6 @@ class RunOutcome:
     def of(cls, result: TrainResult, epsilon_route_lengths: np.ndarray,
            world_extras: dict[str, Any] | None = None) -> RunOutcome:
         """From a finished run's result (a physics one carries its own extras)."""
-        from learning.compiled.readout import greedy_actions
-
         extras = dict(getattr(result, "world_extras", {}))
         extras.update(world_extras or {})
         return cls(result, np.asarray(epsilon_route_lengths), extras,
@@ -252,13 +251,6 @@ def run_record(spec: RunSpec, cfg: Any, outcome: RunOutcome) -> dict[str, Any]:
     per-episode arrays (steps, return) let a script compute any window's reward
     per step as a ratio of sums.
     """
-    from learning.metrics import (
-        episodes_to_first_optimal,
-        episodes_to_stable_optimal,
-        optimal_test_fraction,
-        reward_per_step,
-    )
-
     result = outcome.result
     steps = np.asarray(result.steps)
     returns = np.asarray(result.returns)
@@ -318,8 +310,6 @@ def policy_from_text(text: str) -> np.ndarray:
 
 def _median_route(lengths: np.ndarray) -> float | None:
     """Median route length of rollouts, a rollout that missed G counting as infinite."""
-    from scenarios.runs.results import quantile
-
     v = quantile([None if x < 0 else float(x) for x in lengths], 0.5)
     return None if not np.isfinite(v) else v
 

@@ -14,7 +14,9 @@ parameters.
 
 from __future__ import annotations
 
+import ctypes
 import errno
+import multiprocessing
 import os
 import signal
 import sys
@@ -22,8 +24,10 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
+from learning.methods.registry import EXTERNAL, restore_external
 from scenarios.runs import work
 from scenarios.runs.physics_batch import plan_tasks
 from scenarios.runs.run import run_task
@@ -233,8 +237,6 @@ def _init_worker(counter: Any = None, parent: int | None = None,
     _ignore_sigint(parent)
     work.share(counter)
     if external:
-        from learning.methods.registry import restore_external
-
         restore_external(external)
 
 
@@ -244,8 +246,7 @@ def disk_full_cause(exc: BaseException, spec: RunSpec) -> OSError | None:
     A run's own write error says so (errno ENOSPC). A pool worker that died (a
     ``BrokenProcessPool``: the real cause never reaches the parent) is put down to a full
     disk when the file system of the run's recording is full."""
-    from concurrent.futures.process import BrokenProcessPool
-
+    # looked up per call: tests/test_reliability2.py stands in for no_space_left
     from sim.files import no_space_left
 
     if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
@@ -268,8 +269,6 @@ def _ignore_sigint(parent: int | None = None) -> None:
     signal.signal(signal.SIGHUP, signal.SIG_IGN)  # a closed terminal: the parent's to handle
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     if sys.platform.startswith("linux"):
-        import ctypes
-
         try:
             ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
         except (OSError, AttributeError):  # pragma: no cover - no prctl: nothing to do
@@ -341,10 +340,6 @@ def _run_local(specs: Sequence[RunSpec], jobs: int, col: _Collector,
                     col.ok(i, rec)
         return col.result()
     counter = getattr(col.progress, "counter", None)
-    import multiprocessing
-
-    from learning.methods.registry import EXTERNAL
-
     context = None if start_method is None else multiprocessing.get_context(start_method)
     if context is not None and context.get_start_method() != "fork":
         counter = None  # a lock made for forked workers cannot reach spawned ones: runs
@@ -382,6 +377,7 @@ def run_ray(specs: Sequence[RunSpec], address: str | None = None, num_cpus: int 
     client. Every node needs rnhql installed (``pip install rnhql[ray]``).
     """
     try:
+        # optional (rnhql[ray]); 215 ms at import
         import ray
     except ImportError:
         raise BackendError("command line", "--backend ray", "Ray is not installed",

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from scenarios.runs.spec import ExperimentError
 from sim.errors import InputError
-from sim.files import check_output, node_kind
+from sim.files import check_output, node_kind, open_own_file
 
 LOCK_NAME = ".rnhql-sweep.lock"
 
@@ -86,9 +86,8 @@ def sweep_lock(out_dir: Path, flag: str = "--out") -> Iterator[None]:
     ``flock`` is not held (a sweep of an older rnhql) is respected too. A link planted
     under the lock's name is removed, never followed.
     """
+    # POSIX only: the package still imports where fcntl is missing
     import fcntl
-
-    from sim.files import open_own_file
 
     lock = out_dir / LOCK_NAME
     for _ in range(3):

@@ -6,6 +6,9 @@ owns when; this module owns how.
 
 from __future__ import annotations
 
+import dataclasses
+import shutil
+import uuid
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,9 +41,7 @@ def with_recording(specs: Sequence[RunSpec], recording: SweepRecording) -> list[
     full is >100 MB, more than the viewer draws comfortably, and the comparison
     blueprint shows each method's first seed on the map anyway.
     """
-    import dataclasses
-    import uuid
-
+    # lazy: scenarios.recording (rerun) costs 270 ms; a sweep without --record never needs it
     from scenarios.recording.recorder import run_prefix
 
     record = recording.path
@@ -71,8 +72,7 @@ def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False
     ``keep_parts`` (an interrupted sweep): the recording holds the runs finished
     so far, and the parts stay for ``--resume`` to gather them all at the end.
     """
-    import shutil
-
+    # lazy: scenarios.recording (rerun) costs 270 ms; a sweep without --record never needs it
     from scenarios.recording.comparison import gather_comparison
 
     worlds = {s.world for s in specs}
@@ -84,6 +84,7 @@ def gather_parts(specs: Sequence[RunSpec], record: str, keep_parts: bool = False
     curves = None
     curve_runs = []
     if records:
+        # lazy: as gather_comparison above
         from scenarios.recording.summary import summary_curves
 
         by_key = {s.key: s for s in specs}

@@ -15,6 +15,7 @@ when the sweep is complete; after Ctrl-C the recording holds the runs finished s
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import errno
 import functools
 import json
@@ -26,10 +27,13 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from scenarios.runs import physics_grading as g
+from scenarios.runs.physics import StopFlag
 from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
 from scenarios.runs.spec import RunSpec, load
 from scenarios.signals import sigint_handled_by
-from scenarios.sweep.outdir import check_out_dir, sweep_lock
+from scenarios.sweep.disk_full import disk_full_error
+from scenarios.sweep.outdir import OutDirError, check_out_dir, sweep_lock
 from scenarios.sweep.recording import (
     SweepRecording,
     gather_parts,
@@ -50,7 +54,11 @@ from scenarios.sweep.stop import (
     merge_stopped,
     removed_if_left_empty,
 )
+from sim.files import open_own_file
 from sim.physics.fidelity import Fidelity
+from sim.physics.models.build import stochastic_model
+from sim.physics.models.solve import solve
+from sim.physics.models.stochastic_rollouts import ABS_TOL, P_TOL, REL_TOL
 
 __all__ = ["PARTIAL", "SweepRecording", "finished_compare", "gather_parts", "interrupted",
            "make_specs", "read_partial", "run_label", "run_sweep", "with_recording"]
@@ -124,13 +132,8 @@ def optimum_at_fidelity(sc: Any, fid: Any) -> dict[str, Any] | None:
     """V* at the fidelity (:mod:`sim.physics.models.solve`; built once per scenario and
     fidelity, cached on disk): the yardstick "optimal at F" is measured against.
     ``RNHQL_NO_OPTIMUM=1`` skips it (tiny test sweeps)."""
-    import os
-
     if os.environ.get("RNHQL_NO_OPTIMUM") == "1" or fid.hidden_state:
         return None  # hidden state (open loop, localisation): no V* (Fidelity.hidden_state)
-    from sim.physics.models.build import stochastic_model
-    from sim.physics.models.solve import solve
-    from sim.physics.models.stochastic_rollouts import ABS_TOL, P_TOL, REL_TOL
 
     opt = solve(stochastic_model(sc, fid), sc.steps_per_episode).start
     return {"expected_primitives": round(float(opt.expected_primitives), 4),
@@ -154,15 +157,11 @@ def matches_optimum(policy: dict[str, Any], optimum: dict[str, Any]) -> bool:
 
 def fidelity_knobs(fid: Any) -> dict[str, Any]:
     """Every knob of a fidelity by name, with its unit in the name (``..._m``) or below."""
-    import dataclasses
-
     return {f.name: getattr(fid, f.name) for f in dataclasses.fields(fid)}
 
 
 def grading_protocol(fid: Any) -> dict[str, Any]:
     """How physics runs were graded (see :mod:`scenarios.runs.physics_grading`)."""
-    from scenarios.runs import physics_grading as g
-
     if fid.is_exact:
         return {"tests": "greedy walk on the exact physics model", "final_rollouts": 1}
     return {"tests": "rollouts at the run's fidelity", "test_rollouts": g.TEST_ROLLOUTS,
@@ -198,6 +197,7 @@ def compare_files(figures: bool = True) -> SweepFiles:
 
 def write_compare(specs: Sequence[RunSpec], runs: list[dict[str, Any]], out_dir: Path,
                   figures: bool = True) -> dict[str, Any]:
+    # lazy: matplotlib costs 270 ms; a sweep with figures=False never draws
     from scenarios.figures.plots import all_figures
 
     results = assemble(specs, runs)
@@ -214,8 +214,6 @@ def ctrl_c_held() -> Iterator[None]:
     """A Ctrl-C while the block draws figures acts at its end (seconds); a second one at
     once. One while matplotlib builds its lazy parsers (pyparsing, on the first label) can
     leave them half made and surface as an AttributeError."""
-    from scenarios.runs.physics import StopFlag
-
     stop = StopFlag()
     with sigint_handled_by(stop.request):
         yield
@@ -296,8 +294,6 @@ def _disk_full(err: OSError, out_dir: Path, specs: Sequence[RunSpec],
                recording: SweepRecording | None, files: SweepFiles,
                all_done: bool = False) -> OSError:
     """A full disk (:mod:`scenarios.sweep.disk_full`), counting the runs kept so far."""
-    from scenarios.sweep.disk_full import disk_full_error
-
     try:
         done = read_partial(out_dir, files.finished)
     except Exception:  # a torn resume file must not hide the full disk
@@ -314,8 +310,6 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     keys = {s.key for s in specs}
     foreign = [k for k in done if k not in keys]
     if foreign:
-        from scenarios.sweep.outdir import OutDirError
-
         raise OutDirError(str(out_dir), "--resume",
                           f"holds {len(foreign)} finished run(s) of another sweep (e.g. "
                           f"{foreign[0]})", "resume with the same scenario, methods, seeds, "
@@ -330,7 +324,6 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
     if progress is not None and hasattr(progress, "expect"):
         progress.expect(len(todo), sum(s.episodes for s in todo),
                         sum(s.episodes for s in todo if s.world == "physics"))
-    from sim.files import open_own_file
 
     fd = open_own_file(out_dir / PARTIAL, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
     with os.fdopen(fd, "a", encoding="utf-8") as partial:

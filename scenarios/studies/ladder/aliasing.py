@@ -30,10 +30,15 @@ import time
 from pathlib import Path
 from typing import Any
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 
+from scenarios.artifacts import check_artifact_name, load_artifact, write_artifact
+from scenarios.figures.save import save_figure
 from scenarios.runs.spec import load
 from scenarios.studies.args import script_parser
+from sim.errors import InputError
 from sim.files import atomic_write_text
 from sim.grid import TabularModel
 from sim.physics.fidelity import Fidelity, parse_fidelity
@@ -142,12 +147,7 @@ def heat_map(sc: Scenario, model: TabularModel, result: dict[str, Any]) -> np.nd
 def heat_map_figure(grid: np.ndarray, title: str, path: Path) -> None:
     """The heat map PNG: each cell's largest next-cell entropy (grey: blocked or not
     reaching G)."""
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from scenarios.figures.save import save_figure
 
     fig, ax = plt.subplots(figsize=(6, 5.4))
     cmap = plt.get_cmap("magma").with_extremes(bad="0.75")  # blocked / not reaching G: grey
@@ -166,8 +166,6 @@ def write_artifact_of(name: str, command: str, sc: Scenario, model: TabularModel
                       result: dict[str, Any]) -> None:
     """``docs/results/aliasing.NAME.json``: the summary figures and the heat map's cells
     (None: blocked or not reaching G), what the docs' table and figure are drawn from."""
-    from scenarios.artifacts import write_artifact
-
     grid = heat_map(sc, model, result)
     keep = ("scenario", "fidelity", "repeats", "seed", "pairs", "primitives",
             "multi_outcome_fraction", "mean_entropy_bits", "mean_bump_probability")
@@ -180,8 +178,6 @@ def write_artifact_of(name: str, command: str, sc: Scenario, model: TabularModel
 
 def figure_from_artifact(name: str, path: Path) -> None:
     """Redraw the heat map from artifact ``name`` (``rnhql report --figures``)."""
-    from scenarios.artifacts import load_artifact
-
     d = load_artifact(name)["data"]
     grid = np.array([[np.nan if v is None else v for v in row] for row in d["heat_map"]])
     heat_map_figure(grid, f"{d['scenario']}, fidelity {d['fidelity']}: "
@@ -190,11 +186,10 @@ def figure_from_artifact(name: str, path: Path) -> None:
 
 
 def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str, Any]) -> None:
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+    # lazy: rerun costs 250 ms at import; the ladder study and rnhql report import this
+    # module and record nothing
     from scenarios.recording.file import RecordingFile
 
     out.mkdir(parents=True, exist_ok=True)
@@ -205,6 +200,7 @@ def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str
                     f"{100 * result['multi_outcome_fraction']:.1f} % of (cell, action) pairs "
                     "alias", out / "aliasing.png")
     cmap = plt.get_cmap("magma").with_extremes(bad="0.75")
+    # lazy: as RecordingFile above
     import rerun as rr
 
     with RecordingFile(out / "aliasing.rrd",
@@ -238,8 +234,6 @@ def main(argv: list[str] | None = None) -> int:
                          "heat map)")
     args = ap.parse_args(argv)
     if args.artifact:
-        from scenarios.artifacts import check_artifact_name
-
         check_artifact_name(ap, args.artifact)
     run(args)
     return 0
@@ -247,8 +241,6 @@ def main(argv: list[str] | None = None) -> int:
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
     if args.repeats < 1 or args.repeats > 10_000:
-        from sim.errors import InputError
-
         raise InputError("command line", "--repeats", f"must be in 1..10000, got {args.repeats}",
                          "pass e.g. --repeats 20")
     fid = parse_fidelity(args.fidelity)

@@ -28,12 +28,21 @@ from typing import Any
 
 import numpy as np
 
+from scenarios.artifact_tables import ladder_table
+from scenarios.artifacts import ROOT, load_artifact, write_artifact
 from scenarios.figures.save import save_figure
-from scenarios.runs.spec import load
+from scenarios.palette import method_colour_mpl
+from scenarios.runs.results import quantile
+from scenarios.runs.spec import RunSpec, load, make_config
 from scenarios.studies.ladder.predictivity import srcc
+from scenarios.studies.maps.heldout import KIND, write_problem
 from scenarios.sweep.backends import Progress, run_local
 from scenarios.sweep.run import run_sweep
 from sim.files import atomic_write_text
+from sim.grid.planning import bfs_route
+from sim.physics.fidelity import parse_fidelity
+from sim.physics.models.optimum import continuous_optimum_m
+from sim.scenario_io import builtin_names
 
 
 def overlay_method(results: dict[str, Any], methods: list[str]) -> str:
@@ -47,13 +56,13 @@ def overlay_method(results: dict[str, Any], methods: list[str]) -> str:
 
 
 def overlay(results: dict[str, Any], scenario: str, method: str, path: Path) -> None:
+    # lazy: matplotlib costs 270 ms at import, in each spawned sweep worker too
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from scenarios.figures.plots import draw_map
-    from sim.grid.planning import bfs_route
 
     sc, model = load(scenario)
     fig, ax = plt.subplots(figsize=(6.5, 6.5), dpi=110)
@@ -144,8 +153,6 @@ def main(argv: list[str] | None = None) -> int:
     data = ladder_data(cells, args)
     ladder_figure(data["rows"], methods, out / "ladder.png", data["rungs"])
     if args.artifact:  # the docs' table and figure, from the same data
-        from scenarios.artifacts import ROOT, write_artifact
-
         write_artifact(f"ladder.{args.artifact}", ladder_command(args)
                        + f" --artifact {args.artifact}",
                        ["grid", "physics-exact", "physics-noisy"], data, study=__file__)
@@ -156,8 +163,6 @@ def main(argv: list[str] | None = None) -> int:
 
 def figure_from_artifact(name: str, path: Path) -> None:
     """Draw the ladder's figure from artifact ``name`` (``rnhql report --figures``)."""
-    from scenarios.artifacts import load_artifact
-
     d = load_artifact(name)["data"]
     methods = list(dict.fromkeys(r["method"] for r in d["rows"]))
     ladder_figure(d["rows"], methods, path, d.get("rungs"))
@@ -165,9 +170,6 @@ def figure_from_artifact(name: str, path: Path) -> None:
 
 def _map_path(label: str, map_seed: int, out: Path) -> str:
     """A built-in name or .toml path as it is; ``KIND-N`` generated into ``OUT/maps``."""
-    from scenarios.studies.maps.heldout import KIND, write_problem
-    from sim.scenario_io import builtin_names
-
     if label in builtin_names() or KIND.fullmatch(label) is None:
         return label
     toml, _, _ = write_problem(label, 0.0, map_seed, 0.0, out / "maps")
@@ -182,8 +184,6 @@ def _rung_specs(name: str, methods: list[str], args: argparse.Namespace, world: 
                 rung: str) -> list[Any]:
     """Grid runs drive their final greedy policy at the rung (transfer); physics runs
     train and drive there."""
-    from scenarios.runs.spec import RunSpec
-
     return [RunSpec(scenario=name, method=m, seed=s, episodes=args.episodes, world=world,
                     rewards=args.rewards, drive_final=world == "grid",
                     fidelity=None if rung == "exact" else rung,
@@ -198,16 +198,14 @@ def warmup_for_budget(method: str, episodes: int) -> tuple[tuple[str, float], ..
     """A method whose shaping waits out a warm-up of more than a tenth of the study's
     episodes (rnh-ql: 300) gets a tenth, the paper's share; otherwise, with the study's
     shorter budgets, it would never shape and be st-ql under another name."""
-    from scenarios.runs.spec import make_config
-
     warmup = getattr(make_config(method), "warmup_episodes", 0)
     share = round(WARMUP_SHARE * episodes)
     return (("warmup_episodes", float(share)),) if warmup > share else ()
 
 
 def _aliasing(sc: Any, model: Any, rung: str, repeats: int) -> dict[str, float]:
+    # lazy: the aliasing study imports matplotlib (270 ms), in each spawned sweep worker too
     from scenarios.studies.ladder.aliasing import measure_aliasing
-    from sim.physics.fidelity import parse_fidelity
 
     r = measure_aliasing(sc, model, parse_fidelity(rung), repeats=repeats)
     return {"multi_outcome_fraction": r["multi_outcome_fraction"],
@@ -216,8 +214,6 @@ def _aliasing(sc: Any, model: Any, rung: str, repeats: int) -> dict[str, float]:
 
 def _q(values: list[float], digits: int = 1) -> str:
     """median [q25, q75] of the values (— if none)."""
-    from scenarios.runs.results import quantile
-
     if not values:
         return "—"
     m, lo, hi = (quantile(values, q) for q in (0.5, 0.25, 0.75))
@@ -228,8 +224,6 @@ def ladder_rows(cells: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """One row per map x rung x method x where it was trained (grid / the rung itself),
     from each run's ``final_policy``: the final greedy policy driven from S at the rung
     (once at exact, 50 times above it)."""
-    from sim.physics.models.optimum import continuous_optimum_m
-
     rows = []
     optima: dict[str, float | None] = {}
     for cell in cells:
@@ -264,8 +258,6 @@ def ladder_rows(cells: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def ladder_data(cells: list[dict[str, Any]], args: argparse.Namespace) -> dict[str, Any]:
     """The artifact the docs render the ladder table from (quantiles computed here)."""
-    from scenarios.runs.results import quantile
-
     def q(v: list[float]) -> list[float | None]:
         return [quantile(v, x) for x in (0.5, 0.25, 0.75)] if v else [None] * 3
 
@@ -291,8 +283,6 @@ def ladder_command(args: argparse.Namespace) -> str:
 
 
 def ladder_report(cells: list[dict[str, Any]], args: argparse.Namespace) -> str:
-    from scenarios.artifact_tables import ladder_table
-
     return ("# Continuous vs gridded, along the fidelity ladder\n\n"
             f"Command: `{ladder_command(args)}`\n\n" + ladder_table(ladder_data(cells, args)))
 
@@ -304,12 +294,11 @@ def ladder_figure(rows: list[dict[str, Any]], methods: list[str], path: Path,
     bootstrap interval, a line per map. Right, per map: P(G) of each method's final policy
     driven at the rung (median over seeds), solid: trained at the rung, dashed: in the grid.
     """
+    # lazy: matplotlib costs 270 ms at import, in each spawned sweep worker too
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from scenarios.palette import method_colour_mpl
 
     maps = list(dict.fromkeys(r["map"] for r in rows))
     rung_names = list(dict.fromkeys(r["rung"] for r in rows))

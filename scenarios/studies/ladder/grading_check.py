@@ -25,7 +25,9 @@ import numpy as np
 import sim.envs  # noqa: F401  (registers the ids)
 from learning.compiled.readout import greedy_actions
 from learning.streams import streams
+from scenarios.artifacts import write_artifact
 from scenarios.runs.physics import RunGroup, train_physics_runs
+from scenarios.runs.results import quantile
 from scenarios.runs.spec import load, make_config
 from scenarios.studies.args import arg, parse
 from sim.files import atomic_write_text
@@ -124,8 +126,6 @@ def main(argv: list[str] | None = None) -> int:
         {"command": cmd, "fidelity": fid.label, "policies": out}, indent=1))
     atomic_write_text(outdir / "GRADING.md", text)
     if args.artifact:
-        from scenarios.artifacts import write_artifact
-
         write_artifact(f"physics-grading.{args.artifact}", cmd + f" --artifact {args.artifact}",
                        ["grid", "physics-exact", "physics-noisy"],
                        artifact_data(args, fid.label, methods, out), study=__file__)
@@ -136,8 +136,6 @@ def main(argv: list[str] | None = None) -> int:
 def artifact_data(args: Args, label: str, methods: list[str],
                   out: list[dict]) -> dict:
     """What the docs' table shows, per method (quantiles over seeds, type 7)."""
-    from scenarios.runs.results import quantile
-
     def stats(v: list) -> list:
         return [quantile(v, q) for q in (0.5, 0.25, 0.75)]
 

@@ -27,11 +27,15 @@ from typing import Any
 
 import numpy as np
 
+from learning.metrics import episodes_to_stable_optimal
+from scenarios.artifacts import ROOT, load_artifact, write_artifact
 from scenarios.figures.save import save_figure
+from scenarios.runs.results import quantile
 from scenarios.runs.spec import RunSpec
 from scenarios.studies.args import script_parser
 from scenarios.studies.maps.suite import build_suite
 from scenarios.sweep.run import SweepFiles, ctrl_c_held, run_sweep
+from sim.files import atomic_write_text
 
 # label, method, overrides: each row adds one ingredient to the row above it, down to
 # rnh-ql+; the rows after it take one ingredient away again, or are references. A row that
@@ -70,8 +74,6 @@ VARIANTS: list[tuple[str, str, tuple[tuple[str, float], ...]]] = [
 
 def stable_optimal(test_episodes: list[int], lengths: list[int], optimal: int) -> int | None:
     """Episodes at the first test from which every later test is optimal (learning.metrics)."""
-    from learning.metrics import episodes_to_stable_optimal
-
     return episodes_to_stable_optimal(np.asarray(test_episodes), np.asarray(lengths), optimal)
 
 
@@ -100,8 +102,6 @@ def ablation_specs(rows: Sequence[Row], maps: list[dict], seeds: int, episodes: 
 def quartiles(xs: list[int | None]) -> tuple[float, float, float]:
     """(median, q25, q75) by the one quantile definition (scenarios.runs.results.quantile:
     type 7, None = never = +inf sorts last)."""
-    from scenarios.runs.results import quantile
-
     if not xs:
         return math.inf, math.inf, math.inf
     return tuple(quantile(list(xs), q) for q in (0.5, 0.25, 0.75))
@@ -204,6 +204,7 @@ def verdict(summary: dict, maps: list[dict], ours: str, ref: str, min_seeds: int
 def figure(summary: dict, maps: list[dict], labels: list[str], path: Path, title: str) -> None:
     """Variants x maps: colour = seeds whose final route is optimal, text = that count and the
     median episodes to a stable optimal route."""
+    # lazy: matplotlib costs 270 ms at import, in each spawned sweep worker too
     import matplotlib
 
     matplotlib.use("Agg")
@@ -236,8 +237,6 @@ def ablation_files(rows: Sequence[Row], maps: list[dict], labelled: list[tuple[s
 
     def write(_specs: Sequence[RunSpec], records: list[dict[str, Any]], out: Path
               ) -> dict[str, Any]:
-        from sim.files import atomic_write_text
-
         by_key = {r["key"]: r for r in records}
         runs = []
         for lab, map_name, spec in labelled:
@@ -320,6 +319,7 @@ def main(argv: list[str] | None = None) -> int:
         method, _, sets = ex.partition(":")
         ov = tuple((k, float(v)) for k, v in (kv.split("=") for kv in sets.split(",") if kv))
         rows.append((f"{method}|{sets}" if sets else method, method, ov))
+    # looked up per call: tests/test_experiments_ablation.py stands in for run_local
     from scenarios.sweep.backends import Progress, run_local
 
     labelled = ablation_specs(rows, maps, a.seeds, a.episodes)
@@ -338,8 +338,6 @@ def write_ablation_artifact(a: argparse.Namespace, labels: list[str], maps: list
                             summary: dict, argv: Sequence[str]) -> None:
     """``docs/results/ablation.NAME.json`` (what the README's table shows) and
     ``docs/ablation.png`` drawn from it."""
-    from scenarios.artifacts import ROOT, write_artifact
-
     data = {"rewards": a.rewards, "seeds": a.seeds, "episodes": a.episodes,
             "min_seeds": target_seeds(a.seeds),
             "maps": [{"name": m["name"], "held_out": m["held_out"]} for m in maps],
@@ -354,8 +352,6 @@ def write_ablation_artifact(a: argparse.Namespace, labels: list[str], maps: list
 def figure_from_artifact(name: str, path: Path) -> None:
     """Draw the ablation's figure from artifact ``name`` (what ``rnhql report --figures``
     redraws ``docs/ablation.png`` with)."""
-    from scenarios.artifacts import load_artifact
-
     d = load_artifact(name)["data"]
     summary = {lab: {m: {**c, "median": math.inf if c["median"] is None else c["median"]}
                      for m, c in row.items()} for lab, row in d["summary"].items()}

@@ -37,8 +37,12 @@ import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from shlex import quote
 from typing import Any
 
+from scenarios.artifact_tables import heldout
+from scenarios.artifacts import check_artifact_name, write_artifact
+from scenarios.runs.spec import load
 from scenarios.studies.args import arg, parse, parser_of
 from scenarios.sweep.backends import Progress, run_local
 from scenarios.sweep.run import make_specs, run_sweep
@@ -132,8 +136,6 @@ def cell(stat: dict[str, Any], seeds: int) -> str:
 def main(argv: list[str] | None = None) -> int:
     args = parse(Args, __doc__, argv)
     if args.artifact:
-        from scenarios.artifacts import check_artifact_name
-
         check_artifact_name(parser_of(Args, __doc__), args.artifact)
     out = Path(args.out)
     problems = [p.partition("@") for p in args.problems.split(",") if p]
@@ -143,8 +145,6 @@ def main(argv: list[str] | None = None) -> int:
     for name, _, protocol in problems:
         share = share_of(protocol or "s10")
         if name in builtin_names() or name.endswith(".toml"):
-            from scenarios.runs.spec import load
-
             model = load(name, s_starts=share)[1]
             side = int(model.coords.max() - model.coords.min() + 1)  # 1 m cells
             scenario = name
@@ -170,15 +170,10 @@ def main(argv: list[str] | None = None) -> int:
                f"braid {args.braid:g}; cells: optimal seeds / seeds · median episodes to a "
                "stable optimal route · median wall time per run.")
     data = {"caption": caption, "columns": columns, "rows": rows}
-    from scenarios.artifact_tables import heldout
 
     text = heldout(data)
     atomic_write_text(out / "heldout.md", text)
     if args.artifact:
-        from shlex import quote  # a method's overrides hold ';': the command must paste
-
-        from scenarios.artifacts import write_artifact
-
         command = "python -m scenarios.studies.maps.heldout " + " ".join(
             f"--{k.replace('_', '-')} {quote(str(v))}" for k, v in vars(args).items()
             if v not in (None, False) and k not in ("artifact", "resume", "jobs"))

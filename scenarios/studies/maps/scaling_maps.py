@@ -29,6 +29,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from scenarios.artifacts import check_artifact_name, write_artifact
+from scenarios.runs.spec import load
 from scenarios.studies.args import script_parser
 from scenarios.sweep.backends import Progress, run_local
 from scenarios.sweep.run import make_specs, run_sweep
@@ -81,8 +83,6 @@ def cell(stat: dict[str, Any], seeds: int) -> str:
 
 def reachable_cells(toml: Path) -> int:
     """Free cells with a route to G: the states a learner can explore."""
-    from scenarios.runs.spec import load
-
     _, model = load(str(toml))
     return int((model.distance_to_goal >= 0).sum())
 
@@ -122,8 +122,6 @@ def main(argv: list[str] | None = None) -> int:
                         "docs/scaling-maps.png is drawn from these artifacts)")
     args = p.parse_args(argv)
     if args.artifact:
-        from scenarios.artifacts import check_artifact_name
-
         check_artifact_name(p, args.artifact)
     out = Path(args.out)
     sizes = [int(s) for s in args.sizes.split(",")]
@@ -182,8 +180,6 @@ def main(argv: list[str] | None = None) -> int:
     text = "\n".join(lines) + "\n"
     atomic_write_text(out / "scaling-maps.md", text)
     if args.artifact:
-        from scenarios.artifacts import write_artifact
-
         command = lines[2].removeprefix("Command: `").removesuffix("`")
         write_artifact(f"scaling-maps.{args.artifact}", f"{command} --artifact {args.artifact}",
                        ["grid"], {"title": title, "seeds": args.seeds, "columns": columns,

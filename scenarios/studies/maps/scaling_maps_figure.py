@@ -24,7 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
+from scenarios.artifacts import ArtifactError, load_artifact, provenance
+from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
+from scenarios.runs.spec import load
 from scenarios.studies.args import script_parser
 from scenarios.studies.paper.scaling import fit_exponent
 from sim.files import atomic_write_text
@@ -50,8 +53,6 @@ class Point:
 def read_points(folders: Sequence[Path]) -> list[Point]:
     """Every method's point on every map of the folders' main sweeps (a later folder's
     point for the same method, kind and size replaces an earlier one)."""
-    from scenarios.runs.spec import load
-
     found: dict[tuple[str, str, int], Point] = {}
     for folder in folders:
         paths = sorted(folder.glob("*-*/sweep0/results.json"))
@@ -77,8 +78,6 @@ def read_points(folders: Sequence[Path]) -> list[Point]:
 def points_from_artifacts(names: Sequence[str]) -> list[Point]:
     """The main rows (not the ablation's) of artifacts ``scaling-maps.NAME``; a later
     artifact's point for the same method, kind and size replaces an earlier one."""
-    from scenarios.artifacts import load_artifact
-
     found: dict[tuple[str, str, int], Point] = {}
     for name in names:
         for p in load_artifact(f"scaling-maps.{name}")["data"]["points"]:
@@ -98,13 +97,12 @@ def lines(points: Sequence[Point]) -> dict[tuple[str, str], list[Point]]:
 
 
 def draw(points: Sequence[Point], path: Path) -> Path:
+    # lazy: matplotlib costs 270 ms at import; the docs' Cog blocks import this module
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
-
-    from scenarios.figures.save import save_figure
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), dpi=110)
     for (method, kind), pts in lines(points).items():
@@ -181,9 +179,8 @@ def points_text(points: Sequence[Point]) -> str:
 def render_points(names: Sequence[str]) -> None:
     """For a Cog block: every point of artifacts ``scaling-maps.NAME``, each artifact's
     provenance (and stale banner) under the table."""
+    # only inside a Cog run: cog provides the module
     import cog
-
-    from scenarios.artifacts import load_artifact, provenance
 
     docs = [load_artifact(f"scaling-maps.{n}") for n in names]
     heads = [provenance(d).split("\n\n")[0] for d in docs if "\n\n" in provenance(d)]
@@ -203,7 +200,6 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     if bool(args.folders) == bool(args.artifacts):
         p.error("give study folders or --artifacts NAME..., one of the two")
-    from scenarios.artifacts import ArtifactError
 
     try:
         points = (points_from_artifacts(args.artifacts) if args.artifacts

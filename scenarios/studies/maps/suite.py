@@ -21,11 +21,12 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.studies.args import script_parser
+from sim.grid import build_model
 from sim.grid.planning import far_start_goal
 from sim.maps.generators import small_maze, small_rooms
 from sim.maps.movingai import load_map, movingai_to_cell, read_free_grid, write_free_grid
 from sim.scenario import REWARD_SCHEMES
-from sim.scenario_io import builtin_dir
+from sim.scenario_io import builtin_dir, load_scenario
 
 MAPS_DIR = builtin_dir() / "maps"  # shipped copies
 BUILTIN = ("paper-40", "paper-50", "zigzag-50", "arena")
@@ -67,9 +68,6 @@ def build_suite(out: Path, scheme: str = "goal-only", moving_ai: bool = True,
     """Write the suite into ``out``; returns its entries (also in ``out/suite.json``).
     ``held_out_seeds``: the generator seeds of the held-out maze and rooms maps (more
     seeds: more maps of those kinds nobody tuned on)."""
-    from sim.grid import build_model
-    from sim.scenario_io import load_scenario
-
     rewards = REWARD_SCHEMES[scheme]
     out.mkdir(parents=True, exist_ok=True)
     (out / "maps").mkdir(exist_ok=True)

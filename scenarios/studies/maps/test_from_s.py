@@ -18,10 +18,17 @@ from __future__ import annotations
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from shlex import quote
 
 import numpy as np
 
+from learning.drivers.train import greedy_test, train_tabular
+from learning.methods.registry import family_of
+from learning.streams import streams
+from scenarios.artifacts import check_artifact_name, write_artifact
+from scenarios.runs.spec import load, make_config
 from scenarios.studies.args import arg, parse, parser_of
+from scenarios.studies.maps.heldout import method_of, share_of, write_problem
 
 
 @dataclass(frozen=True)
@@ -52,8 +59,6 @@ def where_it_stops(route: list[int], distance: np.ndarray) -> int:
 
 
 def describe(seed: int, result, model, state) -> str:
-    from learning.drivers.train import greedy_test
-
     dist = np.asarray(model.distance_to_goal)
     length, route = greedy_test(state, model)
     test = length if length >= 0 else "no G"
@@ -72,8 +77,6 @@ def describe(seed: int, result, model, state) -> str:
                  f"{int(acted[route[:k + 1]].sum())}/{k + 1} cells of the walk acted in")
     free_space = getattr(state, "free", None)
     if free_space is not None:
-        from learning.methods.registry import family_of
-
         nb, blocked, fd = free_space.neighbour, free_space.blocked, free_space.distance
         a = int(family_of(result.config).exploit(state, cell))
         best = [b for b in range(nb.shape[1]) if nb[cell, b] >= 0 and not blocked[cell, b]
@@ -87,13 +90,7 @@ def describe(seed: int, result, model, state) -> str:
 def main(argv: list[str] | None = None) -> int:
     args = parse(Args, __doc__, argv)
     if args.artifact:
-        from scenarios.artifacts import check_artifact_name
-
         check_artifact_name(parser_of(Args, __doc__), args.artifact)
-    from learning.drivers.train import train_tabular
-    from learning.streams import streams
-    from scenarios.runs.spec import load, make_config
-    from scenarios.studies.maps.heldout import method_of, share_of, write_problem
 
     name, _, protocol = args.problem.partition("@")
     share = share_of(protocol or "s10")
@@ -111,10 +108,6 @@ def main(argv: list[str] | None = None) -> int:
         lines.append(describe(seed, result, model, result.state))
         print(lines[-1], flush=True)
     if args.artifact:
-        from shlex import quote
-
-        from scenarios.artifacts import write_artifact
-
         command = "python -m scenarios.studies.maps.test_from_s " + " ".join(
             f"--{k.replace('_', '-')} {quote(str(v))}" for k, v in vars(args).items()
             if v is not None and k not in ("artifact", "maps"))

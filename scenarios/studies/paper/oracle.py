@@ -28,6 +28,7 @@ from learning.methods.pfh_rl import PFHRL
 from learning.metrics import episodes_to_stable_optimal
 from learning.parts.rbf import rbf_features
 from learning.streams import streams
+from scenarios.artifacts import check_artifact_name, write_artifact
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
 from scenarios.studies.args import script_parser
@@ -75,8 +76,6 @@ def main(argv: list[str] | None = None) -> int:
                    help="also write docs/results/oracle.NAME.json (the docs' table)")
     args = p.parse_args(argv)
     if args.artifact:
-        from scenarios.artifacts import check_artifact_name
-
         check_artifact_name(p, args.artifact)
     rows: list[dict] = []
     lines = [f"# Oracle bound on {args.scenario}: Q-learning shaped by the best potential each "
@@ -123,8 +122,6 @@ def main(argv: list[str] | None = None) -> int:
     text = "\n".join(lines) + "\n"
     atomic_write_text(Path(args.out) / "ORACLE.md", text)
     if args.artifact:
-        from scenarios.artifacts import write_artifact
-
         write_artifact(f"oracle.{args.artifact}", lines[2].removeprefix("Command: `")
                        .removesuffix("`") + f" --artifact {args.artifact}", ["grid"],
                        {"scenario": args.scenario, "episodes": args.episodes,

@@ -17,12 +17,20 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from learning.methods.registry import comparison_methods
+from learning.metrics import reward_per_step
+from scenarios.artifacts import check_artifact_name, write_artifact
+from scenarios.runs.results import quantile
+from scenarios.runs.spec import load
 from scenarios.studies.args import script_parser
+from scenarios.studies.paper.reward_facts import reward_facts
 from scenarios.sweep.backends import Progress, run_local, run_ray
 from scenarios.sweep.run import make_specs, run_sweep
 from sim.files import atomic_write_text
@@ -44,21 +52,12 @@ def _median(results: dict[str, Any], method: str, figure: str) -> float:
 
 def _curve_median(results: dict[str, Any], method: str, key: str, last: int) -> float:
     """Median over seeds (type 7) of the mean of ``key`` over the last ``last`` episodes."""
-    import numpy as np
-
-    from scenarios.runs.results import quantile
-
     vals = [float(np.mean(r[key][-last:])) for r in results["runs"] if r["method"] == method]
     return quantile(vals, 0.5)
 
 
 def _tail_reward_per_step(results: dict[str, Any], method: str, last: int) -> float:
     """Median over seeds of total return / total steps over the last ``last`` episodes."""
-    import numpy as np
-
-    from learning.metrics import reward_per_step
-    from scenarios.runs.results import quantile
-
     vals = [reward_per_step(np.asarray(r["return_per_episode"][-last:]),
                             np.asarray(r["steps_per_episode"][-last:]))
             for r in results["runs"] if r["method"] == method]
@@ -157,9 +156,6 @@ def report(claim_rows: list[tuple[str, bool, str]], args: argparse.Namespace) ->
 
 def _value_notes(args: argparse.Namespace) -> list[str]:
     """The value gap the greedy route from S rests on, computed, not typed."""
-    from scenarios.runs.spec import load
-    from scenarios.studies.paper.reward_facts import reward_facts
-
     sc, _ = load("paper-50", None, None, args.rewards)
     f = reward_facts(sc, sc.rewards.scheme, sc.rewards, 0.95)
     return [f"- rewards {sc.rewards.label()}, gamma 0.95: the optimal "
@@ -187,14 +183,10 @@ def main(argv: list[str] | None = None) -> int:
                    help="also write docs/results/paper-claims.NAME.json (the docs' table)")
     args = p.parse_args(argv)
     if args.artifact:
-        from scenarios.artifacts import check_artifact_name
-
         check_artifact_name(p, args.artifact)
     out = Path(args.out)
     seeds = list(range(args.seeds))
     if args.backend == "local":
-        import os
-
         execute, kw = run_local, {"jobs": args.jobs or os.cpu_count() or 1}
     else:
         execute, kw = run_ray, {"address": args.address, "num_cpus": args.jobs}
@@ -214,8 +206,6 @@ def main(argv: list[str] | None = None) -> int:
     text = report(rows, args)
     atomic_write_text(out / "REPORT.md", text)
     if args.artifact:
-        from scenarios.artifacts import write_artifact
-
         command = (f"python -m scenarios.studies.paper.reproduce_paper --out {args.out} --seeds "
                    f"{args.seeds} --episodes {args.episodes}"
                    + (f" --rewards {args.rewards}" if args.rewards else "")

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from learning.methods.registry import comparison_methods
+from scenarios.artifacts import write_artifact
 from scenarios.runs.spec import load
 from scenarios.studies.args import script_parser
 from scenarios.studies.paper.reward_facts import RewardFacts, facts_markdown, reward_facts
@@ -120,8 +121,6 @@ def main(argv: list[str] | None = None) -> int:
     text = report(args, methods, facts, grid)
     atomic_write_text(Path(args.out) / "REPORT.md", text)
     if args.artifact:
-        from scenarios.artifacts import write_artifact
-
         cmd = (f"python -m scenarios.studies.paper.reward_design --out {args.out} --scenario "
                f"{args.scenario} --seeds {args.seeds} --episodes {args.episodes}"
                + ("" if args.methods == p.get_default("methods") else

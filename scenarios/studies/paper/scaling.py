@@ -27,8 +27,9 @@ from typing import Any
 
 import numpy as np
 
+from scenarios.artifacts import ROOT, check_artifact_name, load_artifact, write_artifact
 from scenarios.figures.scaling import figure
-from scenarios.studies.args import arg, parse
+from scenarios.studies.args import arg, parse, parser_of
 from scenarios.sweep.backends import Progress, run_local
 from scenarios.sweep.run import make_specs, run_sweep
 from sim.files import atomic_write_text
@@ -76,9 +77,6 @@ class Args:
 def main(argv: list[str] | None = None) -> int:
     args = parse(Args, __doc__, argv)
     if args.artifact:
-        from scenarios.artifacts import check_artifact_name
-        from scenarios.studies.args import parser_of
-
         check_artifact_name(parser_of(Args, __doc__), args.artifact)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -142,8 +140,6 @@ def write_scaling_artifact(args: Args, command: str, sizes: list[int],
                            rows: dict[str, list[dict[str, Any]]], title: str) -> None:
     """``docs/results/scaling.NAME.json`` (the docs' table) and ``docs/scaling.png`` drawn
     from it (:func:`figure_from_artifact`)."""
-    from scenarios.artifacts import write_artifact
-
     data = {"title": title, "sizes": sizes, "seeds": args.seeds, "rewards": args.rewards,
             "rows": rows}
     write_artifact(f"scaling.{args.artifact}", f"{command} --artifact {args.artifact}",
@@ -153,8 +149,6 @@ def write_scaling_artifact(args: Args, command: str, sizes: list[int],
 
 def figure_from_artifact(name: str, path: Path | None = None) -> Path:
     """Redraw ``docs/scaling.png`` (or ``path``) from artifact ``name``."""
-    from scenarios.artifacts import ROOT, load_artifact
-
     data = load_artifact(name)["data"]
     path = path or ROOT / "docs" / "scaling.png"
     figure(data["rows"], path, data["title"])

@@ -15,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from scenarios.artifacts import ROOT, load_artifact
+from scenarios.artifacts import ROOT, ArtifactError, load_artifact
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,11 @@ class Screenshot:
 
     path: str
     command: str
+
+
+# Each figure's study is imported when it is drawn: a study loads matplotlib (about 270 ms)
+# and its own dependencies, which `rnhql report` without --figures and the docs' Cog run
+# never use.
 
 
 def _scaling(path: Path) -> None:
@@ -101,8 +106,6 @@ def redraw(figures: tuple[ArtifactFigure, ...] = FIGURES
            ) -> tuple[list[Path], list[tuple[str, str]]]:
     """Redraw every figure whose artifacts load: the paths written, and (figure, why) for
     each one left as it was (a missing or malformed artifact, named)."""
-    from scenarios.artifacts import ArtifactError
-
     done, skipped = [], []
     for fig in figures:
         try:

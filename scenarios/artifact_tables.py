@@ -11,6 +11,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from sim.physics.fidelity import parse_fidelity
+
 
 @dataclass(frozen=True)
 class Kind:
@@ -174,8 +176,6 @@ def _rho(p: dict[str, Any]) -> str:
 
 def ladder_predictivity(d: dict[str, Any]) -> str:
     """Spearman's rho of the methods' ranks, grid vs rung, per map and rung."""
-    from sim.physics.fidelity import parse_fidelity
-
     rungs = d["rungs"]
     lines = ["#### Does the grid rank the methods as the rung does? (SRCC)", "",
              "Spearman's ρ between the methods' order in the grid (grid-trained runs, the "
@@ -439,27 +439,3 @@ def physics_batch(d: dict[str, Any]) -> str:
               f"**{le['primitives_per_s_training'] / 1000:.0f}k primitives/s** "
               f"({int(le['primitives']):,} primitives); time split: {split}."]
     return "\n".join(lines) + "\n"
-
-
-def scenario_table() -> str:
-    """The built-in scenarios, listed from the code (not a measurement: no artifact)."""
-    from sim.grid import build_model
-    from sim.scenario_io import builtin_names, resolve_scenario
-
-    lines = ["| scenario | cells | circles | blocked map cells | free cells | S | G | "
-             "BFS route (moves) | what it is |", "|---|---|---|---|---|---|---|---|---|"]
-    for name in builtin_names():
-        sc = resolve_scenario(name)
-        m = build_model(sc)
-        desc = " ".join(sc.description.split()) or "—"
-        lines.append(f"| `{name}` | {sc.nx}×{sc.ny} | {len(sc.obstacles)} | "
-                     f"{len(sc.blocked_cells)} | {int((~m.blocked).sum())} | {sc.start} | "
-                     f"{sc.goal} | {m.optimal_route_length} | {desc} |")
-    return "\n".join(lines) + "\n"
-
-
-def show_scenarios() -> None:
-    """For a Cog block: the scenario table."""
-    import cog
-
-    cog.out(scenario_table())

@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from scenarios.artifact_tables import KINDS
+from sim.errors import InputError
 from sim.files import atomic_write_text
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -227,8 +228,6 @@ def checkout_problem() -> str | None:
 def require_checkout(what: str) -> None:
     """One line and exit 2 (an :class:`~sim.errors.InputError`) where :func:`checkout_problem`
     says the artifacts are not here, before any work."""
-    from sim.errors import InputError
-
     problem = checkout_problem()
     if problem is not None:
         raise InputError("command line", what, problem,
@@ -239,8 +238,6 @@ def check_artifact_target(name: str, flag: str = "--artifact") -> None:
     """An ``--artifact NAME`` checked before any work: a short lower-case word (it becomes a
     file name in docs/results and a Cog call; no path can escape that folder), in a
     source checkout."""
-    from sim.errors import InputError
-
     if not ARTIFACT_NAME.fullmatch(name):
         raise InputError("command line", flag, f"{name!r} is not a name",
                          "use lower-case letters, digits and '-' (at most 64), e.g. seed7")
@@ -332,7 +329,7 @@ def rendered_rows(names: Iterable[str]) -> str:
 
 def render_rows(names: list[str]) -> None:
     """For Cog blocks: :func:`rendered_rows`."""
-    import cog
+    import cog  # only inside a Cog run
 
     cog.out(rendered_rows(names))
 
@@ -355,7 +352,7 @@ def legacy_note(command: str, known: str = "") -> str:
 
 def legacy(command: str, known: str = "") -> None:
     """For a Cog block above a hand-typed table (see :func:`legacy_note`)."""
-    import cog
+    import cog  # only inside a Cog run
 
     cog.out(legacy_note(command, known))
 

@@ -79,3 +79,24 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
     print(format_table([f.row() for f in rows], HEADER))
     print("\noptimal = BFS moves from start to goal for the inflated robot (4-connected).")
     return 0
+
+
+def scenario_table() -> str:
+    """The built-in scenarios, listed from the code (not a measurement: no artifact)."""
+    lines = ["| scenario | cells | circles | blocked map cells | free cells | S | G | "
+             "BFS route (moves) | what it is |", "|---|---|---|---|---|---|---|---|---|"]
+    for name in builtin_names():
+        sc = resolve_scenario(name)
+        m = build_model(sc)
+        desc = " ".join(sc.description.split()) or "—"
+        lines.append(f"| `{name}` | {sc.nx}×{sc.ny} | {len(sc.obstacles)} | "
+                     f"{len(sc.blocked_cells)} | {int((~m.blocked).sum())} | {sc.start} | "
+                     f"{sc.goal} | {m.optimal_route_length} | {desc} |")
+    return "\n".join(lines) + "\n"
+
+
+def show_scenarios() -> None:
+    """For a Cog block (docs/scenarios.md): the scenario table."""
+    import cog  # only inside a Cog run
+
+    cog.out(scenario_table())

@@ -26,6 +26,7 @@ from scenarios.artifacts import (
     generated_pages,
     legacy_tables,
     load_artifact,
+    require_checkout,
     stale_parts,
 )
 
@@ -88,8 +89,6 @@ def _redraw_figures(redraw) -> bool:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from scenarios.artifacts import require_checkout
-
     require_checkout("rnhql report")  # the artifacts live in the source tree, not a wheel
     now = behaviour_digests()
     stale = []
@@ -102,6 +101,7 @@ def cmd_report(args: argparse.Namespace) -> int:
               f"{_took(doc.get('wall_s'))} | {state}")
         if parts:
             stale.append(doc)
+    # lazy: the figures' studies load matplotlib (about 270 ms) at every rnhql command's start
     from scenarios.artifact_figures import FIGURES, redraw
 
     print("\nfigure | drawn from | state")

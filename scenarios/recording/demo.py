@@ -17,9 +17,10 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.recording.recorder import Recorder
-from sim.grid import TabularModel
+from sim.grid import TabularModel, build_model
 from sim.grid.planning import bfs_route, value_iteration
 from sim.scenario import Scenario
+from sim.scenario_io import resolve_scenario
 
 
 def walk(model: TabularModel, rng: np.random.Generator, greedy_p: float) -> np.ndarray:
@@ -97,9 +98,6 @@ def main() -> None:
     ap.add_argument("--episodes", type=int, default=300)
     ap.add_argument("--world", choices=("grid", "physics"), default="grid")
     a = ap.parse_args()
-    from sim.grid import build_model
-    from sim.scenario_io import resolve_scenario
-
     sc = resolve_scenario(a.scenario)
     record_synthetic(a.out, sc, build_model(sc), episodes=a.episodes, world=a.world)
     print(a.out)

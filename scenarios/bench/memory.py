@@ -1,4 +1,4 @@
-"""Peak memory and checkpoint size per method and map size (issue 22, item 4).
+"""Peak memory and checkpoint size per method and map size.
 
     python -m scenarios.bench.memory                          # rooms, 64..512, five methods
     python -m scenarios.bench.memory --sizes 256 --methods rnh-ql+ --kind maze

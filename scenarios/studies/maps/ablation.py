@@ -170,7 +170,7 @@ def compact_table(summary: dict, maps: list[dict], labels: list[str], min_seeds:
 def verdict(summary: dict, maps: list[dict], ours: str, ref: str, min_seeds: int,
             open_maps: tuple[str, ...] = ("paper-40", "paper-50"),
             max_median: float = 650.0) -> list[str]:
-    """Issue 10's targets, judged from the summary: ``ours`` reaches ``min_seeds`` optimal
+    """The ablation's targets, judged from the summary: ``ours`` reaches ``min_seeds`` optimal
     seeds on every map, a median of at most ``max_median`` episodes on ``open_maps``, at
     least ``ref``'s optimal seeds everywhere and fewer median episodes on most maps."""
     a, b = summary.get(ours, {}), summary.get(ref, {})

@@ -1,4 +1,4 @@
-"""Held-out maps (issue 37): a list of (map, protocol, method, seeds) runs, one table.
+"""Held-out maps: a list of (map, protocol, method, seeds) runs, one table.
 
     python -m scenarios.studies.maps.heldout --out results/heldout --seeds 3 \\
         --problems maze-w4-256@s10,city-256@uniform --methods rnh-ql+,haql

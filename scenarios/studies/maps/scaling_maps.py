@@ -1,4 +1,4 @@
-"""Route learning on maps of 256 x 256 cells and more, of five kinds (issue 22's study).
+"""Route learning on maps of 256 x 256 cells and more, of five kinds.
 
     python -m scenarios.studies.maps.scaling_maps --out results/scaling-maps       # 10 seeds
     python -m scenarios.studies.maps.scaling_maps --out /tmp/sm --seeds 2 --kinds city

@@ -1,4 +1,4 @@
-"""Where the greedy test from S goes wrong (issue 37's diagnosis), one line per seed.
+"""Where the greedy test from S goes wrong, one line per seed.
 
     python -m scenarios.studies.maps.test_from_s --problem rooms-256@uniform --method rnh-ql+ \\
         --seeds 5 --map-seed 7

@@ -57,3 +57,24 @@ def test_a_switch_must_default_to_off():
 
     with pytest.raises(TypeError, match="off by default"):
         parser_of(Bad, DOC)
+
+
+def test_the_artifact_and_jobs_fields_are_spelled_once():
+    """``--artifact`` is a field type: its name is checked when the flag is parsed (exit 2
+    before any work), and ``--jobs`` defaults to every core in every study that uses it."""
+    from dataclasses import dataclass
+
+    import pytest
+
+    from scenarios.studies.args import artifact_arg, jobs_arg, parse
+
+    @dataclass(frozen=True)
+    class Args:
+        jobs: int | None = jobs_arg()
+        artifact: str | None = artifact_arg("demo")
+
+    assert parse(Args, "A study.", []) == Args(None, None)
+    assert parse(Args, "A study.", ["--artifact", "seed7", "--jobs", "2"]) == Args(2, "seed7")
+    with pytest.raises(SystemExit) as stop:
+        parse(Args, "A study.", ["--artifact", "../x"])
+    assert stop.value.code == 2

@@ -17,10 +17,11 @@ import os
 import subprocess
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 from scenarios.artifacts import write_artifact
-from scenarios.studies.args import script_parser
+from scenarios.studies.args import arg, artifact_arg, parse
 from scenarios.studies.maps.scaling_maps import write_problem
 
 METHODS = ("rnh-ql+", "haql", "rnh-ql", "dyna-q", "st-ql")
@@ -37,17 +38,18 @@ def peak_rss_mb(cmd: list[str], env: dict[str, str]) -> tuple[float, int]:
     return usage.ru_maxrss / 1024.0, proc.returncode  # ru_maxrss is in KiB on Linux
 
 
+@dataclass(frozen=True)
+class Args:
+    sizes: str = arg("64,128,256,512", "map sizes [cells a side]")
+    kind: str = arg("rooms", "map kind (sim.maps.generators)")
+    methods: str = arg(",".join(METHODS), "methods")
+    episodes: int = arg(20, "training episodes per run")
+    map_seed: int = arg(7, "generator seed of the maps")
+    artifact: str | None = artifact_arg("memory")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = script_parser(__doc__)
-    p.add_argument("--sizes", default="64,128,256,512", help="map sizes [cells a side]")
-    p.add_argument("--kind", default="rooms", help="map kind (sim.maps.generators)")
-    p.add_argument("--methods", default=",".join(METHODS), help="methods")
-    p.add_argument("--episodes", type=int, default=20, help="training episodes per run")
-    p.add_argument("--map-seed", type=int, default=7, help="generator seed of the maps")
-    p.add_argument("--artifact", default=None, metavar="NAME",
-                   help="also write docs/results/memory.NAME.json (the table docs/studies.md "
-                        "renders)")
-    args = p.parse_args(argv)
+    args = parse(Args, __doc__, argv)
     measured: dict[str, dict[str, list[float]]] = {}
     methods = [m for m in args.methods.split(",") if m]
     sizes = [int(s) for s in args.sizes.split(",")]

@@ -14,6 +14,11 @@ switch, off by default), its default the flag's, and :func:`arg` gives the help 
     def main(argv: list[str] | None = None) -> int:
         args = parse(Args, __doc__, argv)
 
+Two fields every study spells the same way: :func:`artifact_arg` (``--artifact NAME``:
+also write ``docs/results/<kind>.NAME.json``; the name and the source checkout are checked
+when the flag is parsed, before any work) and :func:`jobs_arg` (``--jobs``: worker
+processes, all cores by default).
+
 The script's ``--help`` is its docstring's first paragraph, then each flag with its help
 and default. :func:`script_parser` is that parser alone, for a script that still adds
 its flags by hand.
@@ -28,6 +33,8 @@ import typing
 from collections.abc import Sequence
 from typing import Any, TypeVar
 
+from scenarios.artifacts import ARTIFACT_NAME, checkout_problem
+
 T = TypeVar("T")
 
 
@@ -35,6 +42,30 @@ def arg(default: Any, help: str, **kwargs: Any) -> Any:
     """A field of an ``Args`` dataclass: its flag's default, help line and other
     ``add_argument`` keywords."""
     return dataclasses.field(default=default, metadata={"help": help, **kwargs})
+
+
+def artifact_name(text: str) -> str:
+    """``--artifact``'s type: a short lower-case word (it becomes a file name and a Cog
+    call), accepted only in a source checkout (where ``docs/results`` lives)."""
+    if not ARTIFACT_NAME.fullmatch(text):
+        raise argparse.ArgumentTypeError(f"{text!r}: use lower-case letters, digits and '-' "
+                                         "(at most 64), e.g. --artifact seed7")
+    problem = checkout_problem()
+    if problem is not None:
+        raise argparse.ArgumentTypeError(f"{text!r}: {problem}; run it from a clone of the "
+                                         "repository")
+    return text
+
+
+def artifact_arg(kind: str) -> Any:
+    """The ``--artifact NAME`` field of a study that writes artifacts of ``kind``."""
+    return arg(None, f"also write docs/results/{kind}.NAME.json (the docs' table)",
+               metavar="NAME", type=artifact_name)
+
+
+def jobs_arg() -> Any:
+    """The ``--jobs`` field: worker processes (None: every core)."""
+    return arg(None, "worker processes (default: every core)")
 
 
 class _Help(argparse.ArgumentDefaultsHelpFormatter):
@@ -73,7 +104,7 @@ def parser_of(cls: type, doc: str | None) -> argparse.ArgumentParser:
                 raise TypeError(f"{cls.__name__}.{f.name}: a switch is off by default")
             p.add_argument(flag, action="store_true", **f.metadata)
         else:
-            p.add_argument(flag, type=kind, default=f.default, **f.metadata)
+            p.add_argument(flag, **{"type": kind, "default": f.default, **f.metadata})
     return p
 
 

@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import json
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
 from learning.parts.free_space import bfs_distances, distances_change, repair_distances
-from scenarios.studies.args import script_parser
+from scenarios.studies.args import arg, parse
 from sim.grid.planning import far_start_goal
 from sim.maps.generators import KINDS, generate
 
@@ -78,12 +79,15 @@ def bench_map(free: np.ndarray, seed: int = 0, max_walls: int = 4000) -> dict:
             "bfs_us": stats(t_bfs)}
 
 
+@dataclass(frozen=True)
+class Args:
+    sizes: str = arg("256,512", "map sizes [cells a side]")
+    kinds: str = arg(",".join(KINDS), "map kinds")
+    walls: int = arg(2000, "walls timed per map (at most)")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = script_parser(__doc__)
-    p.add_argument("--sizes", default="256,512", help="map sizes [cells a side]")
-    p.add_argument("--kinds", default=",".join(KINDS), help="map kinds")
-    p.add_argument("--walls", type=int, default=2000, help="walls timed per map (at most)")
-    args = p.parse_args(argv)
+    args = parse(Args, __doc__, argv)
     out = {}
     for n in (int(x) for x in args.sizes.split(",")):
         for kind in args.kinds.split(","):

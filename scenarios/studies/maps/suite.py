@@ -16,11 +16,12 @@ optimal route, steps per episode, whether the map is held out from tuning).
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from scenarios.studies.args import script_parser
+from scenarios.studies.args import arg, parse
 from sim.grid import build_model
 from sim.grid.planning import far_start_goal
 from sim.maps.generators import small_maze, small_rooms
@@ -143,12 +144,16 @@ def shipped_suite_tomls() -> dict[str, tuple[str, np.ndarray | None]]:
     return out
 
 
+@dataclass(frozen=True)
+class Args:
+    out: str = arg("results/suite", "directory for maps and TOMLs")
+    rewards: str = arg("goal-only", "reward scheme of the suite's TOMLs",
+                       choices=sorted(REWARD_SCHEMES))
+    no_moving_ai: bool = arg(False, "skip the Moving AI maps")
+
+
 def main(argv: list[str] | None = None) -> int:
-    ap = script_parser(__doc__)
-    ap.add_argument("--out", default="results/suite", help="directory for maps and TOMLs")
-    ap.add_argument("--rewards", default="goal-only", choices=sorted(REWARD_SCHEMES))
-    ap.add_argument("--no-moving-ai", action="store_true", help="skip the Moving AI maps")
-    a = ap.parse_args(argv)
+    a = parse(Args, __doc__, argv)
     for e in build_suite(Path(a.out), a.rewards, not a.no_moving_ai):
         print(f"{e['name']:18s} {e['kind']:17s} optimal {e['optimal']:4d}  "
               f"steps/episode {e['steps_per_episode']:5d}  free {e['free_cells']:6d}"

@@ -102,7 +102,7 @@ def test_every_compared_method_has_its_own_colour():
 @pytest.mark.parametrize(("deficiency", "least"), [(None, 22.0), ("protanopia", 12.0),
                                                    ("deuteranopia", 11.0),
                                                    ("tritanopia", 16.0)])
-def test_the_ten_colours_are_far_apart(deficiency, least):
+def test_the_method_colours_are_far_apart(deficiency, least):
     """tab10 (the earlier palette) scores 16.2, 1.3, 3.3 and 9.5 here."""
     assert smallest_difference(METHOD_COLOURS.values(), deficiency) >= least
 

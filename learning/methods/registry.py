@@ -32,7 +32,9 @@ from types import ModuleType
 from learning.config import MethodConfig
 from learning.methods import (
     dyna_q,
+    fsa_replan,
     haql,
+    lrta_star,
     pfh_rl,
     q_lambda,
     q_learning,
@@ -43,7 +45,9 @@ from learning.methods import (
     sarsa_rs,
 )
 from learning.methods.dyna_q import DynaQ
+from learning.methods.fsa_replan import FSAReplan
 from learning.methods.haql import HAQL
+from learning.methods.lrta_star import LRTAStar
 from learning.methods.pfh_rl import PFHRL
 from learning.methods.q_lambda import QLambda
 from learning.methods.q_learning import STQL, QOpt
@@ -66,6 +70,10 @@ _TABLE: tuple[tuple[type[MethodConfig], ModuleType, bool], ...] = (
     (QOpt, q_learning, True),
     (QLambda, q_lambda, True),
     (DynaQ, dyna_q, True),
+    # the references a route learner is judged against (docs/methods.md): learning by
+    # trials (LRTA*) and planning on the optimistic map (the free-space replanner)
+    (LRTAStar, lrta_star, True),
+    (FSAReplan, fsa_replan, True),
     # rnh-ql+ with the ablation's switches (run for run rnh-ql+ at its defaults)
     (RNHQLPlusAblation, rnh_ql_plus_ablation, False),
     # rnh-ql+ with the held-out maps' options on, named: run on request

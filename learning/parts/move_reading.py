@@ -56,3 +56,26 @@ def read_move(r_stay, r_clean, s, r, s2, terminated):
         return False
     r_clean[0] = r
     return True
+
+
+COUNT_CAP = 1 << 30  # bumps minus arrivals saturate here (int32: a long run must not wrap)
+
+
+@njit(cache=True, inline="always")
+def count_outcome(bal, nb, s, a, s2, clean):
+    """The balance of a move after one try: a bump (stayed, or arrived paid the bump's
+    reward: ``clean`` False) counts up, a clean arrival in the neighbour it heads for down;
+    a move that drifted into another cell without a bump tells nothing. Returns +1 when the
+    move has just become blocked (balance above 0: its likelier outcome is a bump), -1 when
+    it has just become free again, 0 otherwise."""
+    before = bal[s, a] > 0
+    if s2 == nb[s, a] and clean:
+        if bal[s, a] > -COUNT_CAP:
+            bal[s, a] -= 1
+    elif not clean:
+        if bal[s, a] < COUNT_CAP:
+            bal[s, a] += 1
+    now = bal[s, a] > 0
+    if now == before:
+        return 0
+    return 1 if now else -1

@@ -1,0 +1,78 @@
+"""The reference methods' rules: LRTA* (Korf 1990) and the free-space replanner (the
+free-space assumption of D* Lite), on the exact grid where a bump is a wall."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from learning import METHODS, train_tabular
+from learning.methods.fsa_replan import FSAReplan
+from learning.methods.lrta_star import LRTAStar
+from learning.parts.free_space import bfs_distances
+from learning.parts.move_reading import count_outcome
+from sim.grid import build_model
+from sim.scenario_io import resolve_scenario
+
+
+@pytest.fixture(scope="module")
+def paper40():
+    return build_model(resolve_scenario("paper-40"))
+
+
+def _walls(model) -> np.ndarray:
+    """bool[nS, nA]: the moves that bump (the grid model stays put)."""
+    states = np.arange(model.next_state.shape[0])[:, None]
+    return (model.next_state == states) & ~model.terminal[:, None]
+
+
+def test_lrta_star_raises_an_admissible_heuristic_and_learns_the_optimal_route(paper40):
+    res = train_tabular(LRTAStar(), paper40, 300, np.random.default_rng(0))
+    st = res.state
+    geom_cells = np.stack([np.arange(paper40.nx * paper40.ny) % paper40.nx,
+                           np.arange(paper40.nx * paper40.ny) // paper40.nx], axis=1)
+    gx, gy = geom_cells[paper40.goal]
+    manhattan = np.abs(geom_cells[:, 0] - gx) + np.abs(geom_cells[:, 1] - gy)
+    free = paper40.distance_to_goal >= 0
+    assert (st.h >= manhattan - 1e-9).all()  # never lowered below its start
+    assert (st.h[free] <= paper40.distance_to_goal[free] + 1e-9).all()  # still admissible
+    assert st.h[paper40.goal] == 0.0
+    assert not (st.blocked & ~_walls(paper40)).any()  # a belief of a wall is a wall
+    assert res.final_route_length == res.optimal_length
+
+
+def test_the_replanner_keeps_the_optimistic_maps_distances_and_its_route_is_optimal(paper40):
+    res = train_tabular(FSAReplan(), paper40, 200, np.random.default_rng(1))
+    fs = res.state.free
+    assert not (fs.blocked & ~_walls(paper40)).any()
+    # the repaired distances are the BFS over the moves believed free
+    again = np.zeros_like(fs.distance)
+    bfs_distances(fs.neighbour, fs.blocked, again, np.zeros_like(fs.queue), int(fs.goal[0]))
+    assert (again == fs.distance).all()
+    assert (fs.distance[paper40.distance_to_goal >= 0]
+            <= paper40.distance_to_goal[paper40.distance_to_goal >= 0]).all()  # optimistic
+    assert res.final_route_length == res.optimal_length
+
+
+@pytest.mark.parametrize("cfg", [LRTAStar(), FSAReplan()], ids=lambda c: c.cli)
+def test_a_seed_gives_the_same_run(paper40, cfg):
+    a = train_tabular(cfg, paper40, 30, np.random.default_rng(5))
+    b = train_tabular(cfg, paper40, 30, np.random.default_rng(5))
+    assert (a.steps == b.steps).all() and a.final_route == b.final_route
+
+
+def test_a_stray_bump_is_outvoted_by_the_moves_arrivals():
+    """A noisy world's bump on a free move blocks it until clean arrivals outnumber it."""
+    bal = np.zeros((2, 4), np.int32)
+    nb = np.array([[1, -1, -1, -1], [-1, 0, -1, -1]], np.int32)
+    assert count_outcome(bal, nb, 0, 0, 0, False) == 1  # bumped: blocked
+    assert count_outcome(bal, nb, 0, 0, 1, True) == -1  # arrived cleanly: free again
+    assert count_outcome(bal, nb, 0, 0, 1, True) == 0
+    assert count_outcome(bal, nb, 0, 0, 0, False) == 0  # one bump against one arrival
+
+
+def test_options_the_references_do_not_read_are_refused():
+    for cls in (LRTAStar, FSAReplan):
+        with pytest.raises(ValueError, match="do not read alpha"):
+            cls(alpha=0.2)
+        assert cls().eps == 0.0 and METHODS[cls.cli] is cls

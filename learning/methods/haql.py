@@ -37,11 +37,12 @@ from learning.parts.free_space import (
     back_move,
     bfs_distances,
     distances_change,
+    lower_distances,
     new_free_space,
     repair_distances,
 )
 from learning.parts.move_reading import MoveReading, new_move_reading, read_move
-from learning.parts.tabular import q_learning, row_max
+from learning.parts.tabular import argmax_first, argmax_tied, q_learning, row_max
 from learning.parts.tally import Tally, begin_tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
@@ -193,13 +194,7 @@ def rederive_after_wall(pi_h, nb, blocked, bal, dist, queue, goal, s, a):
     if changed[0] < 0:  # a state lost its last route (the distances are a full BFS's now)
         rederive(pi_h, nb, blocked, bal, dist, queue, goal)
         return
-    pi_h[s] = nearest_move(nb, blocked, dist, s)
-    for i in range(changed.shape[0]):
-        v = changed[i]
-        for b in range(nb.shape[1]):
-            u = nb[v, b]  # on the grid's symmetric moves, u has a move into v
-            if u >= 0:
-                pi_h[u] = nearest_move(nb, blocked, dist, u)
+    repoint(pi_h, nb, blocked, dist, s, changed, changed.shape[0])
 
 
 @njit(cache=True)
@@ -220,20 +215,18 @@ def rederive_after_unblock(pi_h, nb, blocked, bal, dist, queue, goal, s, a):
     lowered = np.empty(dist.shape[0], np.int32)  # (queue keeps the reachable states)
     dist[s] = dist[t] + 1
     lowered[0] = s
-    head, tail = 0, 1
-    while head < tail:
-        v = lowered[head]
-        head += 1
-        for b in range(nb.shape[1]):
-            u = nb[v, b]  # v's neighbour; u reaches v by the opposite move
-            if u < 0 or blocked[u, back_move(b)] or dist[v] + 1 >= dist[u]:
-                continue
-            dist[u] = dist[v] + 1
-            lowered[tail] = u
-            tail += 1
+    tail = lower_distances(nb, blocked, dist, lowered, 1)  # (every distance is set: no cut)
+    repoint(pi_h, nb, blocked, dist, s, lowered, tail)
+
+
+@njit(cache=True, inline="always")
+def repoint(pi_h, nb, blocked, dist, s, changed, n):
+    """s and the neighbours of the states ``changed[:n]``, whose distances changed, take their
+    nearest move again: no other state's can change (on the grid's symmetric moves, a
+    neighbour u of v has a move into v)."""
     pi_h[s] = nearest_move(nb, blocked, dist, s)
-    for i in range(tail):
-        v = lowered[i]
+    for i in range(n):
+        v = changed[i]
         for b in range(nb.shape[1]):
             u = nb[v, b]
             if u >= 0:
@@ -354,63 +347,29 @@ def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, cle
         rederive_cut(pi_h, nb, bal, dist, goal)
 
 
-@njit(cache=True)
-def score(q, s, b, m, pi_h, xi, beta, eta):
-    """Q(s,b) + xi * H(s,b)^beta, H = max Q - Q(s,b) + eta on the heuristic move, else 0."""
-    if b != pi_h:
-        return q[s, b]
-    return q[s, b] + xi * (m - q[s, b] + eta) ** beta
-
-
-@njit(cache=True)
-def best_first(q, s, pi_h, xi, beta, eta):
-    """argmax of the HAQL scores, ties to the lowest index (the deterministic test policy)."""
-    m = row_max(q, s)
-    best = score(q, s, 0, m, pi_h, xi, beta, eta)
-    a = 0
-    for b in range(1, q.shape[1]):
-        v = score(q, s, b, m, pi_h, xi, beta, eta)
-        if v > best:
-            best = v
-            a = b
-    return a
-
-
 @njit(cache=True, inline="always")
-def best_drawn(q, s, pi_h, xi, beta, eta, rng):
-    """argmax of the HAQL scores; ties broken with ``rng.integers(0, n_ties)``."""
-    m = row_max(q, s)
-    best = score(q, s, 0, m, pi_h, xi, beta, eta)
-    a = 0
-    ties = 1
-    for b in range(1, q.shape[1]):
-        v = score(q, s, b, m, pi_h, xi, beta, eta)
-        if v > best:
-            best = v
-            a = b
-            ties = 1
-        elif v == best:
-            ties += 1
-    if ties == 1:
-        return a
-    k = rng.integers(0, ties)
-    for b in range(q.shape[1]):
-        if score(q, s, b, m, pi_h, xi, beta, eta) == best:
-            if k == 0:
-                return b
-            k -= 1
-    return a
+def heuristic_bonus(q_pi, m, xi, beta, eta):
+    """What the heuristic move adds to its Q, ``q_pi``, in the scores HAQL acts on: xi * H^beta,
+    H = m - q_pi + eta, m = max_b Q(s, b) (every other move's score is its Q)."""
+    return xi * (m - q_pi + eta) ** beta
 
 
 @njit(**HOOK)
 def act(st, s, rng):
-    """Epsilon-greedy around argmax[Q + xi * H^beta]."""
+    """Epsilon-greedy around argmax[Q + xi * H^beta], ties drawn. The heuristic move pi wins
+    outright where its bonus lifts it above every Q (always at xi = beta = 1 and eta > 0):
+    no other move is scored then."""
     p = st.par
     q = st.q
     pi_h = st.pi_h
     if rng.random() < p.eps:
         return rng.integers(0, q.shape[1])
-    return best_drawn(q, s, pi_h[s], p.xi, p.beta_h, p.eta, rng)
+    pi = pi_h[s]
+    m = row_max(q, s)
+    bonus = heuristic_bonus(q[s, pi], m, p.xi, p.beta_h, p.eta)
+    if q[s, pi] + bonus > m:  # pi wins outright
+        return pi
+    return argmax_tied(q, s, rng, False, pi, bonus)
 
 
 @njit(**HOOK)
@@ -438,5 +397,12 @@ def begin(st, s0):
 
 @njit(**HOOK)
 def exploit(st, s):
+    """argmax[Q + xi * H^beta], ties to the lowest index (pi outright as in :func:`act`)."""
     p = st.par
-    return best_first(st.q, s, st.pi_h[s], p.xi, p.beta_h, p.eta)
+    q = st.q
+    pi = st.pi_h[s]
+    m = row_max(q, s)
+    bonus = heuristic_bonus(q[s, pi], m, p.xi, p.beta_h, p.eta)
+    if q[s, pi] + bonus > m:  # pi wins outright
+        return pi
+    return argmax_first(q, s, pi, bonus)

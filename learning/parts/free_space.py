@@ -74,19 +74,28 @@ def bfs_distances(nb, blocked, dist, queue, goal):
         dist[s] = -1
     dist[goal] = 0
     queue[0] = goal
-    head, tail = 0, 1
+    lower_distances(nb, blocked, dist, queue, 1)
+
+
+@njit(cache=True, inline="always")
+def lower_distances(nb, blocked, dist, order, tail):
+    """Distances lowered breadth first from the states ``order[:tail]`` (theirs set, rising
+    along ``order``): a state with an unblocked move into a state v of ``order``, and a
+    distance unset (-1) or above dist[v] + 1, takes dist[v] + 1 and joins ``order``. Returns
+    how many states ``order`` then holds. From G alone, every other distance unset, it is
+    the BFS (a state is first reached at its least distance, so none is lowered twice)."""
+    head = 0
     while head < tail:
-        v = queue[head]
+        v = order[head]
         head += 1
         for a in range(nb.shape[1]):
             u = nb[v, a]  # v's neighbour; u reaches v by the opposite move
-            if u < 0 or dist[u] >= 0:
-                continue
-            if blocked[u, back_move(a)]:
+            if u < 0 or 0 <= dist[u] <= dist[v] + 1 or blocked[u, back_move(a)]:
                 continue
             dist[u] = dist[v] + 1
-            queue[tail] = u
+            order[tail] = u
             tail += 1
+    return tail
 
 
 @njit(cache=True, inline="always")

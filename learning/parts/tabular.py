@@ -34,11 +34,19 @@ def row_max(q, s):
 
 
 @njit(cache=True, inline="always")
-def argmax_first(q, s):
-    """Greedy action at s, ties to the lowest index (deterministic, for tests)."""
+def raised(v, b, up, bonus):
+    """Action b's value v = Q(s, b) as the argmax rules below rank it: plus ``bonus`` when b
+    is the raised action ``up`` (-1: none is; HAQL raises its heuristic move)."""
+    return v + bonus if b == up else v
+
+
+@njit(cache=True, inline="always")
+def argmax_first(q, s, up=-1, bonus=0.0):
+    """Greedy action at s, ties to the lowest index (deterministic, for tests); action ``up``
+    ranked by Q + ``bonus`` (:func:`raised`)."""
     a = 0
     for b in range(1, q.shape[1]):
-        if q[s, b] > q[s, a]:
+        if raised(q[s, b], b, up, bonus) > raised(q[s, a], a, up, bonus):
             a = b
     return a
 
@@ -52,14 +60,15 @@ def draw_below(rng, n):
 
 
 @njit(cache=True, inline="always")
-def argmax_tied(q, s, rng, cheap_draw):
+def argmax_tied(q, s, rng, cheap_draw, up=-1, bonus=0.0):
     """Greedy action at s, a tie broken at random: ``rng.integers(0, n_ties)``, or with
-    ``cheap_draw`` :func:`draw_below`; nothing is drawn without a tie."""
-    best = q[s, 0]
+    ``cheap_draw`` :func:`draw_below`; nothing is drawn without a tie. Action ``up`` is
+    ranked by Q + ``bonus`` (:func:`raised`)."""
+    best = raised(q[s, 0], 0, up, bonus)
     a = 0
     ties = 1
     for b in range(1, q.shape[1]):
-        v = q[s, b]
+        v = raised(q[s, b], b, up, bonus)
         if v > best:
             best = v
             a = b
@@ -70,7 +79,7 @@ def argmax_tied(q, s, rng, cheap_draw):
         return a
     k = draw_below(rng, ties) if cheap_draw else rng.integers(0, ties)
     for b in range(q.shape[1]):
-        if q[s, b] == best:
+        if raised(q[s, b], b, up, bonus) == best:
             if k == 0:
                 return b
             k -= 1

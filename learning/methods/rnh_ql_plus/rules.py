@@ -230,7 +230,9 @@ def revise_optimism(nb, blocked, dist, queue, goal, y, stamp, r_goal_seen, r_fre
     physics worlds; on the grid and at the exact fidelity a move's outcome never changes),
     or a reward (``stale``). A real call, made only then (rnh-ql+ and its ablation share it;
     the steps before it stay written out in each hook: as an inlined helper taking the
-    model's arrays they cost the kernel ~8 % of its speed, measured)."""
+    model's arrays they cost the kernel ~8 % of its speed, measured; again on paper-50 at
+    n_planning 0: -6 % inlined, taking the arrays or the state (numba reference-counts each
+    array an inlined helper takes or reads again, per call), -25 % as a real call)."""
     if now_fail != was_fail and (was_fail or distances_change(nb, dist, blocked, s, a)):
         if was_fail:  # a wall that moved after all (noisy worlds): distances may fall
             bfs_distances(nb, blocked, dist, queue, goal)

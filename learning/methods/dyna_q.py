@@ -16,7 +16,7 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 from numba import njit
 
-from learning.config import MethodConfig
+from learning.config import MethodConfig, params_tuple
 from learning.geometry import Geometry
 from learning.parts.move_model import (
     MoveModel,
@@ -32,6 +32,8 @@ from learning.parts.tally import Tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
 
+Params = params_tuple("Params", __name__, n_planning=int)
+
 
 @dataclass(frozen=True)
 class DynaQ(MethodConfig):
@@ -41,16 +43,7 @@ class DynaQ(MethodConfig):
     cli: ClassVar[str] = "dyna-q"
     n_planning: int = 5  # simulated Q updates per real step, (s, a) uniform over seen pairs
 
-    def params(self) -> Params:
-        return Params(float(self.eps), float(self.alpha), float(self.gamma),
-                      int(self.n_planning))
-
-
-class Params(NamedTuple):
-    eps: float
-    alpha: float
-    gamma: float
-    n_planning: int
+    params_type: ClassVar[type] = Params
 
 
 class State(NamedTuple):

@@ -30,7 +30,7 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 from numba import njit
 
-from learning.config import MethodConfig
+from learning.config import MethodConfig, params_tuple
 from learning.geometry import Geometry
 from learning.parts.free_space import (
     FreeSpace,
@@ -51,6 +51,9 @@ BUMP_COST_CAP = 1 << 20  # a move's excess bumps in a route's cost (int64 sums s
 # Added after checkpoints were written: a file without them loads the fresh values (no reward
 # seen yet), relearnt at the next stay and clean arrival (see learning.drivers.checkpoint).
 ADDED = ("reading.r_stay", "reading.r_clean")
+
+
+Params = params_tuple("Params", __name__, xi=float, beta_h=float, eta=float, explored=bool)
 
 
 @dataclass(frozen=True)
@@ -77,19 +80,7 @@ class HAQL(MethodConfig):
     eta: float = 0.1  # margin of the heuristic move over the current max [reward units]
     explored: int = 1  # 1: heuristic from exploration; 0: the static Manhattan move
 
-    def params(self) -> Params:
-        return Params(float(self.eps), float(self.alpha), float(self.gamma), float(self.xi),
-                      float(self.beta_h), float(self.eta), bool(self.explored))
-
-
-class Params(NamedTuple):
-    eps: float
-    alpha: float
-    gamma: float
-    xi: float
-    beta_h: float
-    eta: float
-    explored: bool
+    params_type: ClassVar[type] = Params
 
 
 class State(NamedTuple):

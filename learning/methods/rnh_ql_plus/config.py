@@ -52,38 +52,18 @@ class RNHQLPlus(MethodConfig):
     * ``model_acting=1`` (off by default; held-out maps): the behaviour's greedy move is the
       optimistic model's, every move (tried or not) valued by one step of look-ahead on
       Phi, a move the model holds blocked never; ties drawn. Q is still learned, off
-      policy, and the test is unchanged. Why: by default a *tried* move is valued by its
-      Q, and on long routes Q holds the scale of earlier potentials: Phi = gamma^(d-1) r_G
-      spans ~70 orders of magnitude along a 3000-move route, and each wall that lengthens
-      a distance by hundreds of moves drops Phi there by 1e-8 or more, far faster than TD
-      steps of alpha shrink what Q learned before. On a 512² maze with 4-cell corridors a
-      cell's largest |Q| of a working move was a median 6e11 x Phi(s) at the end, the
-      max-Q move headed for G at 67 % of cells (92 % at 256²), 9 % of the episodes
-      reached G, the model still
-      believed a route 336 moves shorter than the real one after 4096 episodes, and the
-      known-route test kept a route 24 moves too long (at 11 of its 12 detours the move
-      one nearer G was never tried). Acting on the model walks the route it believes
-      shortest, so each walk either confirms it (its moves are then seen to work and the
-      test follows them) or finds the wall that refutes it (HAQL's and D* Lite's
-      behaviour). Needs ``lookahead=1`` and ``shaping_scale > 0``.
-
+      policy, and the test is unchanged. Needs ``lookahead=1`` and ``shaping_scale > 0``.
     * ``model_test=1`` (off by default; held-out maps): the greedy test walks the optimistic
       model's route (HAQL's test): from s, the move into the neighbour the model holds
       nearest G (ties: a move seen to work, then the lowest index), except where s has a
       known route as short as the model's distance (with ``known_route``), which it then
-      follows: the model can claim no shorter one, and among equal routes the one walked
-      is the one sure to be free. Why: the known-route test needs every move of the
-      optimal route walked before it can follow it, while the model's route is right as
-      soon as the walls that would deflect it are known (the 256² tuning maze, one
-      episode in ten from S: 3/5 seeds optimal by default, 5/5 with it; docs/studies.md).
-      The risk is HAQL's: a move never tried may be a wall the test then walks into.
-
+      follows.
     * ``explore_steps`` (0 by default; held-out maps): the first steps of each episode walk to
       cells never visited (:mod:`learning.parts.coverage`), bumping the walls on the way, then
-      the behaviour above takes over. Why: under uniform starts the agent heading
-      straight for G never enters the region of S (a third of the cells of a 256² map
-      unvisited after 2048 episodes), and the test from S dies at the first wall there
-      it never bumped; no rule of the test can know that wall.
+      the behaviour above takes over.
+
+    Why the last three exist, with what was measured: docs/methods.md, "Why rnh-ql+'s
+    held-out options".
 
     With ``shaping_scale=0, lookahead=0`` it is Dyna-Q (bit for bit).
     """

@@ -45,6 +45,7 @@ from scenarios.signals import sigint_handled_by
 from sim.grid import TabularModel
 from sim.physics.envs.vector import PhysicsRouteVectorEnv
 from sim.physics.models.optimum import continuous_optimum_m
+from sim.physics.sigint import take_deferred
 from sim.scenario import Scenario
 
 TEST_BATCH = 16  # periodic tests above exact driven together, one env [tests]
@@ -275,7 +276,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                     run_tests(TEST_BATCH)
                 start_episodes(ended & active)
                 t_ep += clock() - t4
-            if stop.requested:
+            if stop.requested or take_deferred():
                 raise KeyboardInterrupt
         t5 = clock()
         if pending:

@@ -52,3 +52,11 @@ def raise_if_deferred() -> None:
     if _deferred[0]:
         _deferred[0] = False
         raise KeyboardInterrupt
+
+
+def take_deferred() -> bool:
+    """Whether a callback deferred a ``KeyboardInterrupt`` (clearing it): for a caller that
+    routes SIGINT its own way from now on (a training loop's stop flag), so a Ctrl-C that
+    arrived while the world was being built is not lost when no later step raises it."""
+    deferred, _deferred[0] = _deferred[0], False
+    return deferred

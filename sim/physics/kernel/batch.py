@@ -300,6 +300,7 @@ class RouteBatch:
             if n_waiting == 0:
                 if self.contact_records and self._booked.any():
                     self._book()  # (without records, the counts are the outcome's)
+                sigint.raise_if_deferred()  # one deferred while the world was built, too
                 break
             status = r.status
             for i in np.flatnonzero(act & (status != _DONE)):

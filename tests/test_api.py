@@ -187,31 +187,28 @@ def test_objects_stand_for_their_text(tmp_path):
     assert g == text and g.fidelity.startswith("noisy+ (wheel_noise=0.1")
 
 
+class _NoGreedy:
+    """A plain learner with act and update only: what a first draft may look like."""
+
+    def __init__(self, n_states, n_actions, rng):
+        pass
+
+    def act(self, s):
+        return 0
+
+    def update(self, s, a, r, s2, terminal):
+        pass
+
+
 def test_a_plain_learner_without_greedy_is_refused_with_what_to_add():
-    class NoGreedy:
-        def __init__(self, n_states, n_actions, rng):
-            pass
-
-        def act(self, s):
-            return 0
-
-        def update(self, s, a, r, s2, terminal):
-            pass
-
     with pytest.raises(InputError, match="has no greedy"):
-        api.train("paper-40", NoGreedy, episodes=5)
+        api.train("paper-40", _NoGreedy, episodes=5)
 
 
 def test_a_learner_returning_a_bad_action_is_named():
-    class Wild:
-        def __init__(self, n_states, n_actions, rng):
-            pass
-
+    class Wild(_NoGreedy):
         def act(self, s):
             return 9
-
-        def update(self, s, a, r, s2, terminal):
-            pass
 
         def greedy(self, s):
             return 0

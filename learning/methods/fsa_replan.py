@@ -35,7 +35,7 @@ from learning.parts.free_space import (
     repair_distances,
 )
 from learning.parts.move_reading import MoveReading, count_outcome, new_move_reading, read_move
-from learning.parts.tabular import begin_plain, draw_below
+from learning.parts.tabular import begin_plain, draw_below, least_key, nth_least
 from learning.parts.tally import Tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
@@ -57,58 +57,29 @@ class State(NamedTuple):
     balance: np.ndarray  # int32[nS, nA]; bumps minus clean arrivals (blocked when > 0)
     free: FreeSpace  # the optimistic map and every cell's distance to G over it
     reading: MoveReading  # the rewards of a stay and of a clean arrival
+    keys: np.ndarray  # float64[nA]; scratch: each move's rank at the state in hand
 
 
 def init_state(cfg: FSAReplan, geom: Geometry, rng: np.random.Generator) -> State:
     return State(cfg.params(), new_tally(),
                  np.zeros((geom.n_states, geom.n_actions), np.int32), new_free_space(geom),
-                 new_move_reading())
+                 new_move_reading(), np.zeros(geom.n_actions))
 
 
 @njit(cache=True, inline="always")
-def _key(nb, blocked, dist, bal, s, a, by_route):
-    """A move's rank (lower is better), or -1 for a move that is not a candidate: its
-    neighbour's distance to G over the believed-free moves (``by_route``), else its
+def route_keys(nb, blocked, dist, bal, s, keys):
+    """keys[a]: the rank of move a (lower is better; -1: no candidate): the distance to G of
+    its neighbour over the moves believed free; where no move has such a route, its
     balance of bumps (any move that stays on the arena)."""
-    u = nb[s, a]
-    if u < 0:
-        return -1
-    if by_route:
-        return -1 if blocked[s, a] or dist[u] < 0 else dist[u]
-    return bal[s, a] + (1 << 30)  # >= 0: balances are capped at +-2^30
-
-
-@njit(cache=True, inline="always")
-def route_moves(nb, blocked, dist, bal, s):
-    """(best rank, how many moves share it, by_route): the first moves of the shortest
-    routes to G over the moves believed free; without such a route the least-bumped
-    moves (``by_route`` False)."""
-    by_route = True
-    for _ in range(2):
-        best, ties = -1, 0
-        for a in range(nb.shape[1]):
-            k = _key(nb, blocked, dist, bal, s, a, by_route)
-            if k < 0:
-                continue
-            if best < 0 or k < best:
-                best, ties = k, 1
-            elif k == best:
-                ties += 1
-        if ties > 0:
-            return best, ties, by_route
-        by_route = False
-    return 0, 0, False
-
-
-@njit(cache=True, inline="always")
-def nth_move(nb, blocked, dist, bal, s, best, by_route, n):
-    """The ``n``-th (0-based, in action order) move of rank ``best``."""
+    found = False
     for a in range(nb.shape[1]):
-        if _key(nb, blocked, dist, bal, s, a, by_route) == best:
-            if n == 0:
-                return a
-            n -= 1
-    return 0
+        u = nb[s, a]
+        keys[a] = -1.0 if u < 0 or blocked[s, a] or dist[u] < 0 else float(dist[u])
+        found = found or keys[a] >= 0.0
+    if not found:
+        for a in range(nb.shape[1]):
+            # >= 0: balances are capped at +-2^30
+            keys[a] = -1.0 if nb[s, a] < 0 else float(bal[s, a] + (1 << 30))
 
 
 @njit(**HOOK)
@@ -117,13 +88,14 @@ def act(st, s, rng):
     blocked = st.free.blocked
     dist = st.free.distance
     bal = st.balance
+    keys = st.keys
     if st.par.eps > 0.0 and rng.random() < st.par.eps:
         return rng.integers(0, nb.shape[1])
-    best, ties, by_route = route_moves(nb, blocked, dist, bal, s)
+    route_keys(nb, blocked, dist, bal, s, keys)
+    best, ties = least_key(keys)
     if ties == 0:  # no move stays on the arena (a one-cell arena)
         return 0
-    n = draw_below(rng, ties) if ties > 1 else 0
-    return nth_move(nb, blocked, dist, bal, s, best, by_route, n)
+    return nth_least(keys, best, draw_below(rng, ties) if ties > 1 else 0)
 
 
 @njit(**HOOK)
@@ -156,8 +128,10 @@ def exploit(st, s):
     blocked = st.free.blocked
     dist = st.free.distance
     bal = st.balance
-    best, ties, by_route = route_moves(nb, blocked, dist, bal, s)
-    return nth_move(nb, blocked, dist, bal, s, best, by_route, 0) if ties > 0 else 0
+    keys = st.keys
+    route_keys(nb, blocked, dist, bal, s, keys)
+    best, ties = least_key(keys)
+    return nth_least(keys, best, 0) if ties > 0 else 0
 
 
 def q_table(st: State) -> np.ndarray:

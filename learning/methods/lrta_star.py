@@ -27,7 +27,7 @@ from learning.config import BaseParams, MethodConfig
 from learning.geometry import Geometry
 from learning.parts.free_space import arena_neighbours
 from learning.parts.move_reading import MoveReading, count_outcome, new_move_reading, read_move
-from learning.parts.tabular import begin_plain, draw_below
+from learning.parts.tabular import begin_plain, draw_below, least_key, nth_least
 from learning.parts.tally import Tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
@@ -51,6 +51,7 @@ class State(NamedTuple):
     blocked: np.ndarray  # bool[nS, nA]; moves believed blocked (balance > 0)
     balance: np.ndarray  # int32[nS, nA]; bumps minus clean arrivals
     reading: MoveReading  # the rewards of a stay and of a clean arrival
+    keys: np.ndarray  # float64[nA]; scratch: each move's 1 + h(s') at the state in hand
 
 
 def init_state(cfg: LRTAStar, geom: Geometry, rng: np.random.Generator) -> State:
@@ -59,41 +60,15 @@ def init_state(cfg: LRTAStar, geom: Geometry, rng: np.random.Generator) -> State
     n_s, n_a = geom.n_states, geom.n_actions
     return State(cfg.params(), new_tally(), h, arena_neighbours(geom),
                  np.zeros((n_s, n_a), np.bool_), np.zeros((n_s, n_a), np.int32),
-                 new_move_reading())
+                 new_move_reading(), np.zeros(n_a))
 
 
 @njit(cache=True, inline="always")
-def lookahead(nb, blocked, h, s, a):
-    """1 + h(s') through move a, or -1 for a move believed blocked or off the arena."""
-    u = nb[s, a]
-    return -1.0 if u < 0 or blocked[s, a] else 1.0 + h[u]
-
-
-@njit(cache=True, inline="always")
-def best_lookahead(nb, blocked, h, s):
-    """(min over the believed-free moves of 1 + h(s'), how many moves reach it); (-1, 0)
-    where every move is believed blocked."""
-    best, ties = -1.0, 0
+def lookaheads(nb, blocked, h, s, keys):
+    """keys[a] = 1 + h(s') through move a; -1 for a move believed blocked or off the arena."""
     for a in range(nb.shape[1]):
-        f = lookahead(nb, blocked, h, s, a)
-        if f < 0.0:
-            continue
-        if ties == 0 or f < best:
-            best, ties = f, 1
-        elif f == best:
-            ties += 1
-    return best, ties
-
-
-@njit(cache=True, inline="always")
-def nth_best(nb, blocked, h, s, best, n):
-    """The ``n``-th (0-based, in action order) move whose 1 + h(s') is ``best``."""
-    for a in range(nb.shape[1]):
-        if lookahead(nb, blocked, h, s, a) == best:
-            if n == 0:
-                return a
-            n -= 1
-    return 0
+        u = nb[s, a]
+        keys[a] = -1.0 if u < 0 or blocked[s, a] else 1.0 + h[u]
 
 
 @njit(**HOOK)
@@ -101,12 +76,14 @@ def act(st, s, rng):
     nb = st.neighbour
     blocked = st.blocked
     h = st.h
+    keys = st.keys
     if st.par.eps > 0.0 and rng.random() < st.par.eps:
         return rng.integers(0, nb.shape[1])
-    best, ties = best_lookahead(nb, blocked, h, s)
+    lookaheads(nb, blocked, h, s, keys)
+    best, ties = least_key(keys)
     if ties == 0:  # every move believed blocked: any move (a bump will tell)
         return rng.integers(0, nb.shape[1])
-    return nth_best(nb, blocked, h, s, best, draw_below(rng, ties) if ties > 1 else 0)
+    return nth_least(keys, best, draw_below(rng, ties) if ties > 1 else 0)
 
 
 @njit(**HOOK)
@@ -117,11 +94,13 @@ def update(st, s, a, r, s2, terminated, rng):
     blocked = st.blocked
     bal = st.balance
     h = st.h
+    keys = st.keys
     clean = read_move(st.reading.r_stay, st.reading.r_clean, s, r, s2, terminated)
     flip = count_outcome(bal, nb, s, a, s2, clean)
     if flip != 0:
         blocked[s, a] = flip > 0
-    best, ties = best_lookahead(nb, blocked, h, s)
+    lookaheads(nb, blocked, h, s, keys)
+    best, ties = least_key(keys)
     if ties > 0 and best > h[s]:
         h[s] = best
 
@@ -134,8 +113,10 @@ def exploit(st, s):
     nb = st.neighbour
     blocked = st.blocked
     h = st.h
-    best, ties = best_lookahead(nb, blocked, h, s)
-    return nth_best(nb, blocked, h, s, best, 0) if ties > 0 else 0
+    keys = st.keys
+    lookaheads(nb, blocked, h, s, keys)
+    best, ties = least_key(keys)
+    return nth_least(keys, best, 0) if ties > 0 else 0
 
 
 def q_table(st: State) -> np.ndarray:

@@ -146,3 +146,31 @@ def begin_plain(st, s0):
 def exploit_q(st, s):
     """The ``exploit`` hook of a method whose policy is its Q-table's greedy action."""
     return argmax_first(st.q, s)
+
+
+@njit(cache=True, inline="always")
+def least_key(keys):
+    """(the least non-negative key, how many moves share it); a negative key marks a move
+    that is no candidate; (-1, 0) when none is. With :func:`nth_least`: a planner's choice
+    among its tied best moves."""
+    best, ties = -1.0, 0
+    for a in range(keys.shape[0]):
+        k = keys[a]
+        if k < 0.0:
+            continue
+        if ties == 0 or k < best:
+            best, ties = k, 1
+        elif k == best:
+            ties += 1
+    return best, ties
+
+
+@njit(cache=True, inline="always")
+def nth_least(keys, best, n):
+    """The ``n``-th (0-based, in action order) move whose key is ``best``."""
+    for a in range(keys.shape[0]):
+        if keys[a] == best:
+            if n == 0:
+                return a
+            n -= 1
+    return 0

@@ -95,6 +95,8 @@ class Rewards:
         ``exact`` fidelity a bump never ends in G: the robot stays. With carried pose a robot
         can touch a wall on its way into G; the move still reached G, and a model learner
         that stored it as "G, worth a bump" would replay the goal as a penalty.)"""
+        if not isinstance(bumped, np.ndarray):  # one move (a single env's step): plain Python
+            return self.goal if at_goal else self.bump if bumped else self.step if moved else 0.0
         return np.where(at_goal, self.goal,
                         np.where(bumped, self.bump, np.where(moved, self.step, 0.0)))
 

@@ -162,6 +162,8 @@ class Progress:
         every = min(self.interval_s, 1.0) if self.bar else self.interval_s
         while not self._stop.wait(every):
             with self._lock:
+                if self._stop.is_set():  # closed while this beat waited for the lock:
+                    return  # the closing line is the last one
                 try:
                     if self.bar:
                         self.stream.write("\r" + self._line().ljust(100))

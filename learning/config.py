@@ -48,7 +48,8 @@ _VALID = {
     "sweeping": (lambda v: v in (0, 1), "0 or 1"),
     "model_acting": (lambda v: v in (0, 1), "0 or 1"),
     "model_test": (lambda v: v in (0, 1), "0 or 1"),
-    "explore_steps": (lambda v: v >= 0, ">= 0 [steps per episode]"),
+    "explore_steps": (lambda v: v >= -1, ">= 0 [steps per episode], or -1: "
+                      "4 x the arena's longer side"),
 }
 
 

@@ -378,7 +378,7 @@ def test_the_coverage_walk_tries_a_move_in_every_free_cell_and_then_ends(paper50
     assert not np.array_equal(a.steps, b.steps)
 
 
-@pytest.mark.parametrize("field, value", [("explore_steps", -1), ("model_test", 2),
+@pytest.mark.parametrize("field, value", [("explore_steps", -2), ("model_test", 2),
                                           ("model_acting", 3), ("known_route", -1)])
 def test_the_model_options_refuse_values_they_do_not_have(field, value):
     with pytest.raises(ValueError, match=rf"RNHQLPlus\.{field} = {value} must be"):
@@ -386,17 +386,17 @@ def test_the_model_options_refuse_values_they_do_not_have(field, value):
 
 
 def test_rnh_ql_plus_explore_is_rnh_ql_plus_with_the_model_options(paper50_model):
-    """The named variant is rnh-ql+ with explore_steps=1000, model_acting, model_test on
+    """The named variant is rnh-ql+ with explore_steps=-1, model_acting, model_test on
     and no planned updates, run for run; its record lists the options and round-trips."""
     from learning import RNHQLPlusExplore, config_from_fields
 
     named = RNHQLPlusExplore()
-    spelled = RNHQLPlus(explore_steps=1000, model_acting=1, model_test=1, n_planning=0)
+    spelled = RNHQLPlus(explore_steps=-1, model_acting=1, model_test=1, n_planning=0)
     assert METHODS["rnh-ql+explore"] is RNHQLPlusExplore
     assert config_from_fields("rnh-ql+explore", named.record_fields()) == named
     listed = named.record_fields()
     assert (listed["explore_steps"], listed["model_acting"], listed["model_test"],
-            listed["n_planning"]) == (1000, 1, 1, 0)
+            listed["n_planning"]) == (-1, 1, 1, 0)
     a = train_tabular(named, paper50_model, 40, np.random.default_rng(2))
     b = train_tabular(spelled, paper50_model, 40, np.random.default_rng(2))
     np.testing.assert_array_equal(a.steps, b.steps)
@@ -424,3 +424,18 @@ def test_rnh_ql_plus_explore_chooses_nothing_by_q(paper50_model):
     for s in range(0, m.n_states, 7):
         assert agents[0].greedy_action(s) == agents[1].greedy_action(s)
         assert agents[0].act(s) == agents[1].act(s)
+
+
+def test_the_walk_budget_grows_with_the_arena(paper50_model):
+    """explore_steps=-1 (rnh-ql+explore's): 4 x the arena's longer side, so a run's walk is
+    a fixed multiple of the arena's cells; an explicit budget is kept as given."""
+    from learning import RNHQLPlusExplore, make_agent
+    from learning.parts.coverage import walk_budget
+
+    geom = geometry_of(paper50_model)
+    side = round(max(geom.bounds_m[2] - geom.bounds_m[0], geom.bounds_m[3] - geom.bounds_m[1])
+                 / geom.cell_size_m)
+    assert side == 50
+    agent = make_agent(RNHQLPlusExplore(), geom, np.random.default_rng(0))
+    assert agent.state.par.explore_steps == walk_budget(-1, geom) == 4 * side
+    assert walk_budget(1000, geom) == 1000

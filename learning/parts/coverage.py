@@ -27,10 +27,31 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from learning.geometry import Geometry
 from learning.parts.free_space import back_move
 from learning.parts.tabular import draw_below
 
 NEARBY_CELLS = 1024  # a local search's limit before the field is re-run [cells]
+WALK_PER_SIDE = 4  # the walk's steps an episode per cell of the arena's longer side
+AUTO_WALK = -1  # explore_steps = AUTO_WALK: WALK_PER_SIDE x the arena's longer side
+
+
+def walk_budget(explore_steps: int, geom: Geometry) -> int:
+    """The walk's steps an episode: ``explore_steps``, or for :data:`AUTO_WALK` one derived
+    from the map, ``WALK_PER_SIDE`` x the arena's longer side in cells.
+
+    Why the side: the held-out studies give a run ``8 x the side`` episodes, so the walk
+    totals 32 x the side² steps over a run, a fixed multiple of the arena's cells at every
+    size. A constant does not scale: 1000 steps were chosen at 256² (about 4 x the side);
+    at 512² the caves settled sooner with 2000 than with 1000 (830 against 970 episodes,
+    docs/results/heldout.walk-512.json), and 4000 never settled there, because a walk as
+    long as the episode (4 x the 998-move route) left no step to reach G.
+    """
+    if explore_steps != AUTO_WALK:
+        return int(explore_steps)
+    xmin, ymin, xmax, ymax = geom.bounds_m
+    side = max(xmax - xmin, ymax - ymin) / geom.cell_size_m
+    return int(WALK_PER_SIDE * round(side))
 
 
 class Coverage(NamedTuple):

@@ -58,7 +58,8 @@ class RNHQLPlus(MethodConfig):
       nearest G (ties: a move seen to work, then the lowest index), except where s has a
       known route as short as the model's distance (with ``known_route``), which it then
       follows.
-    * ``explore_steps`` (0 by default; held-out maps): the first steps of each episode walk to
+    * ``explore_steps`` (0 by default; held-out maps; -1: 4 x the arena's longer side,
+      :func:`learning.parts.coverage.walk_budget`): the first steps of each episode walk to
       cells never visited (:mod:`learning.parts.coverage`), bumping the walls on the way, then
       the behaviour above takes over.
 
@@ -78,7 +79,8 @@ class RNHQLPlus(MethodConfig):
     sweeping: int = 0  # 1: planned updates go to the pairs whose values changed most first
     model_acting: int = 0  # 1: the behaviour acts greedily on the optimistic model (see above)
     model_test: int = 0  # 1: the greedy test walks the optimistic model's route (see above)
-    explore_steps: int = 0  # coverage walk at the start of each episode [steps]; 0: none
+    explore_steps: int = 0  # coverage walk at the start of each episode [steps]; 0: none;
+    #                         -1: 4 x the arena's longer side (learning.parts.coverage)
 
     # Options added after records and checkpoints were written: a record lists one only when
     # it is not at its default, so every record from before (and the behaviour digests
@@ -132,8 +134,9 @@ class RNHQLPlus(MethodConfig):
 @dataclass(frozen=True)
 class RNHQLPlusExplore(RNHQLPlus):
     """RNH-QL+ explore (``rnh-ql+explore``): rnh-ql+ with the three held-out-maps options on, for
-    maps nobody tuned for and for the paper's uniform starts: ``explore_steps=1000`` (a
-    coverage walk opens each episode), ``model_acting=1`` (the behaviour acts on the
+    maps nobody tuned for and for the paper's uniform starts: ``explore_steps=-1`` (a
+    coverage walk of 4 x the arena's longer side opens each episode: 1024 steps at 256²,
+    where 1000 was chosen, 2048 at 512²), ``model_acting=1`` (the behaviour acts on the
     optimistic model), ``model_test=1`` (the test walks the model's route where no known
     route is as short), and ``n_planning=0``.
 
@@ -159,7 +162,7 @@ class RNHQLPlusExplore(RNHQLPlus):
     n_planning: int = 0
     model_acting: int = 1
     model_test: int = 1
-    explore_steps: int = 1000
+    explore_steps: int = -1
 
 
 class Params(NamedTuple):

@@ -9,7 +9,7 @@ import numpy as np
 from learning.geometry import Geometry
 from learning.methods.rnh_ql_plus.config import Params, RNHQLPlus
 from learning.methods.rnh_ql_plus.optimism import Optimism, new_optimism
-from learning.parts.coverage import Coverage, new_coverage
+from learning.parts.coverage import Coverage, new_coverage, walk_budget
 from learning.parts.free_space import FreeSpace, new_free_space
 from learning.parts.known_routes import KnownRoutes, new_known_routes
 from learning.parts.move_model import MoveModel, new_move_model
@@ -50,7 +50,8 @@ ADDED = ("reading.r_stay", "reading.r_clean", "coverage.distance")
 
 def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> State:
     n_s, n_a = geom.n_states, geom.n_actions
-    return State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), new_move_model(n_s, n_a),
+    par = cfg.params()._replace(explore_steps=walk_budget(cfg.explore_steps, geom))
+    return State(par, new_tally(), np.zeros((n_s, n_a)), new_move_model(n_s, n_a),
                  new_free_space(geom), new_optimism(n_s), np.zeros((1, n_a)), np.zeros(1),
                  np.zeros(1, np.bool_), new_known_routes(n_s),
                  new_pair_queue(n_s * n_a) if cfg.sweeping else new_pair_queue(0, 0),

@@ -12,9 +12,9 @@ farthest-point search over sRGB (steps of 12) for the largest smallest CIEDE2000
 difference, counted in normal vision and in simulated protanopia, deuteranopia
 (weighted x2) and tritanopia (x1.3; Machado et al. 2009, severity 1), among colours
 dark enough to read on the viewer's light background; each method then took the
-one nearest its old hue. The two reference methods added later (LRTA*, the free-space
-replanner) took the pair of the same search that stays farthest from the ten and from the
-other colours. Smallest differences: at least 22 normal, 12 protan, 11 deutan, 16 tritan
+one nearest its old hue. The reference methods added later (LRTA*, the free-space
+replanner, then R-max) took the colours of the same search that stay farthest from those
+before them and from the other colours. Smallest differences: at least 22 normal, 12 protan, 11 deutan, 16 tritan
 (tests/test_recording_palette.py checks the bounds).
 """
 
@@ -35,6 +35,7 @@ METHOD_COLOURS: dict[str, tuple[int, int, int]] = {  # RGB
     "q-opt": (72, 156, 252),  # sky blue
     "lrta-star": (0, 0, 48),  # navy
     "fsa-replan": (0, 252, 120),  # spring green
+    "r-max": (48, 0, 0),  # maroon
 }
 # methods without a colour of their own (a study's variant): the next four of the same
 # search, each far from the method colours (CIEDE2000 >= 18)

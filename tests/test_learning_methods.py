@@ -14,7 +14,7 @@ from learning.methods.registry import FAMILY_OF_CONFIG, comparison_methods
 
 def test_registry_names():
     assert list(METHODS) == ["rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql",
-                             "q-opt", "q-lambda", "dyna-q", "lrta-star", "fsa-replan",
+                             "q-opt", "q-lambda", "dyna-q", "lrta-star", "fsa-replan", "r-max",
                              "rnh-ql+ablation", "rnh-ql+explore"]
     # all but the ablation's method and rnh-ql+'s named variant
     assert comparison_methods() == tuple(METHODS)[:-2]

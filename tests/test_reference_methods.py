@@ -1,5 +1,6 @@
-"""The reference methods' rules: LRTA* (Korf 1990) and the free-space replanner (the
-free-space assumption of D* Lite), on the exact grid where a bump is a wall."""
+"""The reference methods' rules: LRTA* (Korf 1990), the free-space replanner (the
+free-space assumption of D* Lite) and R-max with a free-space Φ (Brafman & Tennenholtz
+2002, Asmuth et al. 2008), on the exact grid where a bump is a wall."""
 
 from __future__ import annotations
 
@@ -7,8 +8,9 @@ import numpy as np
 import pytest
 
 from learning import METHODS, train_tabular
-from learning.methods.fsa_replan import FSAReplan
-from learning.methods.lrta_star import LRTAStar
+from learning.methods.references.fsa_replan import FSAReplan
+from learning.methods.references.lrta_star import LRTAStar
+from learning.methods.references.r_max import RMax, q_table
 from learning.parts.free_space import bfs_distances
 from learning.parts.move_reading import count_outcome
 from sim.grid import build_model
@@ -54,7 +56,8 @@ def test_the_replanner_keeps_the_optimistic_maps_distances_and_its_route_is_opti
     assert res.final_route_length == res.optimal_length
 
 
-@pytest.mark.parametrize("cfg", [LRTAStar(), FSAReplan()], ids=lambda c: c.cli)
+@pytest.mark.parametrize("cfg", [LRTAStar(), FSAReplan(), RMax(), RMax(m=2)],
+                         ids=lambda c: f"{c.cli}-{getattr(c, 'm', '')}")
 def test_a_seed_gives_the_same_run(paper40, cfg):
     a = train_tabular(cfg, paper40, 30, np.random.default_rng(5))
     b = train_tabular(cfg, paper40, 30, np.random.default_rng(5))
@@ -72,7 +75,52 @@ def test_a_stray_bump_is_outvoted_by_the_moves_arrivals():
 
 
 def test_options_the_references_do_not_read_are_refused():
-    for cls in (LRTAStar, FSAReplan):
+    for cls in (LRTAStar, FSAReplan, RMax):
         with pytest.raises(ValueError, match="do not read alpha"):
             cls(alpha=0.2)
         assert cls().eps == 0.0 and METHODS[cls.cli] is cls
+
+
+def test_r_max_freezes_a_move_after_m_tries_and_its_costs_are_admissible(paper40):
+    """Every move tried m times is known, with the bump share of its m tries; an untried
+    move is valued 1 + Φ (the free-space distance, never above the true one), so every
+    cell's cost is at most its true distance to G, and the final route is the optimum."""
+    for m in (1, 2):
+        res = train_tabular(RMax(m=m), paper40, 200, np.random.default_rng(3))
+        st = res.state
+        assert st.tries.max() <= m and (st.bumps <= st.tries).all()
+        known = st.tries == m
+        walls = _walls(paper40)
+        assert (st.bumps[known & walls] == m).all()  # a wall bumps every try (exact grid)
+        assert (st.bumps[known & ~walls] == 0).all()
+        assert st.version[0] == known.sum()  # one version per move that became known
+        free = paper40.distance_to_goal > 0  # G's own cost is 0, not a move's
+        cost = -q_table(st).max(axis=1)
+        assert (cost[free] <= paper40.distance_to_goal[free] + 1e-9).all()
+        assert (st.phi[free] <= paper40.distance_to_goal[free]).all()
+        assert res.final_route_length == res.optimal_length
+
+
+def test_r_max_values_an_untried_move_by_phi_and_a_known_one_by_its_bumps():
+    """Two cells, G at 1: the move 0 -> 1 untried costs 1 + Φ(1) = 1; known after one
+    bump in two tries (m = 2) it costs 2 expected tries; known to always bump, none."""
+    from learning.geometry import Geometry
+    from learning.methods.references.r_max import init_state, move_costs, refresh_costs
+
+    geom = Geometry(np.array([[0.5, 0.5], [1.5, 0.5]]), 1, (0.0, 0.0, 2.0, 1.0), 2, 4)
+    st = init_state(RMax(m=2), geom, np.random.default_rng(0))
+    right = 3
+    keys = np.zeros(4)
+    refresh_costs(st)
+    move_costs(st, 0, keys)
+    assert keys[right] == 1.0 and (keys[:2] < 0).all()  # up and down leave the arena
+    st.tries[0, right], st.bumps[0, right] = 2, 1
+    st.version[0] += 1
+    refresh_costs(st)
+    move_costs(st, 0, keys)
+    assert keys[right] == 2.0
+    st.bumps[0, right] = 2
+    st.version[0] += 1
+    refresh_costs(st)
+    move_costs(st, 0, keys)
+    assert keys[right] < 0 and st.cost[0] == np.inf  # its only move always bumps

@@ -32,9 +32,7 @@ from types import ModuleType
 from learning.config import MethodConfig
 from learning.methods import (
     dyna_q,
-    fsa_replan,
     haql,
-    lrta_star,
     pfh_rl,
     q_lambda,
     q_learning,
@@ -45,12 +43,14 @@ from learning.methods import (
     sarsa_rs,
 )
 from learning.methods.dyna_q import DynaQ
-from learning.methods.fsa_replan import FSAReplan
 from learning.methods.haql import HAQL
-from learning.methods.lrta_star import LRTAStar
 from learning.methods.pfh_rl import PFHRL
 from learning.methods.q_lambda import QLambda
 from learning.methods.q_learning import STQL, QOpt
+from learning.methods.references import fsa_replan, lrta_star, r_max
+from learning.methods.references.fsa_replan import FSAReplan
+from learning.methods.references.lrta_star import LRTAStar
+from learning.methods.references.r_max import RMax
 from learning.methods.rn_ql import RNQL
 from learning.methods.rnh_ql import RNHQL
 from learning.methods.rnh_ql_plus import RNHQLPlus, RNHQLPlusExplore
@@ -71,9 +71,11 @@ _TABLE: tuple[tuple[type[MethodConfig], ModuleType, bool], ...] = (
     (QLambda, q_lambda, True),
     (DynaQ, dyna_q, True),
     # the references a route learner is judged against (docs/methods.md): learning by
-    # trials (LRTA*) and planning on the optimistic map (the free-space replanner)
+    # trials (LRTA*), planning on the optimistic map (the free-space replanner) and
+    # model-based RL with optimism (R-max, the untried valued by the free-space distance)
     (LRTAStar, lrta_star, True),
     (FSAReplan, fsa_replan, True),
+    (RMax, r_max, True),
     # rnh-ql+ with the ablation's switches (run for run rnh-ql+ at its defaults)
     (RNHQLPlusAblation, rnh_ql_plus_ablation, False),
     # rnh-ql+ with the held-out maps' options on, named: run on request

@@ -79,6 +79,13 @@ def _physics_batch(path: Path) -> None:
     figure_from_artifact("physics-batch.this-machine", path)
 
 
+def _heldout_profiles(path: Path) -> None:
+    from scenarios.studies.maps.ranking import figure_from_artifact
+
+    figure_from_artifact(JUDGING, path)
+
+
+JUDGING = ("heldout.judging-256", "heldout.judging-512")
 FIGURES = (
     ArtifactFigure("docs/scaling.png", ("scaling.arenas",), _scaling),
     ArtifactFigure("docs/scaling-maps.png", tuple(f"scaling-maps.{n}" for n in SCALING_MAPS),
@@ -87,6 +94,7 @@ FIGURES = (
     ArtifactFigure("docs/ladder.png", ("ladder.study",), _ladder),
     ArtifactFigure("docs/aliasing-noisy.png", ("aliasing.paper-50-noisy",), _aliasing),
     ArtifactFigure("docs/physics_batch.png", ("physics-batch.this-machine",), _physics_batch),
+    ArtifactFigure("docs/heldout-profiles.png", JUDGING, _heldout_profiles),
 )
 
 SCREENSHOTS = (

@@ -345,18 +345,6 @@ def scaling_maps(d: dict[str, Any]) -> str:
             "route · median wall time per run.\n\n" + "\n\n".join(out) + "\n")
 
 
-@renderer("heldout", timed=True)
-def heldout(d: dict[str, Any]) -> str:
-    """Held-out maps: a row per method, a column per map and protocol; cells
-    optimal seeds / seeds · median episodes to a stable optimal route · median wall time."""
-    cols = d["columns"]
-    lines = [d["caption"], "", "| method | " + " | ".join(cols) + " |",
-             "|---|" + "---|" * len(cols)]
-    for row, cells in d["rows"].items():
-        lines.append(f"| {row} | " + " | ".join(cells.get(c, "–") for c in cols) + " |")
-    return "\n".join(lines) + "\n"
-
-
 @renderer("test-from-s")
 def test_from_s(d: dict[str, Any]) -> str:
     """Where the greedy test from S stops, a line per seed (the held-out maps' diagnosis)."""

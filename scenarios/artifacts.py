@@ -38,6 +38,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from scenarios import artifact_heldout  # noqa: F401 (registers the held-out tables)
 from scenarios.artifact_tables import KINDS
 from sim.errors import InputError
 from sim.files import atomic_write_text

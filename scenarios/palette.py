@@ -14,8 +14,8 @@ difference, counted in normal vision and in simulated protanopia, deuteranopia
 dark enough to read on the viewer's light background; each method then took the
 one nearest its old hue. The reference methods added later (LRTA*, the free-space
 replanner, then R-max) took the colours of the same search that stay farthest from those
-before them and from the other colours. Smallest differences: at least 22 normal, 12 protan, 11 deutan, 16 tritan
-(tests/test_recording_palette.py checks the bounds).
+before them and from the other colours. Smallest differences: at least 22 normal, 12
+protan, 11 deutan, 16 tritan (tests/test_recording_palette.py checks the bounds).
 """
 
 from __future__ import annotations

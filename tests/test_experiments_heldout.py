@@ -31,6 +31,30 @@ def test_the_study_runs_and_prints_its_table(tmp_path, capsys):
     assert "| rnh-ql+:model_acting=1 |" in text and "maze-w2-24 uniform" in text
     assert text.count(" s |") == 2 * 4  # 2 methods x 4 problems
     assert "rooms-102 uniform (route 38)" in text
+    assert "**Uniform starts**, 3 maps" in text and "**20 % of starts from S**, 1 map:" in text
+    assert "| rnh-ql+ | " in text.split("**Uniform starts**")[1]  # a ranking row
+    assert "Per map, the method with the lowest median" in text
+
+
+def test_the_ranking_orders_by_iqm_and_names_each_maps_winner():
+    """Shares of the budget (never: all of it); the IQM orders the methods, the
+    probability of improvement is complementary, a map's winner has the lowest median."""
+    from scenarios.studies.maps.ranking import profile, ranking, shares
+
+    assert shares([10, None, 200], 100) == [0.1, 1.0, 1.0]
+    runs = {"fast": {"a": [10, 20, 30, 40], "b": [50, 50, 60, None]},
+            "slow": {"a": [40, 50, 60, None], "b": [None] * 4}}
+    r = ranking(runs, {"a": 100, "b": 200}, {"a": "uniform", "b": "uniform"})
+    u = r["protocols"]["uniform"]
+    assert u["order"] == ["fast", "slow"] and u["maps"] == ["a", "b"]
+    assert u["iqm"]["fast"][1] <= u["iqm"]["fast"][0] <= u["iqm"]["fast"][2]
+    p, q = u["poi"]["fast"]["slow"][0], u["poi"]["slow"]["fast"][0]
+    assert p > 0.5 and p + q == pytest.approx(1.0)
+    assert r["winners"]["a"]["method"] == "fast" and r["winners"]["a"]["median"] == 25.0
+    assert r["winners"]["b"] == {"method": "fast", "optimal": 3, "seeds": 4, "median": 55.0,
+                                 "ci": r["winners"]["b"]["ci"]}
+    import numpy as np
+    assert profile([0.1, 0.5, 1.0], np.array([0.0, 0.2, 1.0])).tolist() == [0.0, 1 / 3, 2 / 3]
 
 
 def test_a_bad_artifact_name_is_refused_before_any_run(tmp_path):

@@ -28,7 +28,11 @@ A method is a CLI name with optional config overrides, ``rnh-ql+:sweeping=1``
 
 Cells of the table: seeds whose final greedy route is optimal / seeds · median
 episodes to a stable optimal route (never: the median seed never got there) · median
-wall time per run.
+wall time per run. Under it, per protocol, the rankings of
+:mod:`scenarios.studies.maps.ranking`: each method's IQM share of the episode budget with
+its stratified bootstrap interval, the probability of improvement of each over each
+other, and each map's winner; the artifact keeps every seed's episodes, which the
+performance profiles (``docs/heldout-profiles.png``) are drawn from.
 """
 
 from __future__ import annotations
@@ -40,10 +44,11 @@ from pathlib import Path
 from shlex import quote
 from typing import Any
 
-from scenarios.artifact_tables import heldout
+from scenarios.artifact_heldout import heldout
 from scenarios.artifacts import check_artifact_name, write_artifact
 from scenarios.runs.spec import load
 from scenarios.studies.args import arg, parse, parser_of
+from scenarios.studies.maps.ranking import ranking
 from scenarios.sweep.backends import Progress, run_local
 from scenarios.sweep.run import make_specs, run_sweep
 from sim.files import atomic_write_text
@@ -142,6 +147,9 @@ def main(argv: list[str] | None = None) -> int:
     labels = [m for m in args.methods.split(",") if m]
     seeds = list(range(args.seeds))
     columns, rows = [], {}
+    per_seed: dict[str, dict[str, list[int | None]]] = {}
+    budgets: dict[str, int] = {}
+    protocols: dict[str, str] = {}
     for name, _, protocol in problems:
         share = share_of(protocol or "s10")
         if name in builtin_names() or name.endswith(".toml"):
@@ -157,6 +165,7 @@ def main(argv: list[str] | None = None) -> int:
             scenario, stem = str(toml), toml.stem
         col = f"{name} {protocol or 's10'} (route {route})"
         columns.append(col)
+        budgets[col], protocols[col] = episodes, protocol or "s10"
         for label in labels:
             m, ov = method_of(label)
             specs = make_specs(scenario, [m], seeds, episodes, ["grid"], overrides=ov,
@@ -166,10 +175,15 @@ def main(argv: list[str] | None = None) -> int:
             res = run_sweep(specs, out / stem / tag, run_local, resume=args.resume,
                             figures=False, jobs=args.jobs, progress=Progress(len(specs)))
             rows.setdefault(label, {})[col] = cell(res["summary"][m]["grid"], args.seeds)
+            done = sorted((r for r in res["runs"] if r["method"] == m and r["world"] == "grid"),
+                          key=lambda r: r["seed"])
+            per_seed.setdefault(label, {})[col] = [r["episodes_to_stable_optimal"] for r in done]
     caption = (f"Rewards {args.rewards}, {args.seeds} seeds, map seed {args.map_seed}, maze "
                f"braid {args.braid:g}; cells: optimal seeds / seeds · median episodes to a "
                "stable optimal route · median wall time per run.")
-    data = {"caption": caption, "columns": columns, "rows": rows}
+    data = {"caption": caption, "columns": columns, "rows": rows, "runs": per_seed,
+            "budgets": budgets, "protocols": protocols,
+            "ranking": ranking(per_seed, budgets, protocols)}
 
     text = heldout(data)
     atomic_write_text(out / "heldout.md", text)

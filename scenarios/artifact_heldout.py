@@ -1,0 +1,70 @@
+"""The held-out studies' tables (:mod:`scenarios.studies.maps.heldout`): the per-map table
+with its rankings under it, and the finding across studies (a row per study and protocol,
+each map kind's winner). Registered with :mod:`scenarios.artifact_tables` on import."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from scenarios.artifact_tables import renderer, row_renderer
+
+
+@renderer("heldout", timed=True)
+def heldout(d: dict[str, Any]) -> str:
+    """Held-out maps: a row per method, a column per map and protocol; cells
+    optimal seeds / seeds · median episodes to a stable optimal route · median wall time."""
+    cols = d["columns"]
+    lines = [d["caption"], "", "| method | " + " | ".join(cols) + " |",
+             "|---|" + "---|" * len(cols)]
+    for row, cells in d["rows"].items():
+        lines.append(f"| {row} | " + " | ".join(cells.get(c, "–") for c in cols) + " |")
+    for proto, r in d.get("ranking", {}).get("protocols", {}).items():
+        order = r["order"]
+        n = len(r["maps"])
+        lines += ["", f"**{_protocol(proto)}**, {n} map{'s' * (n != 1)}: each method's IQM share of "
+                  "the episode budget spent before a stable optimal route (never: all of it; "
+                  "lower is better) [95 % stratified bootstrap interval], and P(the row's run "
+                  "spends less than the column's), averaged over the maps [95 %]:", "",
+                  "| method | IQM | " + " | ".join(f"P(< {o})" for o in order) + " |",
+                  "|---|---|" + "---|" * len(order)]
+        for m in order:
+            lines.append(f"| {m} | {_est(r['iqm'][m], 2)} | " + " | ".join(
+                "–" if o == m else _est(r["poi"][m][o], 2) for o in order) + " |")
+    if d.get("ranking", {}).get("winners"):
+        lines += ["", "Per map, the method with the lowest median episodes to a stable optimal "
+                  "route [95 % bootstrap interval of the median]: " + "; ".join(
+                      f"{c.split(' (')[0]}: {_winner(w)}"
+                      for c, w in d["ranking"]["winners"].items()) + "."]
+    return "\n".join(lines) + "\n"
+
+
+def _protocol(proto: str) -> str:
+    return "Uniform starts" if proto == "uniform" else f"{proto[1:]} % of starts from S"
+
+
+def _est(v: list[float], digits: int) -> str:
+    return f"{v[0]:.{digits}f} [{v[1]:.{digits}f}, {v[2]:.{digits}f}]"
+
+
+def _winner(w: dict[str, Any]) -> str:
+    lo, hi = (("never" if v is None else f"{v:.0f}") for v in w["ci"])
+    med = "never" if w["median"] is None else f"{w['median']:.0f}"
+    return f"{w['method']} {w['optimal']}/{w['seeds']} · {med} [{lo}, {hi}]"
+
+
+@row_renderer("heldout")
+def heldout_winners(ds: list[dict[str, Any]]) -> str:
+    """Held-out studies as one finding: a row per study and protocol, a column per map
+    kind, each cell the map's winner (:func:`_winner`), with the IQM ranking's first."""
+    kinds = list(dict.fromkeys(c.split(" ")[0].rsplit("-", 1)[0] for d in ds for c in d["columns"]))
+    lines = ["| maps | starts | " + " | ".join(kinds) + " | lowest IQM [95 %] |",
+             "|---|---|" + "---|" * (len(kinds) + 1)]
+    for d in ds:
+        size = d["columns"][0].split(" ")[0].rsplit("-", 1)[1]
+        for proto, r in d["ranking"]["protocols"].items():
+            won = {c.split(" ")[0].rsplit("-", 1)[0]: _winner(d["ranking"]["winners"][c])
+                   for c in r["maps"]}
+            first = r["order"][0]
+            lines.append(f"| {size}² | {_protocol(proto).lower()} | " + " | ".join(
+                won.get(k, "–") for k in kinds) + f" | {first} {_est(r['iqm'][first], 2)} |")
+    return "\n".join(lines) + "\n"

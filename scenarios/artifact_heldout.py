@@ -8,6 +8,11 @@ from typing import Any
 
 from scenarios.artifact_tables import renderer, row_renderer
 
+RANKING_NOTE = ("each method's IQM share of the episode budget spent before a stable optimal "
+                "route (never: all of it; lower is better) [95 % stratified bootstrap "
+                "interval], and P(the row's run spends less than the column's), averaged over "
+                "the maps [95 %]:")
+
 
 @renderer("heldout", timed=True)
 def heldout(d: dict[str, Any]) -> str:
@@ -21,10 +26,7 @@ def heldout(d: dict[str, Any]) -> str:
     for proto, r in d.get("ranking", {}).get("protocols", {}).items():
         order = r["order"]
         n = len(r["maps"])
-        lines += ["", f"**{_protocol(proto)}**, {n} map{'s' * (n != 1)}: each method's IQM share of "
-                  "the episode budget spent before a stable optimal route (never: all of it; "
-                  "lower is better) [95 % stratified bootstrap interval], and P(the row's run "
-                  "spends less than the column's), averaged over the maps [95 %]:", "",
+        lines += ["", f"**{_protocol(proto)}**, {n} map{'s' * (n != 1)}: {RANKING_NOTE}", "",
                   "| method | IQM | " + " | ".join(f"P(< {o})" for o in order) + " |",
                   "|---|---|" + "---|" * len(order)]
         for m in order:

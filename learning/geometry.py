@@ -50,6 +50,10 @@ class Geometry:
     n_actions: int  # 4: up (+y), down (-y), left (-x), right (+x)
     cell_size_m: float = 1.0  # grid pitch [m]; Manhattan distances are counted in cells
     start_states: np.ndarray | None = None  # int32[k]; random episode starts (None: env's own)
+    # bool[nS]: the cells free in a map given in advance (None: no map). Only a method that
+    # assumes such a prior reads it (abstraction-ql's coarse map); every other learner
+    # learns the map from its bumps.
+    map_prior: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.coords.shape != (self.n_states, 2):
@@ -80,4 +84,5 @@ def geometry_of(model: TabularMDP) -> Geometry:
                     n_states=int(model.next_state.shape[0]),
                     n_actions=int(model.next_state.shape[1]),
                     cell_size_m=float(model.cell_size_m),
-                    start_states=np.asarray(model.start_states, dtype=np.int32))
+                    start_states=np.asarray(model.start_states, dtype=np.int32),
+                    map_prior=np.asarray(model.distance_to_goal) >= 0)

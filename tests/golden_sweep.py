@@ -28,7 +28,7 @@ EPISODES = 100
 NOISY_METHODS = ("rnh-ql+", "haql", "dyna-q")
 # named methods outside compare's default list whose own code paths the compared ones never
 # take (rnh-ql+explore's coverage walk and model acting): their records guard them too
-NAMED_METHODS = ("rnh-ql+explore",)
+NAMED_METHODS = ("rnh-ql+explore", "abstraction-ql")
 NOISY_EPISODES = 30
 WALL_KEYS = ("wall_time_s", "wall_time_per_episode_s")
 # read-outs added to the record after these digests were measured: the final greedy policy

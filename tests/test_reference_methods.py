@@ -124,3 +124,42 @@ def test_r_max_values_an_untried_move_by_phi_and_a_known_one_by_its_bumps():
     refresh_costs(st)
     move_costs(st, 0, keys)
     assert keys[right] < 0 and st.cost[0] == np.inf  # its only move always bumps
+
+
+def test_the_abstractions_value_follows_the_coarse_map_given_in_advance():
+    """12 x 4 cells in three 4 x 4 blocks, G in the left one: with no map every block is
+    linked to the next; with the middle block's cells all blocked, no abstract route
+    reaches the right block, whose Φ is 0; Φ falls by gamma^block a block."""
+    from learning.geometry import Geometry
+    from learning.methods.references.abstraction_ql import (
+        AbstractionQL,
+        abstract_distances,
+        potential,
+    )
+
+    xs, ys = np.meshgrid(np.arange(12), np.arange(4), indexing="xy")
+    coords = np.stack([xs.ravel() + 0.5, ys.ravel() + 0.5], axis=1)
+    geom = Geometry(coords, 0, (0.0, 0.0, 12.0, 4.0), 48, 4)
+    z, d = abstract_distances(geom, 4)
+    assert d.tolist() == [0, 1, 2] and z[0] == 0 and z[11] == 2
+    cfg = AbstractionQL(block=4)
+    phi = potential(cfg, geom)
+    assert phi[0] == cfg.omega and phi[4] == pytest.approx(cfg.omega * cfg.gamma ** 4)
+    walled = Geometry(coords, 0, (0.0, 0.0, 12.0, 4.0), 48, 4,
+                      map_prior=~((coords[:, 0] > 4) & (coords[:, 0] < 8)))
+    assert abstract_distances(walled, 4)[1].tolist() == [0, -1, -1]
+    assert (potential(cfg, walled)[coords[:, 0] > 8] == 0.0).all()
+
+
+def test_abstraction_ql_is_told_the_map_and_learns_on_paper40(paper40):
+    """Its geometry carries the map (the one method that reads it); its greedy test is
+    Q's (shaping by a potential leaves the optimal policy unchanged), and a seed repeats."""
+    from learning.geometry import geometry_of
+    from learning.methods.references.abstraction_ql import AbstractionQL
+
+    geom = geometry_of(paper40)
+    assert (geom.map_prior == (paper40.distance_to_goal >= 0)).all()
+    a = train_tabular(AbstractionQL(), paper40, 40, np.random.default_rng(2))
+    b = train_tabular(AbstractionQL(), paper40, 40, np.random.default_rng(2))
+    assert (a.steps == b.steps).all() and (a.state.q == b.state.q).all()
+    assert a.state.tally.n_shaped[0] > 0

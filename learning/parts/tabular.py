@@ -166,6 +166,26 @@ def least_key(keys):
 
 
 @njit(cache=True, inline="always")
+def least_seen_to_work(keys, balance_row):
+    """The greedy test's move among a planner's tied best: the first whose balance of bumps
+    and clean arrivals is negative (a move seen to work), else the first (0 when no move is
+    a candidate). HAQL's and rnh-ql+explore's tests break ties the same way: of routes the
+    model holds equally short, the one the agent has driven, not an unverified staircase
+    through cells it never entered."""
+    best, ties = least_key(keys)
+    if ties == 0:
+        return 0
+    first = -1
+    for a in range(keys.shape[0]):
+        if keys[a] == best:
+            if balance_row[a] < 0:
+                return a
+            if first < 0:
+                first = a
+    return first
+
+
+@njit(cache=True, inline="always")
 def nth_least(keys, best, n):
     """The ``n``-th (0-based, in action order) move whose key is ``best``."""
     for a in range(keys.shape[0]):

@@ -35,7 +35,13 @@ from learning.parts.free_space import (
     repair_distances,
 )
 from learning.parts.move_reading import MoveReading, count_outcome, new_move_reading, read_move
-from learning.parts.tabular import begin_plain, draw_below, least_key, nth_least
+from learning.parts.tabular import (
+    begin_plain,
+    draw_below,
+    least_key,
+    least_seen_to_work,
+    nth_least,
+)
 from learning.parts.tally import Tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
@@ -130,8 +136,7 @@ def exploit(st, s):
     bal = st.balance
     keys = st.keys
     route_keys(nb, blocked, dist, bal, s, keys)
-    best, ties = least_key(keys)
-    return nth_least(keys, best, 0) if ties > 0 else 0
+    return least_seen_to_work(keys, bal[s])
 
 
 def q_table(st: State) -> np.ndarray:

@@ -27,7 +27,13 @@ from learning.config import BaseParams, MethodConfig
 from learning.geometry import Geometry
 from learning.parts.free_space import arena_neighbours
 from learning.parts.move_reading import MoveReading, count_outcome, new_move_reading, read_move
-from learning.parts.tabular import begin_plain, draw_below, least_key, nth_least
+from learning.parts.tabular import (
+    begin_plain,
+    draw_below,
+    least_key,
+    least_seen_to_work,
+    nth_least,
+)
 from learning.parts.tally import Tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
@@ -115,8 +121,7 @@ def exploit(st, s):
     h = st.h
     keys = st.keys
     lookaheads(nb, blocked, h, s, keys)
-    best, ties = least_key(keys)
-    return nth_least(keys, best, 0) if ties > 0 else 0
+    return least_seen_to_work(keys, st.balance[s])
 
 
 def q_table(st: State) -> np.ndarray:

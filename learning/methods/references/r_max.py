@@ -47,7 +47,7 @@ from learning.geometry import Geometry
 from learning.parts.free_space import back_move, new_free_space
 from learning.parts.move_reading import MoveReading, new_move_reading, read_move
 from learning.parts.priority_queue import PairQueue, new_pair_queue, pop, push
-from learning.parts.tabular import begin_plain, least_key, nth_least
+from learning.parts.tabular import begin_plain, least_key
 from learning.parts.tally import Tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
@@ -311,10 +311,22 @@ begin = begin_plain
 
 @njit(**HOOK)
 def exploit(st, s):
+    """The move of least cost under the model; among ties, a known move that has worked
+    first (:func:`learning.parts.tabular.least_seen_to_work`'s rule)."""
     refresh_costs(st)
-    move_costs(st, s, st.keys)
-    best, ties = least_key(st.keys)
-    return nth_least(st.keys, best, 0) if ties > 0 else 0
+    keys = st.keys
+    move_costs(st, s, keys)
+    best, ties = least_key(keys)
+    if ties == 0:
+        return 0
+    first = -1
+    for a in range(keys.shape[0]):
+        if keys[a] == best:
+            if st.tries[s, a] >= st.par.m and st.bumps[s, a] < st.tries[s, a]:
+                return a
+            if first < 0:
+                first = a
+    return first
 
 
 def q_table(st: State) -> np.ndarray:

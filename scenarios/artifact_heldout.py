@@ -67,6 +67,7 @@ def heldout_winners(ds: list[dict[str, Any]]) -> str:
             won = {c.split(" ")[0].rsplit("-", 1)[0]: _winner(d["ranking"]["winners"][c])
                    for c in r["maps"]}
             first = r["order"][0]
-            lines.append(f"| {size}² | {_protocol(proto).lower()} | " + " | ".join(
+            starts = _protocol(proto)
+            lines.append(f"| {size}² | {starts[0].lower()}{starts[1:]} | " + " | ".join(
                 won.get(k, "–") for k in kinds) + f" | {first} {_est(r['iqm'][first], 2)} |")
     return "\n".join(lines) + "\n"

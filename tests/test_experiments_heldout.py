@@ -89,3 +89,24 @@ def test_the_diagnosis_renders_its_lines_as_one_block():
 
     text = KINDS["test-from-s"].render({"lines": ["rooms-64@uniform ...", "seed 0: test 92"]})
     assert text == "```text\nrooms-64@uniform ...\nseed 0: test 92\n```\n"
+
+
+def test_the_finding_across_studies_names_each_map_kinds_winner():
+    """The README's finding: a row per study and protocol, a column per map kind, each
+    cell the map's winner with its interval, and the lowest IQM of the row."""
+    from scenarios.artifact_tables import KINDS
+    from scenarios.studies.maps.ranking import ranking
+
+    def study(size):
+        cols = [f"maze-w4-{size} s10 (route 9)", f"rooms-{size} s10 (route 9)",
+                f"maze-w4-{size} uniform (route 9)"]
+        runs = {"a": {c: [10, 20, None] for c in cols}, "b": {c: [30, 30, 30] for c in cols}}
+        protocols = {c: c.split(" ")[1] for c in cols}
+        return {"columns": cols, "ranking": ranking(runs, dict.fromkeys(cols, 100), protocols)}
+
+    text = KINDS["heldout"].render_rows([study(256), study(512)])
+    lines = text.splitlines()
+    assert lines[0] == "| maps | starts | maze-w4 | rooms | lowest IQM [95 %] |"
+    assert len(lines) == 2 + 4  # two studies x two protocols
+    assert lines[2].startswith("| 256² | 10 % of starts from S | a 2/3 · 20 [")
+    assert "| – |" in lines[3]  # no rooms map under uniform starts

@@ -35,7 +35,7 @@ def heldout(d: dict[str, Any]) -> str:
     if d.get("ranking", {}).get("winners"):
         lines += ["", "Per map, the method with the lowest median episodes to a stable optimal "
                   "route [95 % bootstrap interval of the median]: " + "; ".join(
-                      f"{c.split(' (')[0]}: {_winner(w)}"
+                      f"{c.split(' (')[0]}: {_winner(w, _tied(d, c, w))}"
                       for c, w in d["ranking"]["winners"].items()) + "."]
     return "\n".join(lines) + "\n"
 
@@ -48,10 +48,26 @@ def _est(v: list[float], digits: int) -> str:
     return f"{v[0]:.{digits}f} [{v[1]:.{digits}f}, {v[2]:.{digits}f}]"
 
 
-def _winner(w: dict[str, Any]) -> str:
+def _winner(w: dict[str, Any], tied: list[str]) -> str:
     lo, hi = (("never" if v is None else f"{v:.0f}") for v in w["ci"])
     med = "never" if w["median"] is None else f"{w['median']:.0f}"
-    return f"{w['method']} {w['optimal']}/{w['seeds']} · {med} [{lo}, {hi}]"
+    also = f" (tied: {', '.join(tied)})" if tied else ""
+    return f"{w['method']}{also} {w['optimal']}/{w['seeds']} · {med} [{lo}, {hi}]"
+
+
+def _tied(d: dict[str, Any], col: str, w: dict[str, Any]) -> list[str]:
+    """The other methods with the winner's median and optimal seeds on map ``col``."""
+    out = []
+    for m, by_map in d.get("runs", {}).items():
+        eps = by_map.get(col)
+        if m == w["method"] or not eps or sum(e is not None for e in eps) != w["optimal"]:
+            continue
+        ordered = sorted(float("inf") if e is None else e for e in eps)
+        mid = len(ordered) // 2
+        med = ordered[mid] if len(ordered) % 2 else (ordered[mid - 1] + ordered[mid]) / 2
+        if med == (float("inf") if w["median"] is None else w["median"]):
+            out.append(m)
+    return out
 
 
 @row_renderer("heldout")
@@ -64,7 +80,8 @@ def heldout_winners(ds: list[dict[str, Any]]) -> str:
     for d in ds:
         size = d["columns"][0].split(" ")[0].rsplit("-", 1)[1]
         for proto, r in d["ranking"]["protocols"].items():
-            won = {c.split(" ")[0].rsplit("-", 1)[0]: _winner(d["ranking"]["winners"][c])
+            won = {c.split(" ")[0].rsplit("-", 1)[0]:
+                   _winner(d["ranking"]["winners"][c], _tied(d, c, d["ranking"]["winners"][c]))
                    for c in r["maps"]}
             first = r["order"][0]
             starts = _protocol(proto)

@@ -77,7 +77,7 @@ def heldout_winners(ds: list[dict[str, Any]]) -> str:
     kinds = list(dict.fromkeys(c.split(" ")[0].rsplit("-", 1)[0] for d in ds for c in d["columns"]))
     lines = ["| maps | starts | " + " | ".join(kinds) + " | lowest IQM [95 %] |",
              "|---|---|" + "---|" * (len(kinds) + 1)]
-    for d in ds:
+    for d in (d for d in ds if "ranking" in d):  # older artifacts kept no seeds to rank
         size = d["columns"][0].split(" ")[0].rsplit("-", 1)[1]
         for proto, r in d["ranking"]["protocols"].items():
             won = {c.split(" ")[0].rsplit("-", 1)[0]:

@@ -105,18 +105,20 @@ def figure_from_artifact(names: tuple[str, ...], path: Path) -> None:
         for proto, r in d["ranking"]["protocols"].items():
             panels.append((name.split(".", 1)[1], proto, d, r))
     fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), squeeze=False)
-    taus = np.linspace(0.0, 1.0, 201)
+    taus = np.geomspace(1e-3, 1.0, 301)  # log: S starts settle within a few % of the budget
     for ax, (label, proto, d, r) in zip(axes[0], panels, strict=True):
         for m in r["order"]:
             runs = [v for c in r["maps"] for v in shares(d["runs"][m][c], d["budgets"][c])]
             ax.step(taus, profile(runs, taus), where="post", color=method_colour_mpl(m),
                     label=f"{m} (IQM {r['iqm'][m][0]:.2f})", lw=1.6)
-        ax.set_title(f"{label}, {proto} starts ({len(r['maps'])} maps)", fontsize=10)
-        ax.set_xlabel("τ: share of the episode budget")
-        ax.set_xlim(0, 1)
+        starts = "uniform starts" if proto == "uniform" else f"{proto[1:]} % of starts from S"
+        ax.set_title(f"{label}, {starts} ({len(r['maps'])} maps)", fontsize=10)
+        ax.set_xlabel("τ: share of the episode budget (log)")
+        ax.set_xscale("log")
+        ax.set_xlim(taus[0], 1)
         ax.set_ylim(0, 1.02)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="lower right")
+        ax.legend(fontsize=7, loc="upper left", framealpha=0.9)
     axes[0][0].set_ylabel("share of runs optimal for good by τ")
     fig.suptitle("Performance profiles on the held-out judging sets (higher and further "
                  "left is better)", fontsize=11)

@@ -88,11 +88,11 @@ def test_r_max_freezes_a_move_after_m_tries_and_its_costs_are_admissible(paper40
     for m in (1, 2):
         res = train_tabular(RMax(m=m), paper40, 200, np.random.default_rng(3))
         st = res.state
-        assert st.tries.max() <= m and (st.bumps <= st.tries).all()
+        assert st.tries.max() <= m and (st.clean <= st.tries).all()
         known = st.tries == m
         walls = _walls(paper40)
-        assert (st.bumps[known & walls] == m).all()  # a wall bumps every try (exact grid)
-        assert (st.bumps[known & ~walls] == 0).all()
+        assert (st.clean[known & walls] == 0).all()  # a wall bumps every try (exact grid)
+        assert (st.clean[known & ~walls] == m).all()
         assert st.version[0] == known.sum()  # one version per move that became known
         free = paper40.distance_to_goal > 0  # G's own cost is 0, not a move's
         cost = -q_table(st).max(axis=1)
@@ -114,12 +114,12 @@ def test_r_max_values_an_untried_move_by_phi_and_a_known_one_by_its_bumps():
     refresh_costs(st)
     move_costs(st, 0, keys)
     assert keys[right] == 1.0 and (keys[:2] < 0).all()  # up and down leave the arena
-    st.tries[0, right], st.bumps[0, right] = 2, 1
+    st.tries[0, right], st.clean[0, right] = 2, 1
     st.version[0] += 1
     refresh_costs(st)
     move_costs(st, 0, keys)
     assert keys[right] == 2.0
-    st.bumps[0, right] = 2
+    st.clean[0, right] = 0
     st.version[0] += 1
     refresh_costs(st)
     move_costs(st, 0, keys)

@@ -166,19 +166,20 @@ def least_key(keys):
 
 
 @njit(cache=True, inline="always")
-def least_seen_to_work(keys, balance_row):
-    """The greedy test's move among a planner's tied best: the first whose balance of bumps
-    and clean arrivals is negative (a move seen to work), else the first (0 when no move is
-    a candidate). HAQL's and rnh-ql+explore's tests break ties the same way: of routes the
-    model holds equally short, the one the agent has driven, not an unverified staircase
-    through cells it never entered."""
+def least_seen_to_work(keys, evidence, sign):
+    """The greedy test's move among a planner's tied best: the first seen to work
+    (``sign * evidence[a] > 0``: a balance of bumps minus clean arrivals with ``sign`` -1, a
+    count of clean arrivals with +1), else the first (0 when no move is a candidate).
+    HAQL's and rnh-ql+explore's tests break ties the same way: of routes the model holds
+    equally short, the one the agent has driven, not an unverified staircase through cells
+    it never entered."""
     best, ties = least_key(keys)
     if ties == 0:
         return 0
     first = -1
     for a in range(keys.shape[0]):
         if keys[a] == best:
-            if balance_row[a] < 0:
+            if sign * evidence[a] > 0:
                 return a
             if first < 0:
                 first = a

@@ -136,7 +136,7 @@ def exploit(st, s):
     bal = st.balance
     keys = st.keys
     route_keys(nb, blocked, dist, bal, s, keys)
-    return least_seen_to_work(keys, bal[s])
+    return least_seen_to_work(keys, bal[s], -1)
 
 
 def q_table(st: State) -> np.ndarray:

@@ -121,7 +121,7 @@ def exploit(st, s):
     h = st.h
     keys = st.keys
     lookaheads(nb, blocked, h, s, keys)
-    return least_seen_to_work(keys, st.balance[s])
+    return least_seen_to_work(keys, st.balance[s], -1)
 
 
 def q_table(st: State) -> np.ndarray:

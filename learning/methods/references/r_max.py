@@ -47,7 +47,7 @@ from learning.geometry import Geometry
 from learning.parts.free_space import back_move, new_free_space
 from learning.parts.move_reading import MoveReading, new_move_reading, read_move
 from learning.parts.priority_queue import PairQueue, new_pair_queue, pop, push
-from learning.parts.tabular import begin_plain, least_key
+from learning.parts.tabular import begin_plain, least_seen_to_work
 from learning.parts.tally import Tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
@@ -96,7 +96,7 @@ class State(NamedTuple):
     neighbour: np.ndarray  # int32[nS, nA]; the arena cell each move heads for (-1: off)
     phi: np.ndarray  # float64[nS]; the free-space distance to G (no wall known) [moves]
     tries: np.ndarray  # int32[nS, nA]; tries of each move, up to m (then known)
-    bumps: np.ndarray  # int32[nS, nA]; bumps among those tries
+    clean: np.ndarray  # int32[nS, nA]; clean arrivals among those tries (the rest bumped)
     version: np.ndarray  # int64[1]; moves that became known (the model's version)
     plan: Plan  # the route the behaviour follows (stored: a resumed run follows it too)
     reading: MoveReading  # the rewards of a stay and of a clean arrival
@@ -127,11 +127,11 @@ def init_state(cfg: RMax, geom: Geometry, rng: np.random.Generator) -> State:
 
 
 @njit(cache=True, inline="always")
-def known_weight(tries, bumps, m, s, a):
-    """The expected cost of known move (s, a) [moves]; NO_MOVE when it always bumps."""
-    t = tries[s, a]
-    b = bumps[s, a]
-    return NO_MOVE if b >= t else t / (t - b)
+def known_weight(tries, clean, s, a):
+    """The expected cost of known move (s, a), tries over clean arrivals [moves]; NO_MOVE
+    when it always bumps."""
+    c = clean[s, a]
+    return NO_MOVE if c == 0 else tries[s, a] / c
 
 
 @njit(cache=True)
@@ -149,7 +149,7 @@ def plan_route(st, s0):
     nb = st.neighbour
     phi = st.phi
     tries = st.tries
-    bumps = st.bumps
+    clean = st.clean
     m = st.par.m
     se = st.search
     q = se.open
@@ -176,7 +176,7 @@ def plan_route(st, s0):
                 if c < best:
                     best, leaf, leaf_move = c, x, a
                 continue
-            w = known_weight(tries, bumps, m, x, a)
+            w = known_weight(tries, clean, x, a)
             if w < 0.0 or closed[u] == ep:
                 continue
             c = g[x] + w
@@ -223,7 +223,7 @@ def refresh_costs(st):
     nb = st.neighbour
     phi = st.phi
     tries = st.tries
-    bumps = st.bumps
+    clean = st.clean
     m = st.par.m
     cost = st.cost
     se = st.search
@@ -248,7 +248,7 @@ def refresh_costs(st):
             y = nb[x, back_move(b)]  # y reaches x by move b
             if y < 0 or closed[y] == ep or nb[y, b] != x or tries[y, b] < m:
                 continue
-            w = known_weight(tries, bumps, m, y, b)
+            w = known_weight(tries, clean, y, b)
             if w < 0.0:
                 continue
             c = cost[x] + w
@@ -270,7 +270,7 @@ def move_costs(st, s, keys):
         elif st.tries[s, a] < st.par.m:
             keys[a] = 1.0 + st.phi[u]
         else:
-            w = known_weight(st.tries, st.bumps, st.par.m, s, a)
+            w = known_weight(st.tries, st.clean, s, a)
             keys[a] = NO_MOVE if w < 0.0 or st.cost[u] == np.inf else w + st.cost[u]
 
 
@@ -300,8 +300,8 @@ def update(st, s, a, r, s2, terminated, rng):
     clean = read_move(st.reading.r_stay, st.reading.r_clean, s, r, s2, terminated)
     if st.tries[s, a] < st.par.m:
         st.tries[s, a] += 1
-        if not clean:
-            st.bumps[s, a] += 1
+        if clean:
+            st.clean[s, a] += 1
         if st.tries[s, a] == st.par.m:
             st.version[0] += 1
 
@@ -314,19 +314,8 @@ def exploit(st, s):
     """The move of least cost under the model; among ties, a known move that has worked
     first (:func:`learning.parts.tabular.least_seen_to_work`'s rule)."""
     refresh_costs(st)
-    keys = st.keys
-    move_costs(st, s, keys)
-    best, ties = least_key(keys)
-    if ties == 0:
-        return 0
-    first = -1
-    for a in range(keys.shape[0]):
-        if keys[a] == best:
-            if st.tries[s, a] >= st.par.m and st.bumps[s, a] < st.tries[s, a]:
-                return a
-            if first < 0:
-                first = a
-    return first
+    move_costs(st, s, st.keys)
+    return least_seen_to_work(st.keys, st.clean[s], 1)
 
 
 def q_table(st: State) -> np.ndarray:

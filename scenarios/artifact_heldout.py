@@ -30,7 +30,7 @@ def heldout(d: dict[str, Any]) -> str:
                   "| method | IQM | " + " | ".join(f"P(< {o})" for o in order) + " |",
                   "|---|---|" + "---|" * len(order)]
         for m in order:
-            lines.append(f"| {m} | {_est(r['iqm'][m], 2)} | " + " | ".join(
+            lines.append(f"| {m} | {_est(r['iqm'][m], 3)} | " + " | ".join(
                 "–" if o == m else _est(r["poi"][m][o], 2) for o in order) + " |")
     if d.get("ranking", {}).get("winners"):
         lines += ["", "Per map, the method with the lowest median episodes to a stable optimal "

@@ -131,11 +131,7 @@ def test_the_abstractions_value_follows_the_coarse_map_given_in_advance():
     linked to the next; with the middle block's cells all blocked, no abstract route
     reaches the right block, whose Φ is 0; Φ falls by gamma^block a block."""
     from learning.geometry import Geometry
-    from learning.methods.references.abstraction_ql import (
-        AbstractionQL,
-        abstract_distances,
-        potential,
-    )
+    from learning.methods.references.abstraction_ql import AbstractionQL, abstract_distances
 
     xs, ys = np.meshgrid(np.arange(12), np.arange(4), indexing="xy")
     coords = np.stack([xs.ravel() + 0.5, ys.ravel() + 0.5], axis=1)
@@ -143,12 +139,12 @@ def test_the_abstractions_value_follows_the_coarse_map_given_in_advance():
     z, d = abstract_distances(geom, 4)
     assert d.tolist() == [0, 1, 2] and z[0] == 0 and z[11] == 2
     cfg = AbstractionQL(block=4)
-    phi = potential(cfg, geom)
+    phi = cfg.potential(geom)
     assert phi[0] == cfg.omega and phi[4] == pytest.approx(cfg.omega * cfg.gamma ** 4)
     walled = Geometry(coords, 0, (0.0, 0.0, 12.0, 4.0), 48, 4,
                       map_prior=~((coords[:, 0] > 4) & (coords[:, 0] < 8)))
     assert abstract_distances(walled, 4)[1].tolist() == [0, -1, -1]
-    assert (potential(cfg, walled)[coords[:, 0] > 8] == 0.0).all()
+    assert (cfg.potential(walled)[coords[:, 0] > 8] == 0.0).all()
 
 
 def test_abstraction_ql_is_told_the_map_and_learns_on_paper40(paper40):

@@ -3,6 +3,10 @@
 Phi(s) = -scale * Manhattan cells to G, from the geometry alone (no obstacles),
 so it is the same knowledge an agent would have in the physics world;
 F = gamma * Phi(s') - Phi(s), Phi(goal) = 0, which keeps the optimal policy.
+
+The rules are those of any Q-learning shaped by a static potential: a config with a
+``potential(geom)`` method of its own brings its Φ and runs on this module (the
+reference ``abstraction-ql``, :mod:`learning.methods.references.abstraction_ql`).
 """
 
 from __future__ import annotations
@@ -29,6 +33,10 @@ class PFHRL(MethodConfig):
     cli: ClassVar[str] = "pfh-rl"
     scale: float = 1.0  # potential per cell of Manhattan distance [reward units / cell]
 
+    def potential(self, geom: Geometry) -> np.ndarray:
+        """float64[nS]: Φ of every cell (the static potential this module shapes with)."""
+        return pfh_potential(geom, self.scale)
+
 
 class State(NamedTuple):
     par: BaseParams
@@ -52,8 +60,9 @@ def pfh_potential(geom: Geometry, scale: float) -> np.ndarray:
 
 
 def init_state(cfg: PFHRL, geom: Geometry, rng: np.random.Generator) -> State:
+    """``cfg.potential``: PFH-RL's Manhattan field, or another static Φ (module docstring)."""
     return State(cfg.params(), new_tally(), np.zeros((geom.n_states, geom.n_actions)),
-                 pfh_potential(geom, cfg.scale))
+                 np.ascontiguousarray(cfg.potential(geom), dtype=np.float64))
 
 
 @njit(**HOOK)

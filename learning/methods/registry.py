@@ -47,7 +47,7 @@ from learning.methods.haql import HAQL
 from learning.methods.pfh_rl import PFHRL
 from learning.methods.q_lambda import QLambda
 from learning.methods.q_learning import STQL, QOpt
-from learning.methods.references import abstraction_ql, fsa_replan, lrta_star, r_max
+from learning.methods.references import fsa_replan, lrta_star, r_max
 from learning.methods.references.abstraction_ql import AbstractionQL
 from learning.methods.references.fsa_replan import FSAReplan
 from learning.methods.references.lrta_star import LRTAStar
@@ -84,7 +84,7 @@ _TABLE: tuple[tuple[type[MethodConfig], ModuleType, bool], ...] = (
     # shaping from a coarse abstraction of a map given in advance, run on request: the one
     # method told the map (coarsely) before its first step, so not in the default list of
     # methods that learn an unknown map; its row says what such a prior is worth
-    (AbstractionQL, abstraction_ql, False),
+    (AbstractionQL, pfh_rl, False),  # PFH-RL's rules, its own static Φ
 )
 HOOKS = ("State", "init_state", "act", "update", "begin", "exploit")
 # each compiled hook's parameters, as learning.compiled.hooks calls it

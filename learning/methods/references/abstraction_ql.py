@@ -9,7 +9,8 @@ is a move from a free cell of the other. The abstract distance D(z) to G's block
 blocks, is one BFS; Φ(s) = ``omega`` · gamma^(block · D(z(s))), the discounted goal
 reward over the route the abstraction promises (0 where no abstract route exists). The
 ground learner is Q-learning with F = gamma · Φ(s') - Φ(s) (Φ(G) = 0 on arrival), so its
-optimal policy is the unshaped one's.
+optimal policy is the unshaped one's: the rules of :mod:`learning.methods.pfh_rl`, which
+runs any config that brings a static Φ (this module is the config and its Φ only).
 
 This is the modern form of SARSA-RS's coarse-grid Φ (:mod:`learning.methods.sarsa_rs`
 learns its abstract values online); Cipollone et al. assume the abstraction is given, and
@@ -22,17 +23,13 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
-from typing import ClassVar, NamedTuple
+from typing import ClassVar
 
 import numpy as np
-from numba import njit
 
-from learning.config import BaseParams, MethodConfig
+from learning.config import MethodConfig
 from learning.geometry import ACTION_DELTAS, Geometry
-from learning.parts.tabular import begin_plain, eps_greedy, exploit_q, q_learning
-from learning.parts.tally import Tally, new_tally, record_shaping
 
-HOOK = dict(cache=True, inline="always")
 
 @dataclass(frozen=True)
 class AbstractionQL(MethodConfig):
@@ -43,15 +40,11 @@ class AbstractionQL(MethodConfig):
     block: int = 8  # abstract cell side [cells]
     omega: float = 100.0  # Φ at G's block [reward units]; the built-in schemes' goal reward
 
-
-class State(NamedTuple):
-    par: BaseParams
-    tally: Tally
-    q: np.ndarray  # float64[nS, nA]
-    phi: np.ndarray  # float64[nS]; the abstraction's value of each cell (derived)
-
-
-DERIVED = ("phi",)
+    def potential(self, geom: Geometry) -> np.ndarray:
+        """Φ(s) = omega · gamma^(block · D(z(s))), 0 where the abstraction has no route."""
+        z, dist = abstract_distances(geom, self.block)
+        d = dist[z]
+        return np.where(d >= 0, self.omega * self.gamma ** (self.block * np.maximum(d, 0)), 0.0)
 
 
 def abstract_distances(geom: Geometry, block: int) -> tuple[np.ndarray, np.ndarray]:
@@ -82,32 +75,3 @@ def abstract_distances(geom: Geometry, block: int) -> tuple[np.ndarray, np.ndarr
                 dist[b] = dist[a] + 1
                 todo.append(b)
     return z.astype(np.int64), dist
-
-
-def potential(cfg: AbstractionQL, geom: Geometry) -> np.ndarray:
-    """Φ(s) = omega · gamma^(block · D(z(s))), 0 where the abstraction has no route."""
-    z, dist = abstract_distances(geom, cfg.block)
-    d = dist[z]
-    return np.where(d >= 0, cfg.omega * cfg.gamma ** (cfg.block * np.maximum(d, 0)), 0.0)
-
-
-def init_state(cfg: AbstractionQL, geom: Geometry, rng: np.random.Generator) -> State:
-    return State(cfg.params(), new_tally(), np.zeros((geom.n_states, geom.n_actions)),
-                 potential(cfg, geom))
-
-
-@njit(**HOOK)
-def act(st, s, rng):
-    return eps_greedy(st.q, s, st.par.eps, rng)
-
-
-@njit(**HOOK)
-def update(st, s, a, r, s2, terminated, rng):
-    p = st.par
-    f = (0.0 if terminated else p.gamma * st.phi[s2]) - st.phi[s]
-    record_shaping(st.tally.f_sum, st.tally.f_sq, st.tally.n_shaped, f, True)
-    q_learning(st.q, s, a, r, s2, terminated, p.alpha, p.gamma, f)
-
-
-begin = begin_plain
-exploit = exploit_q

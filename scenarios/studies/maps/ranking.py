@@ -104,9 +104,11 @@ def figure_from_artifact(names: tuple[str, ...], path: Path) -> None:
             continue
         for proto, r in d["ranking"]["protocols"].items():
             panels.append((name.split(".", 1)[1], proto, d, r))
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.8), squeeze=False)
+    cols = 2  # a row per study, a panel per protocol
+    rows = -(-len(panels) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 3.9 * rows), squeeze=False)
     taus = np.geomspace(1e-3, 1.0, 301)  # log: S starts settle within a few % of the budget
-    for ax, (label, proto, d, r) in zip(axes[0], panels, strict=True):
+    for ax, (label, proto, d, r) in zip(axes.ravel(), panels, strict=False):
         for m in r["order"]:
             runs = [v for c in r["maps"] for v in shares(d["runs"][m][c], d["budgets"][c])]
             ax.step(taus, profile(runs, taus), where="post", color=method_colour_mpl(m),
@@ -119,7 +121,10 @@ def figure_from_artifact(names: tuple[str, ...], path: Path) -> None:
         ax.set_ylim(0, 1.02)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper left", framealpha=0.9)
-    axes[0][0].set_ylabel("share of runs optimal for good by τ")
+    for row in axes:
+        row[0].set_ylabel("share of runs optimal for good by τ")
+    for ax in axes.ravel()[len(panels):]:
+        ax.set_visible(False)
     fig.suptitle("Performance profiles on the held-out judging sets (higher and further "
                  "left is better)", fontsize=11)
     fig.tight_layout()

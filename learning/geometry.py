@@ -85,4 +85,11 @@ def geometry_of(model: TabularMDP) -> Geometry:
                     n_actions=int(model.next_state.shape[1]),
                     cell_size_m=float(model.cell_size_m),
                     start_states=np.asarray(model.start_states, dtype=np.int32),
-                    map_prior=np.asarray(model.distance_to_goal) >= 0)
+                    map_prior=_map_of(model))
+
+
+def _map_of(model: TabularMDP) -> np.ndarray | None:
+    """bool[nS]: the cells with a route to G (the map a method with a prior is told), or
+    None for a model that does not say (a hand-built one without distances)."""
+    distance = getattr(model, "distance_to_goal", None)
+    return None if distance is None else np.asarray(distance) >= 0

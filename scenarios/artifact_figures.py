@@ -11,7 +11,7 @@ names the command that wrote the recording and how the screenshot was taken.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import importlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,11 +20,18 @@ from scenarios.artifacts import ROOT, ArtifactError, load_artifact
 
 @dataclass(frozen=True)
 class ArtifactFigure:
-    """A ``docs/`` figure drawn by ``draw(path)`` from ``artifacts``."""
+    """A ``docs/`` figure drawn from ``artifacts`` by ``drawer``, named ``module:function``
+    and called as ``function(*artifacts, path=path)``. The study module is imported when the
+    figure is drawn: a study loads matplotlib (about 270 ms) and its own dependencies,
+    which `rnhql report` without --figures and the docs' Cog run never use."""
 
     path: str  # relative to the repository root
     artifacts: tuple[str, ...]
-    draw: Callable[[Path], object]
+    drawer: str
+
+    def draw(self, path: Path) -> object:
+        module, function = self.drawer.split(":")
+        return getattr(importlib.import_module(module), function)(*self.artifacts, path=path)
 
 
 @dataclass(frozen=True)
@@ -35,66 +42,23 @@ class Screenshot:
     command: str
 
 
-# Each figure's study is imported when it is drawn: a study loads matplotlib (about 270 ms)
-# and its own dependencies, which `rnhql report` without --figures and the docs' Cog run
-# never use.
-
-
-def _scaling(path: Path) -> None:
-    from scenarios.studies.paper.scaling import figure_from_artifact
-
-    figure_from_artifact("scaling.arenas", path)
-
-
-SCALING_MAPS = ("small", "seed7", "512")
-
-
-def _scaling_maps(path: Path) -> None:
-    from scenarios.studies.maps.scaling_maps_figure import draw, points_from_artifacts
-
-    draw(points_from_artifacts(SCALING_MAPS), path)
-
-
-def _ablation(path: Path) -> None:
-    from scenarios.studies.maps.ablation import figure_from_artifact
-
-    figure_from_artifact("ablation.suite", path)
-
-
-def _ladder(path: Path) -> None:
-    from scenarios.studies.ladder.continuous_vs_grid import figure_from_artifact
-
-    figure_from_artifact("ladder.study", path)
-
-
-def _aliasing(path: Path) -> None:
-    from scenarios.studies.ladder.aliasing import figure_from_artifact
-
-    figure_from_artifact("aliasing.paper-50-noisy", path)
-
-
-def _physics_batch(path: Path) -> None:
-    from scenarios.bench.physics_batch import figure_from_artifact
-
-    figure_from_artifact("physics-batch.this-machine", path)
-
-
-def _heldout_profiles(path: Path) -> None:
-    from scenarios.studies.maps.ranking import figure_from_artifact
-
-    figure_from_artifact(JUDGING, path)
-
-
 JUDGING = ("heldout.judging-256", "heldout.judging-512")
+SCALING_MAPS = tuple(f"scaling-maps.{n}" for n in ("small", "seed7", "512"))
 FIGURES = (
-    ArtifactFigure("docs/scaling.png", ("scaling.arenas",), _scaling),
-    ArtifactFigure("docs/scaling-maps.png", tuple(f"scaling-maps.{n}" for n in SCALING_MAPS),
-                   _scaling_maps),
-    ArtifactFigure("docs/ablation.png", ("ablation.suite",), _ablation),
-    ArtifactFigure("docs/ladder.png", ("ladder.study",), _ladder),
-    ArtifactFigure("docs/aliasing-noisy.png", ("aliasing.paper-50-noisy",), _aliasing),
-    ArtifactFigure("docs/physics_batch.png", ("physics-batch.this-machine",), _physics_batch),
-    ArtifactFigure("docs/heldout-profiles.png", JUDGING, _heldout_profiles),
+    ArtifactFigure("docs/scaling.png", ("scaling.arenas",),
+                   "scenarios.studies.paper.scaling:figure_from_artifact"),
+    ArtifactFigure("docs/scaling-maps.png", SCALING_MAPS,
+                   "scenarios.studies.maps.scaling_maps_figure:figure_from_artifacts"),
+    ArtifactFigure("docs/ablation.png", ("ablation.suite",),
+                   "scenarios.studies.maps.ablation:figure_from_artifact"),
+    ArtifactFigure("docs/ladder.png", ("ladder.study",),
+                   "scenarios.studies.ladder.continuous_vs_grid:figure_from_artifact"),
+    ArtifactFigure("docs/aliasing-noisy.png", ("aliasing.paper-50-noisy",),
+                   "scenarios.studies.ladder.aliasing:figure_from_artifact"),
+    ArtifactFigure("docs/physics_batch.png", ("physics-batch.this-machine",),
+                   "scenarios.bench.physics_batch:figure_from_artifact"),
+    ArtifactFigure("docs/heldout-profiles.png", JUDGING,
+                   "scenarios.studies.maps.ranking:figure_from_artifact"),
 )
 
 SCREENSHOTS = (

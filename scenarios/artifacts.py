@@ -40,6 +40,7 @@ from typing import Any
 
 from scenarios import artifact_heldout  # noqa: F401 (registers the held-out tables)
 from scenarios.artifact_tables import KINDS
+from scenarios.cog_blocks import cog_out
 from sim.errors import InputError
 from sim.files import atomic_write_text
 
@@ -330,16 +331,12 @@ def rendered_rows(names: Iterable[str]) -> str:
 
 def render_rows(names: list[str]) -> None:
     """For Cog blocks: :func:`rendered_rows`."""
-    import cog  # only inside a Cog run
-
-    cog.out(rendered_rows(names))
+    cog_out(rendered_rows(names))
 
 
 def render(name: str) -> None:
     """For Cog blocks: write artifact ``name``'s Markdown into the page."""
-    import cog  # only inside a Cog run
-
-    cog.out(rendered(name))
+    cog_out(rendered(name))
 
 
 def legacy_note(command: str, known: str = "") -> str:
@@ -353,9 +350,7 @@ def legacy_note(command: str, known: str = "") -> str:
 
 def legacy(command: str, known: str = "") -> None:
     """For a Cog block above a hand-typed table (see :func:`legacy_note`)."""
-    import cog  # only inside a Cog run
-
-    cog.out(legacy_note(command, known))
+    cog_out(legacy_note(command, known))
 
 
 LEGACY_CALL = re.compile(r'legacy\("([^"]+)"')

@@ -24,6 +24,7 @@ import numpy as np
 
 from learning.config import MethodConfig
 from learning.plain.learner import located_name
+from scenarios.figures.plots import all_figures
 from scenarios.runs.results import summary_markdown, write_results
 from scenarios.runs.spec import load, policy_from_text
 from scenarios.sweep.brief import summary_terminal
@@ -149,9 +150,6 @@ class Comparison:
     def save(self, out: str | Path, figures: bool = True) -> Path:
         """Write ``results.json``, ``summary.md`` and (``figures``) the figures to ``out``, as
         ``rnhql compare --out`` does; returns the folder."""
-        # lazy: matplotlib costs 270 ms; save(figures=False) never draws
-        from scenarios.figures.plots import all_figures
-
         out = check_out_dir(Path(out), "out")
         results = dict(self.results)
         write_results(out, results, self.methods)

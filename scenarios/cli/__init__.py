@@ -81,16 +81,13 @@ def _import_app():
     ImportError that the library catches and ignores, and the command then ran on as if
     never interrupted (seen once in CI: exit 0). A Ctrl-C pressed meanwhile is raised
     right after, as one."""
-    if threading.current_thread() is not threading.main_thread():
-        # lazy by design: main() imports the parser itself (the package docstring says why)
-        from scenarios.cli.app import main as run
-
-        return run
     pressed: list[int] = []
-    held = {signal.SIGINT: signal.signal(signal.SIGINT, lambda s, _f: pressed.append(s))}
-    for sig in (signal.SIGTERM, signal.SIGHUP):  # likewise (unless ignored: nohup)
-        if signal.getsignal(sig) is signal.SIG_DFL:
-            held[sig] = signal.signal(sig, lambda s, _f: pressed.append(s))
+    held = {}
+    if threading.current_thread() is threading.main_thread():  # signals are the main thread's
+        held[signal.SIGINT] = signal.signal(signal.SIGINT, lambda s, _f: pressed.append(s))
+        for sig in (signal.SIGTERM, signal.SIGHUP):  # likewise (unless ignored: nohup)
+            if signal.getsignal(sig) is signal.SIG_DFL:
+                held[sig] = signal.signal(sig, lambda s, _f: pressed.append(s))
     try:
         # lazy by design: main() imports the parser itself (the package docstring says why)
         from scenarios.cli.app import main as run

@@ -6,6 +6,7 @@ import argparse
 from dataclasses import dataclass
 
 from scenarios.cli.args import scenario_from_args
+from scenarios.cog_blocks import cog_out
 from sim.grid import build_model
 from sim.scenario import Scenario
 from sim.scenario_io import builtin_dir, builtin_names, resolve_scenario
@@ -97,6 +98,4 @@ def scenario_table() -> str:
 
 def show_scenarios() -> None:
     """For a Cog block (docs/scenarios.md): the scenario table."""
-    import cog  # only inside a Cog run
-
-    cog.out(scenario_table())
+    cog_out(scenario_table())

@@ -28,7 +28,9 @@ from scenarios.cli.args import (
 from scenarios.sweep.outdir import check_output_file
 from sim.grid.actions import ACTION_NAMES
 from sim.physics.fidelity import parse_fidelity
+from sim.physics.models.build import cache_dir, digest, stochastic_model
 from sim.physics.models.optimum import continuous_optimum_m
+from sim.physics.models.solve import solve
 from sim.physics.models.stochastic import (
     ARRIVED,
     FACING,
@@ -38,6 +40,7 @@ from sim.physics.models.stochastic import (
     Sampling,
     is_resting,
 )
+from sim.physics.models.stochastic_rollouts import drive_model_policy
 from sim.physics.models.transition import physics_model
 from sim.physics.static import PhysicsConfig
 
@@ -66,11 +69,6 @@ def _states_line(model) -> str:
 
 
 def cmd_optimum(args: argparse.Namespace) -> int:
-    # lazy: sim.physics.models.build, .solve, .stochastic_rollouts cost 8 ms at startup
-    from sim.physics.models.build import cache_dir, digest, stochastic_model
-    from sim.physics.models.solve import solve
-    from sim.physics.models.stochastic_rollouts import drive_model_policy
-
     if getattr(args, "artifact", None):
         check_artifact_target(args.artifact)  # before the work: a name, in a checkout
     fid = parse_fidelity(args.fidelity)

@@ -14,6 +14,15 @@ import os
 import sys
 from pathlib import Path
 
+from scenarios.recording.viewer import (
+    Stopped,
+    ViewerError,
+    WebViewer,
+    spawn,
+    ssh_hint,
+    stop_group,
+    stopping_on_signals,
+)
 from sim.errors import InputError
 
 
@@ -27,9 +36,6 @@ def _check_display(path: Path) -> None:
 
 
 def _serve_web(path: Path, port: int | None) -> int:
-    # lazy: scenarios.recording.viewer costs 9 ms at startup
-    from scenarios.recording.viewer import ViewerError, WebViewer, ssh_hint
-
     viewer = WebViewer(path, web_port=port or None)
     try:  # stopped however we leave, a signal during the start included
         try:
@@ -53,8 +59,6 @@ def _serve_web(path: Path, port: int | None) -> int:
 def _open_native(path: Path) -> int:
     # lazy: scenarios.recording.viewer costs 9 ms at startup (and tests/test_security.py
     # stands in for viewer.spawn: looked up per call)
-    from scenarios.recording.viewer import spawn, stop_group
-
     proc = spawn([str(path)])
     try:
         return proc.wait()
@@ -64,9 +68,6 @@ def _open_native(path: Path) -> int:
 
 def cmd_view(args: argparse.Namespace) -> int:
     """Open a recording: the native viewer, or the web viewer served on loopback."""
-    # lazy: scenarios.recording.viewer costs 9 ms at startup
-    from scenarios.recording.viewer import Stopped, stopping_on_signals
-
     path = Path(args.file)
     if not path.exists():
         raise InputError(str(path), "FILE", "does not exist", "pass a .rrd written by --record")

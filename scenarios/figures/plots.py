@@ -7,22 +7,20 @@ moving average (window in the legend) because single-episode steps are noisy.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.colors import ListedColormap
-from matplotlib.patches import Circle as CirclePatch
 
 from learning.metrics import windowed_reward_per_step
+from scenarios.figures.mpl import pyplot
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 from sim.grid import TabularModel
 from sim.grid.planning import bfs_route
 from sim.scenario import Scenario
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 
 def _smooth(y: np.ndarray, window: int) -> np.ndarray:
@@ -56,6 +54,7 @@ def curve_figure(results: dict[str, Any], key: str, ylabel: str, path: Path,
                  window: int = 25, logy: bool = False, what: str = "") -> None:
     """Median and IQR over seeds of a per-episode figure; ``what`` says which episodes it
     counts (the training ones start on random cells: they are not the ranked test)."""
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
     n_episodes = len(results["runs"][0]["steps_per_episode"])
     window = min(window, n_episodes)
@@ -107,6 +106,7 @@ def greedy_test_figure(results: dict[str, Any], path: Path) -> None:
     """What the ranking reads: per method, the share of seeds whose greedy route from S is
     optimal at each test (every ``test_every`` episodes); a method is stably optimal in a
     seed from the test after which that seed's line never drops again."""
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 4.5), dpi=110)
     groups = _groups(results)
     several_worlds = len({w for _, w in groups}) > 1
@@ -131,18 +131,20 @@ def greedy_test_figure(results: dict[str, Any], path: Path) -> None:
     plt.close(fig)
 
 
-def draw_map(ax: plt.Axes, sc: Scenario, model: TabularModel) -> None:
+def draw_map(ax: Axes, sc: Scenario, model: TabularModel) -> None:
+    plt = pyplot()
     ax.imshow(model.blocked, origin="lower", cmap="Greys", alpha=0.25,
               extent=(0, sc.width_m, 0, sc.height_m), vmin=0, vmax=1.5)
     for o in sc.obstacles:
-        ax.add_patch(CirclePatch((o.x_m, o.y_m), o.radius_m, color="#464a54", lw=0))
+        ax.add_patch(plt.Circle((o.x_m, o.y_m), o.radius_m, color="#464a54", lw=0))
     c = sc.cell_size_m
     if sc.blocked_cells:  # one image, not a patch per cell (a 512² map has ~10^5 of them)
         walls = np.zeros((sc.ny, sc.nx))
         cells = np.asarray(sc.blocked_cells, dtype=np.int64)
         walls[cells[:, 1], cells[:, 0]] = 1.0
         ax.imshow(np.ma.masked_equal(walls, 0.0), origin="lower", interpolation="nearest",
-                  cmap=ListedColormap(["#464a54"]), extent=(0, sc.width_m, 0, sc.height_m),
+                  cmap=plt.matplotlib.colors.ListedColormap(["#464a54"]),
+                  extent=(0, sc.width_m, 0, sc.height_m),
                   vmin=0, vmax=1)
     for cell, colour, label in ((sc.start, "#2ea043", "S"), (sc.goal, "#e6aa14", "G")):
         x, y = (cell[0] + 0.5) * c, (cell[1] + 0.5) * c
@@ -159,10 +161,12 @@ def draw_map(ax: plt.Axes, sc: Scenario, model: TabularModel) -> None:
 def routes_figure(results: dict[str, Any], sc: Scenario, model: TabularModel,
                   path: Path) -> None:
     """One panel per method (and world): seed-0's final greedy route against the BFS optimum."""
+    plt = pyplot()
     groups = _groups(results)
     n = len(groups)
     cols = min(n, 3)
     rows = int(np.ceil(n / cols))
+    plt = pyplot()
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 4 * rows), dpi=100, squeeze=False)
     optimum = model.coords[bfs_route(model.next_state, model.distance_to_goal, model.start)]
     for ax, ((method, world), runs) in zip(axes.ravel(), groups.items(), strict=False):

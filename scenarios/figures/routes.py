@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from scenarios.figures.mpl import pyplot
+from scenarios.figures.plots import draw_map
 from scenarios.figures.save import save_figure
 from sim.grid import TabularModel
 from sim.grid.planning import bfs_route
@@ -33,13 +35,7 @@ def ascii_routes(model: TabularModel, route: Sequence[int], optimum: Sequence[in
 def route_png(sc: Scenario, model: TabularModel, route: Sequence[int], path: Path,
               title: str, trajectory: np.ndarray | None = None) -> None:
     """The map with the optimum, the learned grid route and (optionally) a driven trajectory."""
-    # lazy: matplotlib costs 270 ms at startup (rnhql route draws only with --png)
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from scenarios.figures.plots import draw_map
+    plt = pyplot()
 
     optimum = model.coords[bfs_route(model.next_state, model.distance_to_goal, model.start)]
     pts = model.coords[np.asarray(route, dtype=int)]

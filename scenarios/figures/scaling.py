@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from scenarios.figures.mpl import pyplot
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 
@@ -16,10 +17,7 @@ from scenarios.palette import method_colour_mpl
 def figure(rows: dict[str, list[dict[str, Any]]], path: Path, title: str) -> None:
     # lazy: matplotlib costs 270 ms at import; the docs' Cog blocks import this module
     # (through scaling_maps_figure) and never draw
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), dpi=110)
     for method, pts in rows.items():

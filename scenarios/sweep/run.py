@@ -27,6 +27,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from scenarios.figures.plots import all_figures
 from scenarios.runs import physics_grading as g
 from scenarios.runs.physics import StopFlag
 from scenarios.runs.results import RESULTS_VERSION, summarise, write_results
@@ -197,9 +198,6 @@ def compare_files(figures: bool = True) -> SweepFiles:
 
 def write_compare(specs: Sequence[RunSpec], runs: list[dict[str, Any]], out_dir: Path,
                   figures: bool = True) -> dict[str, Any]:
-    # lazy: matplotlib costs 270 ms; a sweep with figures=False never draws
-    from scenarios.figures.plots import all_figures
-
     results = assemble(specs, runs)
     write_results(out_dir, results, list(dict.fromkeys(s.method for s in specs)))
     if figures:

@@ -33,9 +33,11 @@ from typing import Any
 import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
+import rerun as rr
 
 from scenarios.artifacts import check_artifact_name, load_artifact, write_artifact
 from scenarios.figures.save import save_figure
+from scenarios.recording.file import RecordingFile
 from scenarios.runs.spec import load
 from scenarios.studies.args import script_parser
 from sim.errors import InputError
@@ -188,10 +190,6 @@ def figure_from_artifact(name: str, path: Path) -> None:
 def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str, Any]) -> None:
     matplotlib.use("Agg")
 
-    # lazy: rerun costs 250 ms at import; the ladder study and rnhql report import this
-    # module and record nothing
-    from scenarios.recording.file import RecordingFile
-
     out.mkdir(parents=True, exist_ok=True)
     public = {k: v for k, v in result.items() if not k.startswith("_")}
     atomic_write_text(out / "aliasing.json", json.dumps(public, indent=1))
@@ -200,9 +198,6 @@ def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str
                     f"{100 * result['multi_outcome_fraction']:.1f} % of (cell, action) pairs "
                     "alias", out / "aliasing.png")
     cmap = plt.get_cmap("magma").with_extremes(bad="0.75")
-    # lazy: as RecordingFile above
-    import rerun as rr
-
     with RecordingFile(out / "aliasing.rrd",
                        recording_name=f"aliasing {sc.name} {result['fidelity']}") as rec:
         vmax = max(1.0, float(np.nanmax(grid)) if np.isfinite(grid).any() else 1.0)

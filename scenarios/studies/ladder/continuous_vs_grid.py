@@ -30,6 +30,7 @@ import numpy as np
 
 from scenarios.artifact_tables import ladder_table
 from scenarios.artifacts import ROOT, load_artifact, write_artifact
+from scenarios.figures.plots import draw_map
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 from scenarios.runs.results import quantile
@@ -61,8 +62,6 @@ def overlay(results: dict[str, Any], scenario: str, method: str, path: Path) -> 
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from scenarios.figures.plots import draw_map
 
     sc, model = load(scenario)
     fig, ax = plt.subplots(figsize=(6.5, 6.5), dpi=110)

@@ -28,6 +28,9 @@ from typing import Any
 
 import numpy as np
 
+from scenarios.artifacts import load_artifact
+from scenarios.figures.mpl import pyplot
+from scenarios.palette import method_colour_mpl
 from scenarios.runs.statistics import (
     bootstrap_ci,
     probability_of_improvement_tasks,
@@ -87,15 +90,9 @@ def profile(share: list[float], taus: np.ndarray) -> np.ndarray:
     return (s[None, :] <= taus[:, None]).mean(axis=1)
 
 
-def figure_from_artifact(names: tuple[str, ...], path: Path) -> None:
+def figure_from_artifact(*names: str, path: Path) -> None:
     """The performance profiles of held-out artifacts: a panel per artifact and protocol."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from scenarios.artifacts import load_artifact
-    from scenarios.palette import method_colour_mpl
+    plt = pyplot()
 
     panels: list[tuple[str, str, dict[str, Any], dict[str, Any]]] = []
     for name in names:

@@ -25,6 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.artifacts import ArtifactError, load_artifact, provenance
+from scenarios.cog_blocks import cog_out
+from scenarios.figures.mpl import pyplot
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 from scenarios.runs.spec import load
@@ -89,6 +91,11 @@ def points_from_artifacts(names: Sequence[str]) -> list[Point]:
     return sorted(found.values(), key=lambda p: (p.method, p.kind, p.size))
 
 
+def figure_from_artifacts(*names: str, path: Path) -> Path:
+    """The figure of artifacts ``scaling-maps.NAME`` (full names, as the report lists them)."""
+    return draw(points_from_artifacts([n.removeprefix("scaling-maps.") for n in names]), path)
+
+
 def lines(points: Sequence[Point]) -> dict[tuple[str, str], list[Point]]:
     out: dict[tuple[str, str], list[Point]] = {}
     for p in points:
@@ -97,12 +104,7 @@ def lines(points: Sequence[Point]) -> dict[tuple[str, str], list[Point]]:
 
 
 def draw(points: Sequence[Point], path: Path) -> Path:
-    # lazy: matplotlib costs 270 ms at import; the docs' Cog blocks import this module
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.lines import Line2D
+    plt = pyplot()
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.8), dpi=110)
     for (method, kind), pts in lines(points).items():
@@ -130,9 +132,9 @@ def draw(points: Sequence[Point], path: Path) -> Path:
         ax.grid(alpha=0.3, which="both")
     methods = list(dict.fromkeys(p.method for p in points))
     kinds = list(dict.fromkeys(p.kind for p in points))
-    handles = [Line2D([], [], color=method_colour_mpl(m), ls=STYLES.get(m, "-."), label=m)
+    handles = [plt.Line2D([], [], color=method_colour_mpl(m), ls=STYLES.get(m, "-."), label=m)
                for m in methods]
-    handles += [Line2D([], [], color="0.3", ls="", marker=MARKERS.get(k, "x"), label=k)
+    handles += [plt.Line2D([], [], color="0.3", ls="", marker=MARKERS.get(k, "x"), label=k)
                 for k in kinds]
     for ax in axes:
         ax.legend(handles=handles, fontsize=7, loc="upper left", ncol=2)
@@ -179,13 +181,10 @@ def points_text(points: Sequence[Point]) -> str:
 def render_points(names: Sequence[str]) -> None:
     """For a Cog block: every point of artifacts ``scaling-maps.NAME``, each artifact's
     provenance (and stale banner) under the table."""
-    # only inside a Cog run: cog provides the module
-    import cog
-
     docs = [load_artifact(f"scaling-maps.{n}") for n in names]
     heads = [provenance(d).split("\n\n")[0] for d in docs if "\n\n" in provenance(d)]
     tails = [provenance(d).split("\n\n")[-1] for d in docs]
-    cog.out("".join(h + "\n\n" for h in heads) + points_text(points_from_artifacts(names))
+    cog_out("".join(h + "\n\n" for h in heads) + points_text(points_from_artifacts(names))
             + "\n" + "\n\n".join(tails) + "\n")
 
 

@@ -40,7 +40,6 @@ from typing import Any
 
 from scenarios import artifact_heldout  # noqa: F401 (registers the held-out tables)
 from scenarios.artifact_tables import KINDS
-from scenarios.cog_blocks import cog_out
 from sim.errors import InputError
 from sim.files import atomic_write_text
 
@@ -327,6 +326,15 @@ def rendered_rows(names: Iterable[str]) -> str:
     heads = [provenance(d, now).split("\n\n")[0] for d in docs if stale_parts(d, now)]
     tails = [provenance(d, now).split("\n\n")[-1] for d in docs]
     return "".join(h + "\n\n" for h in heads) + body + "\n\n" + "\n\n".join(tails) + "\n"
+
+
+def cog_out(text: str) -> None:
+    """Write ``text`` into the page where the running Cog block stands. Cog provides the
+    ``cog`` module only while it runs a page's blocks (``cog -r README.md docs/*.md``, and
+    ``cog --check`` in the tests), so it is imported here, when a block writes."""
+    import cog  # exists only inside a Cog run
+
+    cog.out(text)
 
 
 def render_rows(names: list[str]) -> None:

@@ -1,4 +1,4 @@
-"""An experiment's arguments declared as a dataclass (scenarios.studies.args)."""
+"""An experiment's arguments declared as a dataclass (scenarios.script_args)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import pytest
 
-from scenarios.studies.args import arg, parse, parser_of
+from scenarios.script_args import arg, parse, parser_of
 
 
 @dataclass(frozen=True)
@@ -66,7 +66,7 @@ def test_the_artifact_and_jobs_fields_are_spelled_once():
 
     import pytest
 
-    from scenarios.studies.args import artifact_arg, jobs_arg, parse
+    from scenarios.script_args import artifact_arg, jobs_arg, parse
 
     @dataclass(frozen=True)
     class Args:

@@ -135,7 +135,7 @@ def test_readme_command_parses(page, command, monkeypatch, capsys):
         else:
             module = importlib.import_module(argv[2])
             source = inspect.getsource(module)
-            if "argparse" not in source and "scenarios.studies.args" not in source:
+            if "argparse" not in source and "scenarios.script_args" not in source:
                 # takes no arguments (a benchmark run as is): it exists; running it would run it
                 assert len(argv) == 3, f"{page}: {argv[2]} takes no arguments: {command}"
                 return

@@ -16,7 +16,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from scenarios.studies.args import arg, parse
+from scenarios.script_args import arg, parse
 from scenarios.sweep.backends import run_local, run_ray
 from scenarios.sweep.run import make_specs, run_sweep
 

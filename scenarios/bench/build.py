@@ -19,7 +19,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from scenarios.studies.args import arg, parse
+from scenarios.script_args import arg, parse
 from sim.grid.planning import far_start_goal
 from sim.maps.movingai import read_free_grid
 from sim.scenario_io import builtin_dir

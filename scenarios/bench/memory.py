@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from scenarios.artifacts import write_artifact
-from scenarios.studies.args import arg, artifact_arg, parse
+from scenarios.script_args import arg, artifact_arg, parse
 from scenarios.studies.maps.scaling_maps import write_problem
 
 METHODS = ("rnh-ql+", "haql", "rnh-ql", "dyna-q", "st-ql")

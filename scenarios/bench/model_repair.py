@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from learning.parts.free_space import bfs_distances, distances_change, repair_distances
-from scenarios.studies.args import arg, parse
+from scenarios.script_args import arg, parse
 from sim.grid.planning import far_start_goal
 from sim.maps.generators import KINDS, generate
 

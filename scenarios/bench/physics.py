@@ -27,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 import sim.envs  # noqa: F401  (registers the ids)
-from scenarios.studies.args import arg, parse
+from scenarios.script_args import arg, parse
 from sim.physics.envs.route import PhysicsRouteEnv
 from sim.physics.reference.controller import PrimitiveController
 from sim.physics.reference.world import PhysicsConfig, PhysicsWorld

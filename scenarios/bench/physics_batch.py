@@ -21,6 +21,7 @@ import os
 import platform
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -28,13 +29,13 @@ import numpy as np
 
 from learning.methods.registry import comparison_methods
 from learning.streams import streams
-from scenarios.artifacts import ROOT, check_artifact_name, load_artifact, write_artifact
+from scenarios.artifacts import ROOT, load_artifact, write_artifact
 from scenarios.bench.build import arena_toml
 from scenarios.bench.physics import _round
 from scenarios.figures.save import save_figure
 from scenarios.runs.physics import RunGroup, train_physics_runs
 from scenarios.runs.spec import load, make_config
-from scenarios.studies.args import script_parser
+from scenarios.script_args import arg, artifact_arg, parse
 from sim.grid import build_model
 from sim.physics.fidelity import parse_fidelity
 from sim.physics.kernel.batch import RouteBatch
@@ -153,24 +154,23 @@ def figure_from_artifact(name: str, path: Path) -> None:
     plot(load_artifact(name)["data"], path)
 
 
+@dataclass(frozen=True)
+class Args:
+    quick: bool = arg(False, "shorter timings, 30 episodes")
+    episodes: int | None = arg(None, "episodes of the learning run (default 300; 30 with "
+                               "--quick)")
+    plot: str | None = arg(None, "write the scaling plot here")
+    artifact: str | None = artifact_arg("physics-batch")
+
+
 def main(argv: list[str] | None = None) -> int:
-    ap = script_parser(__doc__)
-    ap.add_argument("--quick", action="store_true", help="shorter timings, 30 episodes")
-    ap.add_argument("--episodes", type=int, default=None,
-                    help="episodes of the learning run (default 300; 30 with --quick)")
-    ap.add_argument("--plot", type=Path, default=None, help="write the scaling plot here")
-    ap.add_argument("--artifact", default=None, metavar="NAME",
-                    help="also write docs/results/physics-batch.NAME.json (the docs' table) "
-                         "and redraw docs/physics_batch.png from it")
-    args = ap.parse_args(argv)
-    if args.artifact:
-        check_artifact_name(ap, args.artifact)
+    args = parse(Args, __doc__, argv)
 
     load_before = os.getloadavg()[0]  # other work on the machine skews every timing
     figs = {"scaling": scaling(0.5 if args.quick else 2.0, (1, 16, 256) if args.quick else SIZES),
             "learning": learning(args.episodes or (30 if args.quick else 300))}
     if args.plot is not None:
-        plot(figs, args.plot)
+        plot(figs, Path(args.plot))
     if args.artifact:
         figs["machine"] = {"cores": os.cpu_count(), "cpu": platform.processor() or
                            platform.machine(), "python": platform.python_version(),

@@ -17,10 +17,10 @@ docs/python-api.md renders). On ``paper-50``, goal-only rewards:
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -29,8 +29,9 @@ import numpy as np
 from learning.drivers.plain_train import train_plain
 from learning.drivers.train import train_tabular
 from learning.plain.learner import is_plain
-from scenarios.artifacts import check_artifact_name, write_artifact
+from scenarios.artifacts import write_artifact
 from scenarios.runs.spec import load, make_config
+from scenarios.script_args import arg, artifact_arg, parse
 from scenarios.sweep.backends import run_local
 from scenarios.sweep.run import make_specs
 
@@ -89,17 +90,17 @@ def measure(episodes: int, repeats: int, seeds: int, physics_episodes: int) -> d
     }
 
 
+@dataclass(frozen=True)
+class Args:
+    episodes: int = arg(3000, "grid episodes per run")
+    repeats: int = arg(3, "grid runs, the best kept")
+    seeds: int = arg(4, "physics runs per method")
+    physics_episodes: int = arg(30, "physics episodes per run")
+    artifact: str | None = artifact_arg("plain-learner")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m scenarios.bench.plain", description=__doc__)
-    p.add_argument("--episodes", type=int, default=3000, help="grid episodes per run")
-    p.add_argument("--repeats", type=int, default=3, help="grid runs, the best kept")
-    p.add_argument("--seeds", type=int, default=4, help="physics runs per method")
-    p.add_argument("--physics-episodes", type=int, default=30, help="physics episodes per run")
-    p.add_argument("--artifact", default=None, metavar="NAME",
-                   help="also write docs/results/plain-learner.NAME.json")
-    a = p.parse_args(argv)
-    if a.artifact is not None:
-        check_artifact_name(p, a.artifact)
+    a = parse(Args, __doc__, argv)
     data = measure(a.episodes, a.repeats, a.seeds, a.physics_episodes)
     print(json.dumps(data, indent=1))
     if a.artifact is not None:

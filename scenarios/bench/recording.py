@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from scenarios.recording.recorder import Recorder
-from scenarios.studies.args import arg, parse
+from scenarios.script_args import arg, parse
 from sim.grid import build_model
 from sim.scenario_io import resolve_scenario
 

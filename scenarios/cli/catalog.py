@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from dataclasses import dataclass
 
+from scenarios.artifacts import cog_out
 from scenarios.cli.args import scenario_from_args
-from scenarios.cog_blocks import cog_out
 from sim.grid import build_model
 from sim.scenario import Scenario
 from sim.scenario_io import builtin_dir, builtin_names, resolve_scenario

@@ -11,12 +11,13 @@ that shrinks with the episode. Everything is seeded.
 
 from __future__ import annotations
 
-import argparse
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from scenarios.recording.recorder import Recorder
+from scenarios.script_args import arg, parse, positional
 from sim.grid import TabularModel, build_model
 from sim.grid.planning import bfs_route, value_iteration
 from sim.scenario import Scenario
@@ -90,14 +91,16 @@ def record_synthetic(path: str | Path | None, sc: Scenario, model: TabularModel,
     return {"trajectories": logged, "route": route, "recorder": rec}
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("out")
-    ap.add_argument("--scenario", default="paper-50")
-    ap.add_argument("--episodes", type=int, default=300)
-    ap.add_argument("--world", choices=("grid", "physics"), default="grid")
-    a = ap.parse_args()
+@dataclass(frozen=True)
+class Args:
+    out: str = positional("the recording to write (.rrd)")
+    scenario: str = arg("paper-50", "scenario name or file")
+    episodes: int = arg(300, "synthetic episodes")
+    world: str = arg("grid", "whose trajectories to draw", choices=("grid", "physics"))
+
+
+def main(argv: list[str] | None = None) -> None:
+    a = parse(Args, __doc__, argv)
     sc = resolve_scenario(a.scenario)
     record_synthetic(a.out, sc, build_model(sc), episodes=a.episodes, world=a.world)
     print(a.out)

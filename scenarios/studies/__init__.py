@@ -5,8 +5,9 @@
 - :mod:`scenarios.studies.ladder`: the fidelity ladder (continuous vs gridded,
   predictivity, the grading check, aliasing);
 - :mod:`scenarios.studies.maps`: maps of many kinds (the suite, the RNH-QL+ ablation,
-  held-out maps, large maps, the greedy test from S);
-- :mod:`scenarios.studies.args`: one way to declare a script's arguments.
+  held-out maps, large maps, the greedy test from S).
+
+Every script declares its arguments one way (:mod:`scenarios.script_args`).
 
 Each turns sweeps (:mod:`scenarios.sweep`) into a report, figures and an artifact
 (:mod:`scenarios.artifacts`). May import ``sweep``, ``runs``, ``recording``, ``figures``,

@@ -39,7 +39,7 @@ from scenarios.artifacts import check_artifact_name, load_artifact, write_artifa
 from scenarios.figures.save import save_figure
 from scenarios.recording.file import RecordingFile
 from scenarios.runs.spec import load
-from scenarios.studies.args import script_parser
+from scenarios.script_args import script_parser
 from sim.errors import InputError
 from sim.files import atomic_write_text
 from sim.grid import TabularModel

@@ -29,7 +29,7 @@ from scenarios.artifacts import write_artifact
 from scenarios.runs.physics import RunGroup, train_physics_runs
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import load, make_config
-from scenarios.studies.args import arg, parse
+from scenarios.script_args import arg, parse
 from sim.files import atomic_write_text
 from sim.physics.fidelity import parse_fidelity
 from sim.physics.models.rollouts import wilson_interval

@@ -32,7 +32,7 @@ from scenarios.artifacts import ROOT, load_artifact, write_artifact
 from scenarios.figures.save import save_figure
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import RunSpec
-from scenarios.studies.args import script_parser
+from scenarios.script_args import script_parser
 from scenarios.studies.maps.suite import build_suite
 from scenarios.sweep.run import SweepFiles, ctrl_c_held, run_sweep
 from sim.files import atomic_write_text

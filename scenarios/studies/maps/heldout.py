@@ -47,7 +47,7 @@ from typing import Any
 from scenarios.artifact_heldout import heldout
 from scenarios.artifacts import check_artifact_name, write_artifact
 from scenarios.runs.spec import load
-from scenarios.studies.args import arg, parse, parser_of
+from scenarios.script_args import arg, parse, parser_of
 from scenarios.studies.maps.ranking import ranking
 from scenarios.sweep.backends import Progress, run_local
 from scenarios.sweep.run import make_specs, run_sweep

@@ -31,7 +31,7 @@ from typing import Any
 
 from scenarios.artifacts import check_artifact_name, write_artifact
 from scenarios.runs.spec import load
-from scenarios.studies.args import script_parser
+from scenarios.script_args import script_parser
 from scenarios.sweep.backends import Progress, run_local
 from scenarios.sweep.run import make_specs, run_sweep
 from sim.files import atomic_write_text

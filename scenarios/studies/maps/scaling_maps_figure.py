@@ -24,13 +24,12 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.artifacts import ArtifactError, load_artifact, provenance
-from scenarios.cog_blocks import cog_out
+from scenarios.artifacts import ArtifactError, cog_out, load_artifact, provenance
 from scenarios.figures.mpl import pyplot
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 from scenarios.runs.spec import load
-from scenarios.studies.args import script_parser
+from scenarios.script_args import script_parser
 from scenarios.studies.paper.scaling import fit_exponent
 from sim.files import atomic_write_text
 

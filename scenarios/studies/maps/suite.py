@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from scenarios.studies.args import arg, parse
+from scenarios.script_args import arg, parse
 from sim.grid import build_model
 from sim.grid.planning import far_start_goal
 from sim.maps.generators import small_maze, small_rooms

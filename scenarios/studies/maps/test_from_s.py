@@ -27,7 +27,7 @@ from learning.methods.registry import family_of
 from learning.streams import streams
 from scenarios.artifacts import check_artifact_name, write_artifact
 from scenarios.runs.spec import load, make_config
-from scenarios.studies.args import arg, parse, parser_of
+from scenarios.script_args import arg, parse, parser_of
 from scenarios.studies.maps.heldout import method_of, share_of, write_problem
 
 

@@ -16,6 +16,7 @@ greedy test from S every 10 episodes, common random numbers per seed.
 from __future__ import annotations
 
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -28,10 +29,10 @@ from learning.methods.pfh_rl import PFHRL
 from learning.metrics import episodes_to_stable_optimal
 from learning.parts.rbf import rbf_features
 from learning.streams import streams
-from scenarios.artifacts import check_artifact_name, write_artifact
+from scenarios.artifacts import write_artifact
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
-from scenarios.studies.args import script_parser
+from scenarios.script_args import arg, artifact_arg, parse
 from sim.files import atomic_write_text
 from sim.grid.planning import value_iteration
 
@@ -65,18 +66,18 @@ def train_with_potential(model, potential: np.ndarray, seed: int, episodes: int,
                                                           np.array(tests_l), opt)
 
 
+@dataclass(frozen=True)
+class Args:
+    out: str = arg("results/oracle", "output folder")
+    scenario: str = arg("paper-50", "scenario name or file")
+    seeds: int = arg(10, "seeds per cell (0 .. N-1)")
+    episodes: int = arg(3000, "episodes per run")
+    gamma: float = arg(0.95, "discount")
+    artifact: str | None = artifact_arg("oracle")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = script_parser(__doc__)
-    p.add_argument("--out", default="results/oracle", help="output folder")
-    p.add_argument("--scenario", default="paper-50", help="scenario name or file")
-    p.add_argument("--seeds", type=int, default=10, help="seeds per cell (0 .. N-1)")
-    p.add_argument("--episodes", type=int, default=3000, help="episodes per run")
-    p.add_argument("--gamma", type=float, default=0.95, help="discount")
-    p.add_argument("--artifact", default=None, metavar="NAME",
-                   help="also write docs/results/oracle.NAME.json (the docs' table)")
-    args = p.parse_args(argv)
-    if args.artifact:
-        check_artifact_name(p, args.artifact)
+    args = parse(Args, __doc__, argv)
     rows: list[dict] = []
     lines = [f"# Oracle bound on {args.scenario}: Q-learning shaped by the best potential each "
              "feature set can represent", "",

@@ -15,10 +15,10 @@ Then ``REPORT.md`` states each claim, the figure we measured, and whether it hol
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -26,10 +26,10 @@ import numpy as np
 
 from learning.methods.registry import comparison_methods
 from learning.metrics import reward_per_step
-from scenarios.artifacts import check_artifact_name, write_artifact
+from scenarios.artifacts import write_artifact
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
-from scenarios.studies.args import script_parser
+from scenarios.script_args import arg, artifact_arg, jobs_arg, parse
 from scenarios.studies.paper.reward_facts import reward_facts
 from scenarios.sweep.backends import Progress, run_local, run_ray
 from scenarios.sweep.run import make_specs, run_sweep
@@ -137,7 +137,7 @@ def claims(compare: dict[str, dict[str, Any]], alpha: dict[float, dict[str, Any]
     return out
 
 
-def report(claim_rows: list[tuple[str, bool, str]], args: argparse.Namespace) -> str:
+def report(claim_rows: list[tuple[str, bool, str]], args: Args) -> str:
     held = sum(h for _, h, _ in claim_rows)
     lines = ["# The RNH-QL paper, reproduced", "",
              "Command: `python -m scenarios.studies.paper.reproduce_paper "
@@ -154,7 +154,7 @@ def report(claim_rows: list[tuple[str, bool, str]], args: argparse.Namespace) ->
     return "\n".join(lines) + "\n"
 
 
-def _value_notes(args: argparse.Namespace) -> list[str]:
+def _value_notes(args: Args) -> list[str]:
     """The value gap the greedy route from S rests on, computed, not typed."""
     sc, _ = load("paper-50", None, None, args.rewards)
     f = reward_facts(sc, sc.rewards.scheme, sc.rewards, 0.95)
@@ -166,24 +166,21 @@ def _value_notes(args: argparse.Namespace) -> list[str]:
             "estimates are noisier than that does not settle on the optimal route."]
 
 
+@dataclass(frozen=True)
+class Args:
+    out: str = arg("results/paper", "output folder")
+    seeds: int = arg(10, "seeds per cell (0 .. N-1)")
+    episodes: int = arg(3000, "episodes per run")
+    jobs: int | None = jobs_arg()
+    backend: str = arg("local", "where the runs execute", choices=("local", "ray"))
+    address: str | None = arg(None, "Ray cluster address (auto, ray://...)")
+    resume: bool = arg(False, "skip runs already finished")
+    rewards: str | None = arg(None, "reward scheme (default: the scenarios' own, the paper's)")
+    artifact: str | None = artifact_arg("paper-claims")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = script_parser(__doc__)
-    p.add_argument("--out", default="results/paper", help="output folder")
-    p.add_argument("--seeds", type=int, default=10, help="seeds per cell (0 .. N-1)")
-    p.add_argument("--episodes", type=int, default=3000, help="episodes per run")
-    p.add_argument("--jobs", type=int, default=None,
-                   help="worker processes (default: all cores)")
-    p.add_argument("--backend", default="local", choices=("local", "ray"),
-                   help="where the runs execute")
-    p.add_argument("--address", default=None, help="Ray cluster address (auto, ray://...)")
-    p.add_argument("--resume", action="store_true", help="skip runs already finished")
-    p.add_argument("--rewards", default=None,
-                   help="reward scheme (default: the scenarios' own, the paper's)")
-    p.add_argument("--artifact", default=None, metavar="NAME",
-                   help="also write docs/results/paper-claims.NAME.json (the docs' table)")
-    args = p.parse_args(argv)
-    if args.artifact:
-        check_artifact_name(p, args.artifact)
+    args = parse(Args, __doc__, argv)
     out = Path(args.out)
     seeds = list(range(args.seeds))
     if args.backend == "local":

@@ -15,17 +15,17 @@ so every number in the explanation is computed, not typed.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from learning.methods.registry import comparison_methods
 from scenarios.artifacts import write_artifact
 from scenarios.runs.spec import load
-from scenarios.studies.args import script_parser
+from scenarios.script_args import arg, artifact_arg, jobs_arg, parse
 from scenarios.studies.paper.reward_facts import RewardFacts, facts_markdown, reward_facts
 from scenarios.sweep.backends import Progress, run_local
 from scenarios.sweep.run import make_specs, run_sweep
@@ -70,7 +70,7 @@ def explain(facts: list[RewardFacts]) -> list[str]:
     return out
 
 
-def report(args: argparse.Namespace, methods: list[str], facts: list[RewardFacts],
+def report(args: Args, methods: list[str], facts: list[RewardFacts],
            grid: dict[tuple[str, float], dict[str, Any]]) -> str:
     lines = ["# Reward design: which scheme lets the learners find the optimal route", "",
              f"Command: `python -m scenarios.studies.paper.reward_design --out {args.out} "
@@ -89,22 +89,20 @@ def report(args: argparse.Namespace, methods: list[str], facts: list[RewardFacts
     return "\n".join(lines) + "\n"
 
 
+@dataclass(frozen=True)
+class Args:
+    out: str = arg("results/reward-design", "output folder")
+    scenario: str = arg("paper-50", "scenario name or file")
+    methods: str = arg(",".join(comparison_methods()), "comma-separated methods")
+    seeds: int = arg(10, "seeds per cell (0 .. N-1)")
+    episodes: int = arg(3000, "episodes per run")
+    jobs: int | None = jobs_arg()
+    resume: bool = arg(False, "skip runs already finished")
+    artifact: str | None = artifact_arg("reward-design")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = script_parser(__doc__)
-    p.add_argument("--out", default="results/reward-design",
-                   help="output folder")
-    p.add_argument("--scenario", default="paper-50", help="scenario name or file")
-    p.add_argument("--methods", default=",".join(comparison_methods()),
-                   help="comma-separated methods")
-    p.add_argument("--seeds", type=int, default=10, help="seeds per cell (0 .. N-1)")
-    p.add_argument("--episodes", type=int, default=3000, help="episodes per run")
-    p.add_argument("--jobs", type=int, default=None,
-                   help="worker processes (default: all cores)")
-    p.add_argument("--resume", action="store_true", help="skip runs already finished")
-    p.add_argument("--artifact", default=None, metavar="NAME",
-                   help="also write docs/results/reward-design.NAME.json (the table the "
-                        "README renders)")
-    args = p.parse_args(argv)
+    args = parse(Args, __doc__, argv)
     methods = [m for m in args.methods.split(",") if m]
     sc, _ = load(args.scenario)
     facts = [reward_facts(sc, s, Rewards.preset(s), g) for g in GAMMAS for s in REWARD_SCHEMES]
@@ -123,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.artifact:
         cmd = (f"python -m scenarios.studies.paper.reward_design --out {args.out} --scenario "
                f"{args.scenario} --seeds {args.seeds} --episodes {args.episodes}"
-               + ("" if args.methods == p.get_default("methods") else
+               + ("" if args.methods == Args.methods else
                   f" --methods {args.methods}") + f" --artifact {args.artifact}")
         write_artifact(f"reward-design.{args.artifact}", cmd, ["grid"],
                        artifact_data(args, methods, facts, grid), study=__file__)
@@ -131,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def artifact_data(args: argparse.Namespace, methods: list[str], facts: list[RewardFacts],
+def artifact_data(args: Args, methods: list[str], facts: list[RewardFacts],
                   grid: dict[tuple[str, float], dict[str, Any]]) -> dict[str, Any]:
     """What the README's table and sentences show: per method and (scheme, gamma) the
     seeds, the optimal ones and episodes to a stable optimal route; the computed facts."""

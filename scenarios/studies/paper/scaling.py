@@ -29,7 +29,7 @@ import numpy as np
 
 from scenarios.artifacts import ROOT, check_artifact_name, load_artifact, write_artifact
 from scenarios.figures.scaling import figure
-from scenarios.studies.args import arg, parse, parser_of
+from scenarios.script_args import arg, parse, parser_of
 from scenarios.sweep.backends import Progress, run_local
 from scenarios.sweep.run import make_specs, run_sweep
 from sim.files import atomic_write_text

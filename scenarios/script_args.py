@@ -14,7 +14,8 @@ switch, off by default), its default the flag's, and :func:`arg` gives the help 
     def main(argv: list[str] | None = None) -> int:
         args = parse(Args, __doc__, argv)
 
-Two fields every study spells the same way: :func:`artifact_arg` (``--artifact NAME``:
+A required positional argument is :func:`positional`. Two fields every study spells the
+same way: :func:`artifact_arg` (``--artifact NAME``:
 also write ``docs/results/<kind>.NAME.json``; the name and the source checkout are checked
 when the flag is parsed, before any work) and :func:`jobs_arg` (``--jobs``: worker
 processes, all cores by default).
@@ -42,6 +43,12 @@ def arg(default: Any, help: str, **kwargs: Any) -> Any:
     """A field of an ``Args`` dataclass: its flag's default, help line and other
     ``add_argument`` keywords."""
     return dataclasses.field(default=default, metadata={"help": help, **kwargs})
+
+
+def positional(help: str, **kwargs: Any) -> Any:
+    """A required positional field of an ``Args`` dataclass (a folder, a scenario), named
+    by the field; place it before the flags with defaults."""
+    return dataclasses.field(metadata={"help": help, "positional": True, **kwargs})
 
 
 def artifact_name(text: str) -> str:
@@ -99,7 +106,10 @@ def parser_of(cls: type, doc: str | None) -> argparse.ArgumentParser:
     for f in dataclasses.fields(cls):
         flag = "--" + f.name.replace("_", "-")
         kind = _scalar(hints[f.name])
-        if kind is bool:
+        if f.metadata.get("positional"):
+            extra = {k: v for k, v in f.metadata.items() if k != "positional"}
+            p.add_argument(f.name, **{"type": kind, **extra})
+        elif kind is bool:
             if f.default is not False:
                 raise TypeError(f"{cls.__name__}.{f.name}: a switch is off by default")
             p.add_argument(flag, action="store_true", **f.metadata)

@@ -18,6 +18,12 @@ class InputError(ValueError):
         self.fix = fix
         super().__init__(f"{source}: {field}: {problem}. Fix: {fix}")
 
+    def __reduce__(self):
+        """Rebuilt from its four parts: a sweep's worker pickles the error to its parent,
+        and an exception pickles by its ``args`` (here the one message) by default, which
+        this constructor cannot take; the parent then saw a dead pool, not the error."""
+        return type(self), (self.source, self.field, self.problem, self.fix)
+
 
 class ScenarioError(InputError):
     """A scenario (TOML or built-in) that cannot describe a valid route problem."""

@@ -436,3 +436,46 @@ def test_a_signal_at_many_moments_of_a_loaded_machine_always_ends_the_sweep(tmp_
     finally:
         load.kill()
         load.wait()
+
+
+# ------------------------------------------------- 4: a worker's input error reaches the parent
+def _input_error_classes():
+    import scenarios.cli.args
+    import scenarios.sweep.backends
+    import scenarios.sweep.outdir
+    import sim.files  # noqa: F401 (each defines an InputError class)
+    from sim.errors import InputError
+
+    found, todo = [], [InputError]
+    while todo:
+        cls = todo.pop()
+        found.append(cls)
+        todo.extend(cls.__subclasses__())
+    return sorted(set(found), key=lambda c: c.__qualname__)
+
+
+@pytest.mark.parametrize("cls", _input_error_classes(), ids=lambda c: c.__name__)
+def test_every_input_error_survives_the_trip_from_a_worker(cls):
+    import pickle
+
+    err = cls("maps/x.toml", "arena.map", "no such file", "give the map's path")
+    back = pickle.loads(pickle.dumps(err))
+    assert type(back) is cls and str(back) == str(err)
+    assert (back.source, back.field, back.problem, back.fix) == (
+        "maps/x.toml", "arena.map", "no such file", "give the map's path")
+
+
+def test_a_run_refused_in_a_pooled_worker_names_its_error_not_a_dead_pool(tmp_path):
+    """A setting one method does not read, refused inside a worker (a study sets it for
+    every method), is the run's error in the sweep's report: it was 'BrokenProcessPool: a
+    process terminated abruptly', because the error could not be unpickled."""
+    from scenarios.sweep.backends import SweepError, run_local
+    from scenarios.sweep.run import make_specs, run_sweep
+
+    specs = make_specs("paper-40", ["st-ql", "lrta-star"], [0], 5, ["grid"],
+                       (("gamma", 0.95),))
+    with pytest.raises(SweepError) as got:
+        run_sweep(specs, tmp_path / "out", run_local, jobs=2, figures=False)
+    text = str(got.value)
+    assert "lrta-star's rules do not read gamma" in text
+    assert "BrokenProcessPool" not in text

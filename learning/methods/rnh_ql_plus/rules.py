@@ -152,19 +152,18 @@ def act(st, s, rng):
         a = coverage_move(nb, blocked, succ, goal, cover_d, cover_q, cover_done, cover_mark,
                           cover_first, cover_searches, s, rng)
         cover_left[0] -= 1
-    if a >= 0:
-        pass
-    elif not (par.lookahead and shaping[0]):
-        a = eps_greedy(q, s, par.eps, rng)
-    elif rng.random() < par.eps:
-        a = draw_below(rng, q.shape[1])
-    else:
-        r_goal = goal_reward(r_goal_seen, r_free_seen, par.gamma)
-        if par.model_acting:
-            model_values(par, values, y, blocked, nb, goal, r_free_seen[0], r_goal, s)
+    if a < 0:  # no move yet
+        if not (par.lookahead and shaping[0]):
+            a = eps_greedy(q, s, par.eps, rng)
+        elif rng.random() < par.eps:
+            a = draw_below(rng, q.shape[1])
         else:
-            action_values(par, q, values, y, succ, nb, goal, r_free_seen[0], r_goal, s)
-        a = argmax_drawn(values, 0, rng)
+            r_goal = goal_reward(r_goal_seen, r_free_seen, par.gamma)
+            if par.model_acting:
+                model_values(par, values, y, blocked, nb, goal, r_free_seen[0], r_goal, s)
+            else:
+                action_values(par, q, values, y, succ, nb, goal, r_free_seen[0], r_goal, s)
+            a = argmax_drawn(values, 0, rng)
     return a
 
 
@@ -196,14 +195,13 @@ def exploit(st, s):
         a = known_route_move(nb, works, fails, known_d, known_q, known_stale, goal, s)
     if par.model_test and (a < 0 or known_d[s] != dist[s]):
         a = model_move(nb, blocked, dist, works, fails, s)
-    if a >= 0:
-        pass
-    elif par.lookahead and shaping[0]:
-        action_values(par, q, values, y, succ, nb, goal, r_free_seen[0],
-                      goal_reward(r_goal_seen, r_free_seen, par.gamma), s)
-        a = argmax_first(values, 0)
-    else:
-        a = argmax_first(q, s)
+    if a < 0:  # no move yet
+        if par.lookahead and shaping[0]:
+            action_values(par, q, values, y, succ, nb, goal, r_free_seen[0],
+                          goal_reward(r_goal_seen, r_free_seen, par.gamma), s)
+            a = argmax_first(values, 0)
+        else:
+            a = argmax_first(q, s)
     return a
 
 

@@ -147,19 +147,18 @@ def exploit(st, s):
     a = -1
     if par.known_route:
         a = known_route_move(nb, works, fails, known_d, known_q, known_stale, goal, s)
-    if a >= 0:
-        pass
-    elif par.lookahead and shaping[0]:
-        if based:
-            rebase(par, q, w, on, centre, y, phi_row, succ, s)
-        action_values(par, q, values, y, phi_row, w, on, centre, succ, nb, goal,
-                      r_free_seen[0], goal_reward(r_goal_seen, r_free_seen, par.gamma),
-                      direct, based, s)
-        a = argmax_first(values, 0)
-    elif based and tried_max(q, succ, s) > -np.inf:
-        a = tried_argmax(q, succ, s)
-    else:
-        a = argmax_first(q, s)
+    if a < 0:  # no move yet
+        if par.lookahead and shaping[0]:
+            if based:
+                rebase(par, q, w, on, centre, y, phi_row, succ, s)
+            action_values(par, q, values, y, phi_row, w, on, centre, succ, nb, goal,
+                          r_free_seen[0], goal_reward(r_goal_seen, r_free_seen, par.gamma),
+                          direct, based, s)
+            a = argmax_first(values, 0)
+        elif based and tried_max(q, succ, s) > -np.inf:
+            a = tried_argmax(q, succ, s)
+        else:
+            a = argmax_first(q, s)
     return a
 
 

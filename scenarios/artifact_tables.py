@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import statistics
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -174,9 +175,97 @@ def _rho(p: dict[str, Any]) -> str:
     return f"{p['rho']:+.2f} [{ci[0]:+.2f}, {ci[1]:+.2f}]" if ci else f"{p['rho']:+.2f}"
 
 
+def _mmrv(p: dict[str, Any], digits: int) -> str:
+    ci = p.get("mmrv_ci95")
+    v = f"{p['mmrv']:.{digits}f}"
+    return f"{v} [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]" if ci else v
+
+
+_LADDER_FIGURES = (("deployed", "deployed [primitives]", 1), ("p_goal", "P(G)", 2),
+                   ("learning", "learning [steps]", 1))
+
+
+def _v_star(d: dict[str, Any], c: dict[str, Any]) -> str:
+    opt = c["optimum"]
+    exact = next((r["physics_opt"] for r in d["rows"] if r["map"] == c["map"]
+                  and r["physics_opt"]), None)
+    return ("— (hidden state: not Markov in cells)" if opt is None
+            and parse_fidelity(c["rung"]).hidden_state else
+            f"1 · {exact} (the physics world's BFS route)" if opt is None and exact
+            and c["rung"] == "exact" else "—" if opt is None else
+            f"{opt['p_goal_within_budget']:.3f} · {opt['expected_primitives']:.1f}")
+
+
 def ladder_predictivity(d: dict[str, Any]) -> str:
-    """Spearman's rho of the methods' ranks, grid vs rung, per map and rung."""
+    """Spearman's rho of the methods' ranks, grid vs rung, per map and rung; with MMRV, the
+    predictive mark and the control-variate table where the artifact has them."""
     rungs = d["rungs"]
+    if "mmrv" not in rungs[0]["predictivity"]["deployed"]:
+        return _ladder_rho_only(d)
+    lines = ["#### Does the grid rank the methods as the rung does? (SRCC and MMRV)", "",
+             "Per figure: Spearman's ρ between the methods' order in the grid (grid-trained "
+             "runs, the grid's own figures) and at the rung (runs trained and driven there), "
+             "then the mean maximum rank violation (MMRV, SIMPLER; in the figure's units: how "
+             "much worse at the rung a method the grid ranked better can be), each with a 95 % "
+             "bootstrap interval over seeds (`scenarios/studies/ladder/predictivity.py`). "
+             "✓: the rung is *predictive* of the figure, ρ ≥ 0.85 and MMRV within one seed "
+             "spread (the median over methods of the rung's interquartile range of seeds). "
+             "*Deployed*: expected primitives of the final policy from S, a miss costing the "
+             "episode budget; *P(G)*: its chance of reaching G; *learning*: mean training "
+             "episode length. — (no spread): a world cannot tell the methods apart.", "",
+             "| map | rung | " + " | ".join(f"ρ {t} | MMRV {t}" for _, t, _ in _LADDER_FIGURES)
+             + " | V* at the rung: P*(G) · E[primitives] |",
+             "|---|---|" + "---|---|" * len(_LADDER_FIGURES) + "---|"]
+    for c in rungs:
+        pr = c["predictivity"]
+        cells = [f"{_rho(pr[f])} | {_mmrv(pr[f], k)}{' ✓' if pr[f]['predictive'] else ''}"
+                 for f, _, k in _LADDER_FIGURES]
+        lines.append(f"| {c['map']} | {c['rung']} | " + " | ".join(cells)
+                     + f" | {_v_star(d, c)} |")
+    lines += ["", _first_not_predictive(rungs), "", _control_variates(rungs)]
+    return "\n".join(lines) + "\n"
+
+
+def _first_not_predictive(rungs: list[dict[str, Any]]) -> str:
+    """Per map, the first rung (in the study's order) not predictive of where a policy
+    ends up (deployed and P(G))."""
+    out = []
+    for m in dict.fromkeys(c["map"] for c in rungs):
+        miss = next((c["rung"] for c in rungs if c["map"] == m and not all(
+            c["predictivity"][f]["predictive"] for f in ("deployed", "p_goal"))), None)
+        out.append(f"{m}: {miss}" if miss else f"{m}: none (every rung predictive)")
+    return ("The first rung where the grid stops predicting the deployed policy (deployed "
+            "and P(G) both ✓ up to it): " + "; ".join(out) + ".")
+
+
+def _control_variates(rungs: list[dict[str, Any]]) -> str:
+    """The grid as a control variate for the rung's seeds, per map and rung."""
+    lines = ["#### The grid as a control variate for the rung's seeds", "",
+             "Seed k's grid run and rung run share the seed's streams. Where their figures "
+             "correlate (r), the rung's mean corrected by the grid's has variance (1 − r²) "
+             "times the plain mean's, with the grid's mean pinned by many cheap grid seeds "
+             "(Sim2Val, SureSim). Per figure: the median over methods of r² (the variance "
+             "removed, range over methods) · the rung seeds that give the interval of the "
+             "study's seeds (median over methods).", "",
+             "| map | rung | " + " | ".join(t for _, t, _ in _LADDER_FIGURES) + " |",
+             "|---|---|" + "---|" * len(_LADDER_FIGURES)]
+    for c in rungs:
+        cells = []
+        for f, _, _ in _LADDER_FIGURES:
+            cv = list(c["predictivity"][f]["control_variate"].values())
+            if not cv:
+                cells.append("—")
+                continue
+            red = [v["variance_reduction"] for v in cv]
+            need = float(statistics.median([v["seeds_with_grid"] for v in cv]))
+            cells.append(f"{statistics.median(red):.2f} ({min(red):.2f}–{max(red):.2f}) · "
+                         f"{need:g} of {cv[0]['seeds']}")
+        lines.append(f"| {c['map']} | {c['rung']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _ladder_rho_only(d: dict[str, Any]) -> str:
+    """The table of artifacts written before MMRV and the control variates were kept."""
     lines = ["#### Does the grid rank the methods as the rung does? (SRCC)", "",
              "Spearman's ρ between the methods' order in the grid (grid-trained runs, the "
              "grid's own figures) and at the rung (runs trained and driven there), with a 95 % "
@@ -187,17 +276,9 @@ def ladder_predictivity(d: dict[str, Any]) -> str:
              "cannot tell the methods apart (every median equal).", "",
              "| map | rung | ρ deployed | ρ learning | V* at the rung: P*(G) · E[primitives] |",
              "|---|---|---|---|---|"]
-    for c in rungs:
-        opt = c["optimum"]
-        exact = next((r["physics_opt"] for r in d["rows"] if r["map"] == c["map"]
-                      and r["physics_opt"]), None)
-        v = ("— (hidden state: not Markov in cells)" if opt is None
-             and parse_fidelity(c["rung"]).hidden_state else
-             f"1 · {exact} (the physics world's BFS route)" if opt is None and exact
-             and c["rung"] == "exact" else "—" if opt is None else
-             f"{opt['p_goal_within_budget']:.3f} · {opt['expected_primitives']:.1f}")
+    for c in d["rungs"]:
         lines.append(f"| {c['map']} | {c['rung']} | {_rho(c['predictivity']['deployed'])} | "
-                     f"{_rho(c['predictivity']['learning'])} | {v} |")
+                     f"{_rho(c['predictivity']['learning'])} | {_v_star(d, c)} |")
     return "\n".join(lines) + "\n"
 
 

@@ -7,9 +7,12 @@ import math
 import numpy as np
 
 from scenarios.studies.ladder.predictivity import (
+    control_variate,
     deployed_grid,
     deployed_rung,
+    mmrv,
     ranks,
+    seed_spread,
     spearman,
     srcc,
 )
@@ -68,3 +71,55 @@ def test_noisy_seeds_widen_the_interval_and_a_world_without_spread_is_undefined(
     assert res["deployed"]["rho"] is None and res["deployed"]["ci95"] is None
     lo, hi = res["learning"]["ci95"]
     assert -1.0 <= lo < hi <= 1.0 and hi - lo > 0.2
+
+
+def test_mmrv_weighs_a_swap_by_how_far_apart_the_rung_puts_the_two():
+    """SIMPLER's definition, worked by hand: the grid orders a < b < c; the rung swaps b and c
+    (near-tied: 1 apart) in one case, a and c (10 apart) in the other. Spearman is the same
+    for both swaps of neighbours, MMRV is not."""
+    grid = np.array([1.0, 2.0, 3.0])
+    assert mmrv(grid, np.array([10.0, 20.0, 30.0])) == 0.0  # the same order
+    # b, c swapped at the rung (20 vs 19): b and c each violated by 1, a by nothing
+    assert math.isclose(mmrv(grid, np.array([10.0, 20.0, 19.0])), (0 + 1 + 1) / 3)
+    # a, b swapped far apart (10 vs 0): a and b each violated by 10
+    assert math.isclose(mmrv(grid, np.array([10.0, 0.0, 30.0])), (10 + 10 + 0) / 3)
+    assert spearman(grid, np.array([10.0, 20.0, 19.0])) == spearman(
+        grid, np.array([10.0, 0.0, 30.0]))
+
+
+def test_the_control_variate_removes_the_variance_the_grid_explains():
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=10)
+    same = control_variate(x, 3.0 * x + 1.0)  # the rung a function of the grid: all of it
+    assert same["r"] == 1.0 and same["variance_reduction"] == 1.0
+    assert same["seeds_with_grid"] == 1
+    none = control_variate(x, rng.normal(size=10))
+    assert none["variance_reduction"] < 0.5 and none["seeds_with_grid"] > 5
+    flat = control_variate(np.ones(10), x)  # a grid without spread explains nothing
+    assert flat == {"r": 0.0, "variance_reduction": 0.0, "seeds": 10, "seeds_with_grid": 10}
+    # the claim itself: over many draws, Y - beta (X - mu_X) has (1 - r^2) of Y's variance
+    n, r = 200_000, 0.8
+    x = rng.normal(size=n)
+    y = r * x + math.sqrt(1 - r * r) * rng.normal(size=n)
+    beta = np.cov(x, y)[0, 1] / x.var()
+    assert math.isclose((y - beta * x).var() / y.var(), 1 - r * r, rel_tol=0.02)
+
+
+def test_a_rung_is_predictive_only_with_a_high_rho_and_violations_within_the_seed_spread():
+    runs = []
+    for k, m in enumerate("abcdef"):
+        for s in range(6):
+            runs.append(_run(m, "grid", s, length=60 + 20 * k, steps=(100 + k,)))
+            # the rung: the same order but e and f swapped, 1 primitive apart, well within
+            # the seeds' spread of 4
+            prims = 60.0 + 20 * min(k, 4) + (s % 3) * 2 - (1.0 if k == 5 else 0.0)
+            runs.append(_run(m, "physics", s, prims=prims, steps=(100 + k,)))
+    p = srcc(runs, 600, n_boot=100)["deployed"]
+    assert p["rho"] >= 0.85 and 0.0 < p["mmrv"] <= p["seed_spread"]
+    assert p["predictive"]
+    assert seed_spread([np.array([0.0, 1.0, 2.0, 3.0, 4.0])]) == 2.0
+    far = [r if r["world"] == "grid" or r["method"] != "f" else
+           _run("f", "physics", r["seed"], prims=20.0) for r in runs]  # f now the best
+    q = srcc(far, 600, n_boot=100)["deployed"]
+    assert q["mmrv"] > q["seed_spread"] and not q["predictive"]
+    assert set(q["control_variate"]) == set("abcdef")

@@ -1,4 +1,5 @@
-"""How well the grid predicts a rung: the rank correlation of methods, grid vs rung (SRCC).
+"""How well the grid predicts a rung: rank correlation, rank violations, and the grid as a
+control variate for the rung's seeds.
 
 Kadian et al. (2020, "Sim2Real predictivity") rank agents by their performance in
 simulation and on the real robot and report Spearman's rank correlation between the two
@@ -12,19 +13,37 @@ figures) and in the runs trained and driven at the rung:
   ``P(G) * mean primitives + (1 - P(G)) * budget`` over its drives);
 - ``learning``: the mean episode length over training (how fast the method gets good).
 
-Lower is better for both. The interval is a percentile bootstrap over seeds: each
-(method, world)'s seeds are resampled with replacement, the medians re-ranked. Where a
-world cannot tell the methods apart (every median equal) Spearman is undefined ("—").
+- ``p_goal``: the final greedy policy's chance of reaching G (grid: 1 or 0; rung: over
+  its drives). Higher is better.
+
+Spearman's rho counts every swap the same, a swap of two near-tied methods as much as one
+of the best and the worst; SIMPLER (Li et al. 2024) pairs it with the mean maximum rank
+violation (:func:`mmrv`), in the figure's own units: how much worse, at the rung, a method
+the grid ranked above another can be. A rung is *predictive* of a figure when rho >= 0.85
+(the bar of Kadian et al. 2020 and later sim-to-real studies) and its MMRV is within one
+seed spread (the median over methods of the rung's interquartile range of seeds).
+
+Both intervals are percentile bootstraps over seeds: each (method, world)'s seeds are
+resampled with replacement and the medians re-ranked. Where a world cannot tell the
+methods apart (every median equal) Spearman is undefined ("—").
+
+**The grid as a control variate** (:func:`control_variate`; after Sim2Val and SureSim,
+2025): a seed's grid run and its rung run share the seed's streams, so where their
+figures are correlated, the rung mean corrected by the grid's (``Y - beta (X - mu_X)``,
+``mu_X`` pinned by many cheap grid seeds) has variance ``(1 - r^2)`` times the plain
+mean's. The same interval then needs ``n (1 - r^2)`` rung seeds instead of ``n``.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
-FIGURES = ("deployed", "learning")
+FIGURES = ("deployed", "learning", "p_goal")
 BOOTSTRAP = 2000
+PREDICTIVE_RHO = 0.85  # Kadian et al. 2020 (0.875), EmbodiedSplat (0.87-0.97)
 
 
 def deployed_grid(run: dict[str, Any], budget: int) -> float:
@@ -40,6 +59,14 @@ def deployed_rung(run: dict[str, Any], budget: int) -> float:
     p = float(fp["p_goal"])
     prims = fp.get("primitives_mean")
     return p * float(prims) + (1.0 - p) * budget if prims is not None else float(budget)
+
+
+def p_goal(run: dict[str, Any]) -> float:
+    """The final greedy policy's P(G): the grid route reaches G or not; a rung's drives."""
+    if run["world"] == "grid":
+        length = run.get("final_route_length")
+        return 1.0 if length is not None and length > 0 else 0.0
+    return float(run["final_policy"]["p_goal"])
 
 
 def learning(run: dict[str, Any]) -> float:
@@ -67,6 +94,38 @@ def spearman(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.clip(round(float(np.corrcoef(ra, rb)[0, 1]), 12), -1.0, 1.0))
 
 
+def mmrv(grid: np.ndarray, rung: np.ndarray) -> float:
+    """SIMPLER's mean maximum rank violation of the rung's figures ``rung`` by the grid's
+    order ``grid``: for each method, the largest ``|rung_i - rung_j|`` over the methods j
+    the two worlds order differently against it; the mean over methods. 0 when the orders
+    agree; in the figure's units."""
+    g, r = np.asarray(grid, float), np.asarray(rung, float)
+    violated = (g[:, None] < g[None, :]) != (r[:, None] < r[None, :])
+    gap = np.abs(r[:, None] - r[None, :])
+    return float(np.where(violated, gap, 0.0).max(axis=1).mean()) if len(g) else 0.0
+
+
+def seed_spread(per_method: list[np.ndarray]) -> float:
+    """The median over methods of the interquartile range of their seeds."""
+    iqr = [float(np.subtract(*np.quantile(v, [0.75, 0.25]))) for v in per_method]
+    return float(np.median(iqr)) if iqr else 0.0
+
+
+def control_variate(grid: np.ndarray, rung: np.ndarray) -> dict[str, Any]:
+    """One method's seeds, paired (seed k's grid run and rung run): the correlation r, the
+    variance reduction r^2 of the control-variate mean, and the rung seeds that give the
+    same interval width with it, ``ceil(n (1 - r^2))``. Without spread in either world
+    there is nothing to correlate (r = 0): the rung's own seeds are all it has."""
+    x, y = np.asarray(grid, float), np.asarray(rung, float)
+    n = len(y)
+    r = 0.0
+    if n >= 3 and x.std() > 0.0 and y.std() > 0.0:
+        r = float(np.corrcoef(x, y)[0, 1])
+    reduction = r * r
+    return {"r": round(r, 4), "variance_reduction": round(reduction, 4), "seeds": n,
+            "seeds_with_grid": max(1, math.ceil(round(n * (1.0 - reduction), 9)))}
+
+
 def figures_by_method(runs: list[dict[str, Any]], budget: int
                       ) -> dict[str, dict[str, dict[str, list[float]]]]:
     """figure -> world ("grid" / "rung") -> method -> per-seed values, in seed order."""
@@ -77,13 +136,25 @@ def figures_by_method(runs: list[dict[str, Any]], budget: int
         dep = deployed_grid(r, budget) if world == "grid" else deployed_rung(r, budget)
         out["deployed"][world].setdefault(r["method"], []).append(dep)
         out["learning"][world].setdefault(r["method"], []).append(learning(r))
+        out["p_goal"][world].setdefault(r["method"], []).append(p_goal(r))
     return out
+
+
+def _interval(values: list[float]) -> list[float] | None:
+    b = np.asarray(values, float)
+    ok = b[np.isfinite(b)]
+    if not ok.size:
+        return None
+    return [round(float(np.quantile(ok, 0.025)), 4), round(float(np.quantile(ok, 0.975)), 4)]
 
 
 def srcc(runs: list[dict[str, Any]], budget: int, seed: int = 0,
          n_boot: int = BOOTSTRAP) -> dict[str, dict[str, Any]]:
-    """Per figure: rho of the methods' medians (grid vs rung), its 95 % bootstrap interval
-    over seeds, the share of resamples where rho was defined, and each world's medians."""
+    """Per figure: rho of the methods' medians (grid vs rung) and MMRV, each with its 95 %
+    bootstrap interval over seeds, the share of resamples where rho was defined, the seed
+    spread and whether the rung is predictive of it, each world's medians, and each
+    method's control variate (the seeds paired, as the study runs them: one seed list
+    for both worlds)."""
     rng = np.random.default_rng(seed)
     result = {}
     for fig, worlds in figures_by_method(runs, budget).items():
@@ -92,21 +163,30 @@ def srcc(runs: list[dict[str, Any]], budget: int, seed: int = 0,
         rung = [np.asarray(worlds["rung"][m]) for m in methods]
         med_g = np.array([np.median(v) for v in grid])
         med_r = np.array([np.median(v) for v in rung])
-        rho = spearman(med_g, med_r) if len(methods) >= 3 else float("nan")
-        boots = []
-        for _ in range(n_boot if len(methods) >= 3 else 0):
-            bg = [np.median(v[rng.integers(0, len(v), len(v))]) for v in grid]
-            br = [np.median(v[rng.integers(0, len(v), len(v))]) for v in rung]
-            boots.append(spearman(np.array(bg), np.array(br)))
+        enough = len(methods) >= 3
+        rho = spearman(med_g, med_r) if enough else float("nan")
+        violation = mmrv(med_g, med_r)
+        boots, boot_mmrv = [], []
+        for _ in range(n_boot if enough else 0):
+            bg = np.array([np.median(v[rng.integers(0, len(v), len(v))]) for v in grid])
+            br = np.array([np.median(v[rng.integers(0, len(v), len(v))]) for v in rung])
+            boots.append(spearman(bg, br))
+            boot_mmrv.append(mmrv(bg, br))
         b = np.asarray(boots)
-        ok = b[np.isfinite(b)]
+        spread = seed_spread(rung)
         result[fig] = {
             "rho": None if not np.isfinite(rho) else round(rho, 4),
-            "ci95": ([round(float(np.quantile(ok, 0.025)), 4),
-                      round(float(np.quantile(ok, 0.975)), 4)] if ok.size else None),
-            "defined_share": round(ok.size / b.size, 4) if b.size else 0.0,
+            "ci95": _interval(boots),
+            "defined_share": round(int(np.isfinite(b).sum()) / b.size, 4) if b.size else 0.0,
+            "mmrv": round(violation, 4),
+            "mmrv_ci95": _interval(boot_mmrv),
+            "seed_spread": round(spread, 4),
+            "predictive": bool(np.isfinite(rho) and rho >= PREDICTIVE_RHO
+                               and violation <= spread),
             "methods": methods,
             "grid_median": [round(float(x), 3) for x in med_g],
             "rung_median": [round(float(x), 3) for x in med_r],
+            "control_variate": {m: control_variate(g, r) for m, g, r
+                                in zip(methods, grid, rung, strict=True) if len(g) == len(r)},
         }
     return result

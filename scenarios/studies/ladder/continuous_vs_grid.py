@@ -20,9 +20,9 @@ diameter, as the held-out study makes them).
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +35,7 @@ from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import RunSpec, load, make_config
+from scenarios.script_args import arg, artifact_arg, jobs_arg, parse
 from scenarios.studies.ladder.predictivity import srcc
 from scenarios.studies.maps.heldout import KIND, write_problem
 from scenarios.sweep.backends import Progress, run_local
@@ -99,34 +100,31 @@ STUDY_METHODS = ("rnh-ql+", "haql", "dyna-q", "q-lambda", "st-ql", "rnh-ql")
 STUDY_RUNGS = ("exact", "noisy", "uncalibrated", "open-loop", "localised")
 
 
+@dataclass(frozen=True)
+class Args:
+    """Methods x fidelity rungs x seeds on several maps, trained in the grid (and driven at
+    every rung: transfer) and in physics at each rung; one table (ladder.md) and one figure
+    (ladder.png). With --maps of one map and --rungs of one rung it is the old two-world
+    comparison of that map."""
+
+    maps: str = arg(",".join(STUDY_MAPS), "scenarios (named, or .toml paths), comma-separated")
+    methods: str = arg(",".join(STUDY_METHODS), "comma-separated")
+    rungs: str = arg(",".join(STUDY_RUNGS), "physics fidelities, comma-separated (presets; "
+                     "knobs need their own run of `rnhql compare --fidelity`)")
+    seeds: int = arg(10, "seeds 0..N-1 per method and rung")
+    episodes: int = arg(300, "training episodes per run (a warm-up longer than a tenth of "
+                        "them, rnh-ql's, is cut to a tenth: the paper's share)")
+    rewards: str = arg("goal-only", "reward scheme")
+    repeats: int = arg(10, "drives per (cell, action) for the aliasing column")
+    jobs: int | None = jobs_arg()
+    resume: bool = arg(False, "keep the runs of an earlier call")
+    map_seed: int = arg(38, "generator seed of KIND-N maps (never one anything was tuned on)")
+    out: str = arg("results/continuous-vs-grid", "output folder")
+    artifact: str | None = artifact_arg("ladder")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(
-        description="Methods x fidelity rungs x seeds on several maps, trained in the grid "
-                    "(and driven at every rung: transfer) and in physics at each rung; one "
-                    "table (ladder.md) and one figure (ladder.png). With --maps of one map and "
-                    "--rungs of one rung it is the old two-world comparison of that map.",
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--maps", default=",".join(STUDY_MAPS),
-                   help="scenarios (named, or .toml paths), comma-separated")
-    p.add_argument("--methods", default=",".join(STUDY_METHODS), help="comma-separated")
-    p.add_argument("--rungs", default=",".join(STUDY_RUNGS),
-                   help="physics fidelities, comma-separated (presets; knobs need their own "
-                        "run of `rnhql compare --fidelity`)")
-    p.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 per method and rung")
-    p.add_argument("--episodes", type=int, default=300,
-                   help="training episodes per run (a warm-up longer than a tenth of them, "
-                        "rnh-ql's, is cut to a tenth: the paper's share)")
-    p.add_argument("--rewards", default="goal-only", help="reward scheme")
-    p.add_argument("--repeats", type=int, default=10,
-                   help="drives per (cell, action) for the aliasing column")
-    p.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="worker processes")
-    p.add_argument("--resume", action="store_true", help="keep the runs of an earlier call")
-    p.add_argument("--map-seed", type=int, default=38,
-                   help="generator seed of KIND-N maps (never one anything was tuned on)")
-    p.add_argument("--out", default="results/continuous-vs-grid", help="output folder")
-    p.add_argument("--artifact", default=None, metavar="NAME",
-                   help="also write docs/results/ladder.NAME.json (the docs render it)")
-    args = p.parse_args(argv)
+    args = parse(Args, Args.__doc__, argv)
     methods = [m.strip() for m in args.methods.split(",") if m.strip()]
     maps = [m.strip() for m in args.maps.split(",") if m.strip()]
     rungs = [r.strip() for r in args.rungs.split(",") if r.strip()]
@@ -140,7 +138,8 @@ def main(argv: list[str] | None = None) -> int:
                      for spec in _rung_specs(name, methods, args, world, rung)]
             sub = out / _slug(label) / rung
             print(f"{label} at {rung}: {len(specs)} runs -> {sub}", flush=True)
-            results = run_sweep(specs, sub, run_local, resume=args.resume, jobs=args.jobs,
+            results = run_sweep(specs, sub, run_local, resume=args.resume,
+                                jobs=args.jobs or os.cpu_count() or 1,
                                 progress=Progress(len(specs)))
             cells.append(dict(map=label, path=name, rung=rung, results=results,
                               aliasing=_aliasing(sc, model, rung, args.repeats),
@@ -179,7 +178,7 @@ def _slug(name: str) -> str:
     return Path(name).stem if name.endswith(".toml") else name
 
 
-def _rung_specs(name: str, methods: list[str], args: argparse.Namespace, world: str,
+def _rung_specs(name: str, methods: list[str], args: Args, world: str,
                 rung: str) -> list[Any]:
     """Grid runs drive their final greedy policy at the rung (transfer); physics runs
     train and drive there."""
@@ -255,7 +254,7 @@ def ladder_rows(cells: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return rows
 
 
-def ladder_data(cells: list[dict[str, Any]], args: argparse.Namespace) -> dict[str, Any]:
+def ladder_data(cells: list[dict[str, Any]], args: Args) -> dict[str, Any]:
     """The artifact the docs render the ladder table from (quantiles computed here)."""
     def q(v: list[float]) -> list[float | None]:
         return [quantile(v, x) for x in (0.5, 0.25, 0.75)] if v else [None] * 3
@@ -274,14 +273,14 @@ def ladder_data(cells: list[dict[str, Any]], args: argparse.Namespace) -> dict[s
             "rungs": rungs}
 
 
-def ladder_command(args: argparse.Namespace) -> str:
+def ladder_command(args: Args) -> str:
     return (f"python -m scenarios.studies.ladder.continuous_vs_grid --maps {args.maps} "
             f"--methods {args.methods} --rungs {args.rungs} --seeds {args.seeds} "
             f"--episodes {args.episodes} --rewards {args.rewards} --map-seed {args.map_seed} "
             f"--repeats {args.repeats}")
 
 
-def ladder_report(cells: list[dict[str, Any]], args: argparse.Namespace) -> str:
+def ladder_report(cells: list[dict[str, Any]], args: Args) -> str:
     return ("# Continuous vs gridded, along the fidelity ladder\n\n"
             f"Command: `{ladder_command(args)}`\n\n" + ladder_table(ladder_data(cells, args)))
 

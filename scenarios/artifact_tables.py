@@ -508,3 +508,32 @@ def physics_batch(d: dict[str, Any]) -> str:
               f"**{le['primitives_per_s_training'] / 1000:.0f}k primitives/s** "
               f"({int(le['primitives']):,} primitives); time split: {split}."]
     return "\n".join(lines) + "\n"
+
+
+def _took(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.1f} min"
+
+
+@renderer("tour", timed=True)
+def tour_table(d: dict[str, Any]) -> str:
+    """The short tour as a code block, each line with what to expect and its measured time."""
+    own = set(d["own_file"])
+    lines = ["```bash"]
+    for r in d["lines"]:
+        note = d["notes"][r["command"]] + (" (with your own file)" if r["command"] in own
+                                           else "")
+        if not r["ran"]:
+            took = ""
+        elif r["passed"]:
+            took = f" · {_took(r['wall_s'])}"
+        else:
+            took = f" · FAILED here (exit {r['exit']})"
+        lines.append(f"{r['command']:<49} # {note}{took}")
+    ran = [r for r in d["lines"] if r["ran"]]
+    total = sum(r["wall_s"] for r in ran)
+    where = ("a non-editable copy (`pip install`), with a cold numba cache"
+             if d["installed"] else "a clone, with numba's cache as the lines before left it")
+    lines += ["```", "", f"Times: each line run in order in a fresh folder from {where} "
+              f"({_took(total)} for the {len(ran)} lines; a first use of a method or of the "
+              "physics world compiles its kernels once, so later lines are faster)."]
+    return "\n".join(lines) + "\n"

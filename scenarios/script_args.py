@@ -93,9 +93,12 @@ def script_parser(doc: str | None) -> argparse.ArgumentParser:
 
 
 def _scalar(hint: Any) -> type:
-    """``int`` of ``int`` and of ``int | None``: what argparse converts the flag's text with."""
+    """``int`` of ``int``, of ``int | None`` and of ``list[int]`` (a flag given again and
+    again, ``action="append"``): what argparse converts the flag's text with."""
     if isinstance(hint, types.UnionType) or typing.get_origin(hint) is typing.Union:
         (hint,) = (h for h in typing.get_args(hint) if h is not type(None))
+    if typing.get_origin(hint) is list:
+        (hint,) = typing.get_args(hint)
     return hint
 
 

@@ -442,8 +442,8 @@ def test_a_signal_at_many_moments_of_a_loaded_machine_always_ends_the_sweep(tmp_
 def _input_error_classes():
     import scenarios.cli.args
     import scenarios.sweep.backends
-    import scenarios.sweep.outdir
-    import sim.files  # noqa: F401 (each defines an InputError class)
+    import scenarios.sweep.outdir  # noqa: F401
+    import sim.files  # noqa: F401
     from sim.errors import InputError
 
     found, todo = [], [InputError]

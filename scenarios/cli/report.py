@@ -38,8 +38,8 @@ def _took(wall_s: float | None) -> str:
 
 
 ARTIFACT_SUBCOMMANDS = ("aliasing", "optimum")  # rnhql subcommands that write artifacts
-STUDY_PACKAGES = ("scenarios.studies.paper", "scenarios.studies.ladder",  # where the studies
-                  "scenarios.studies.maps", "scenarios.bench")  # live
+STUDY_PACKAGES = ("scenarios.studies", "scenarios.studies.paper", "scenarios.studies.ladder",
+                  "scenarios.studies.maps", "scenarios.bench")  # where the studies live
 SAFE_WORD = re.compile(r"[A-Za-z0-9_.,=:+;@%-]+(/[A-Za-z0-9_.,=:+;@%-]+)*")
 
 

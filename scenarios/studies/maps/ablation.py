@@ -19,9 +19,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import textwrap
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +34,7 @@ from scenarios.artifacts import ROOT, load_artifact, write_artifact
 from scenarios.figures.save import save_figure
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import RunSpec
-from scenarios.script_args import script_parser
+from scenarios.script_args import arg, artifact_arg, jobs_arg, parse, parser_of
 from scenarios.studies.maps.suite import build_suite
 from scenarios.sweep.run import SweepFiles, ctrl_c_held, run_sweep
 from sim.files import atomic_write_text
@@ -277,34 +279,34 @@ def ablation_files(rows: Sequence[Row], maps: list[dict], labelled: list[tuple[s
     return SweepFiles(write, keep=kept, finished=lambda _out: {})
 
 
+@dataclass(frozen=True)
+class Args:
+    out: str = arg("results/ablation", "output folder")
+    seeds: int = arg(10, "seeds per cell (0 .. N-1)")
+    episodes: int = arg(3000, "episodes per run")
+    jobs: int | None = jobs_arg()
+    resume: bool = arg(False, "after Ctrl-C: run only the runs not finished yet")
+    maps: str = arg("", "comma-separated suite names, or held-out (default: all)")
+    variants: str = arg("", "comma-separated labels or row numbers (0-based) of the table "
+                        "(default: all)")
+    extra: list[str] | None = arg(  # noqa: RUF009 (arg is a dataclasses.field)
+        None, "an extra row METHOD[:FIELD=VALUE,...] (e.g. "
+        "rnh-ql+:n_planning=10, rnh-ql+ablation:v_target=1); repeat for more",
+        action="append")
+    rewards: str = arg("goal-only", "reward scheme of the suite")
+    held_out_seeds: str = arg("101,102", "generator seeds of the held-out maze and rooms maps "
+                              "(e.g. 101,...,110)")
+    artifact: str | None = artifact_arg("ablation")
+
+
 def main(argv: list[str] | None = None) -> int:
-    ap = script_parser(__doc__)
-    ap.add_argument("--out", default="results/ablation", help="output folder")
-    ap.add_argument("--seeds", type=int, default=10, help="seeds per cell (0 .. N-1)")
-    ap.add_argument("--episodes", type=int, default=3000, help="episodes per run")
-    ap.add_argument("--jobs", type=int, default=2, help="worker processes")
-    ap.add_argument("--resume", action="store_true",
-                    help="after Ctrl-C: run only the runs not finished yet")
-    ap.add_argument("--maps", default="",
-                    help="comma-separated suite names, or held-out (default: all)")
-    ap.add_argument("--variants", default="", help="comma-separated labels or row numbers "
-                    "(0-based) of the table (default: all)")
-    ap.add_argument("--extra", action="append", default=[],
-                    help="an extra row METHOD[:FIELD=VALUE,...] (e.g. rnh-ql+:n_planning=10, "
-                    "rnh-ql+ablation:v_target=1)")
-    ap.add_argument("--rewards", default="goal-only", help="reward scheme of the suite")
-    ap.add_argument("--held-out-seeds", default="101,102",
-                    help="generator seeds of the held-out maze and rooms maps (e.g. 101,...,110)")
-    ap.add_argument("--artifact", default=None, metavar="NAME",
-                    help="also write docs/results/ablation.NAME.json (the README's table) and "
-                         "redraw docs/ablation.png from it")
-    a = ap.parse_args(argv)
+    a = parse(Args, __doc__, argv)
     out = Path(a.out)
     try:
         held = tuple(int(x) for x in a.held_out_seeds.split(",") if x)
     except ValueError:
-        ap.error(f"--held-out-seeds: {a.held_out_seeds!r} is not a comma-separated list of "
-                 "integers")
+        parser_of(Args, __doc__).error(f"--held-out-seeds: {a.held_out_seeds!r} is not a "
+                                       "comma-separated list of integers")
     maps = build_suite(out / "suite", a.rewards, held_out_seeds=held)
     if a.maps == "held-out":
         maps = [m for m in maps if m["held_out"]]
@@ -315,7 +317,7 @@ def main(argv: list[str] | None = None) -> int:
     if a.variants:
         keys = a.variants.split(",")
         rows = [v for i, v in enumerate(VARIANTS) if v[0] in keys or str(i) in keys]
-    for ex in a.extra:
+    for ex in a.extra or ():
         method, _, sets = ex.partition(":")
         ov = tuple((k, float(v)) for k, v in (kv.split("=") for kv in sets.split(",") if kv))
         rows.append((f"{method}|{sets}" if sets else method, method, ov))
@@ -327,7 +329,7 @@ def main(argv: list[str] | None = None) -> int:
     payload = run_sweep(specs, out, run_local, resume=a.resume,
                         files=ablation_files(rows, maps, labelled, a.rewards, a.seeds,
                                              a.episodes),
-                        jobs=max(1, a.jobs), progress=Progress(len(specs)))
+                        jobs=a.jobs or os.cpu_count() or 1, progress=Progress(len(specs)))
     if a.artifact:
         write_ablation_artifact(a, [r[0] for r in rows], maps, payload["summary"],
                                 sys.argv[1:] if argv is None else argv)

@@ -54,6 +54,7 @@ class Case:
     send: tuple[int, float] | None = None  # (signal, seconds after start)
     env: dict[str, str] = field(default_factory=dict)
     note: str = ""
+    python: str | None = None  # run this snippet (python -c) instead of the command
 
 
 def _write(name: str, data: bytes | str) -> Callable[[Path], None]:
@@ -585,9 +586,125 @@ def full_disk_case(rng: random.Random) -> Case:
                 note="tmpfs")
 
 
+# ---------------------------------------------------------------- round three's classes
+VICTIM = "victim.txt"
+OWN_NAMES = ["results.json", "summary.md", "runs.partial.jsonl", ".rnhql-sweep.lock",
+             "steps_per_episode.png", "greedy_test.png"]
+
+
+def _victim_untouched(d: Path) -> str | None:
+    v = d / VICTIM
+    return None if v.read_text() == "keep me" else f"a planted link wrote {VICTIM}"
+
+
+def link_case(rng: random.Random) -> Case:
+    """A link planted in a shared output folder, under a name the tool gives its own files,
+    pointing at a file of the user's: it is replaced, never followed."""
+    name = rng.choice(OWN_NAMES)
+
+    def setup(d: Path) -> None:
+        (d / VICTIM).write_text("keep me")
+        (d / "out").mkdir()
+        (d / "out" / name).symlink_to(d / VICTIM)
+
+    argv = [*SWEEP, *(["--resume"] if rng.random() < 0.3 else [])]
+    return Case(f"link:{name}", argv, "ok|error2", setup, _victim_untouched)
+
+
+def view_case(rng: random.Random) -> Case:
+    """``rnhql view``'s inputs: a file named like a flag, ports out of range, an empty
+    recording, a folder, a FIFO, /dev/null. Each is one line, exit 2, and no viewer."""
+    kind = rng.choice(["flag-name", "port-high", "port-negative", "empty", "dir", "fifo",
+                       "devnull"])
+    target = {"flag-name": "--version", "devnull": "/dev/null"}.get(kind, "x.rrd")
+
+    def setup(d: Path) -> None:
+        if kind in ("flag-name", "empty", "port-high", "port-negative"):
+            (d / target).write_bytes(b"" if kind == "empty" else b"not a recording")
+        elif kind == "dir":
+            (d / target).mkdir()
+        elif kind == "fifo":
+            os.mkfifo(d / target)
+
+    argv = ["view", f"./{target}" if kind == "flag-name" else target, "--web"]
+    if kind == "port-high":
+        argv += ["--port", "65536"]
+    elif kind == "port-negative":
+        argv += ["--port", "-1"]
+    return Case(f"view:{kind}", argv, "error2", setup)
+
+
+def numba_full_case(rng: random.Random) -> Case:
+    """NUMBA_CACHE_DIR on a full disk: numba's cache is named, exit 1."""
+    return Case("env:numba-cache-full", ["train", "paper-40", *TRAIN], "error1",
+                env={"NUMBA_CACHE_DIR": "{mnt}"}, note="tmpfs")
+
+
+def obstacles_case(rng: random.Random) -> Case:
+    """Random circles that can never all fit (S and G kept clear): an error naming how many
+    fit, not a run with fewer."""
+    count = rng.choice(["100000", "5000", "2000"])
+    text = BASE_TOML.replace("count = 28", f"count = {count}", 1)
+    return Case(f"obstacles:count={count}", ["train", "s.toml", *TRAIN], "error2",
+                _write("s.toml", text))
+
+
+GYM_SNIPPETS = {
+    "cell-negative": "Scenario(**{**base, 'blocked_cells': ((-1, 0),)})",
+    "cell-outside": "Scenario(**{**base, 'blocked_cells': ((base['width_m'] * 100, 3),)})",
+    "cell-float": "Scenario(**{**base, 'blocked_cells': ((1.5, 2),)})",
+    "friction-nan": "PhysicsConfig(friction=float('nan')).validate()",
+    "substeps-huge": "PhysicsConfig(substeps=10**7).validate()",
+    "dt-tiny": "PhysicsConfig(dt_s=1e-9).validate()",
+    "num-envs-huge": "gym.make_vec('rnhql/GridRoute-v0', num_envs=100000)",
+}
+
+
+def gym_case(rng: random.Random) -> Case:
+    """What a Gymnasium client hands the envs: each argument checked as the TOML path checks
+    it, the same one-line error (the snippet prints it as the CLI would, exit 2)."""
+    kind = rng.choice(sorted(GYM_SNIPPETS))
+    code = (
+        "import dataclasses, sys\n"
+        "import gymnasium as gym\n"
+        "import sim\n"
+        "from sim.errors import InputError\n"
+        "from sim.physics.static import PhysicsConfig\n"
+        "from sim.scenario import Scenario\n"
+        "from sim.scenario_io import resolve_scenario\n"
+        "sc = resolve_scenario('paper-40')\n"
+        "base = {f.name: getattr(sc, f.name) for f in dataclasses.fields(sc)}\n"
+        "try:\n"
+        f"    {GYM_SNIPPETS[kind]}\n"
+        "except InputError as err:\n"
+        "    print(f'rnhql: error: {err}', file=sys.stderr)\n"
+        "    sys.exit(2)\n")
+    return Case(f"gym:{kind}", [], "error2", python=code)
+
+
+def results_case(rng: random.Random) -> Case:
+    """Damaged resume state of the two forms round two found: a run with a string where a
+    number goes, a run with only its key."""
+    kind = rng.choice(["string-value", "key-only"])
+    line = ('{"key": "%s", "final_route_length": "many"}' if kind == "string-value"
+            else '{"key": "%s"}')
+
+    def setup(d: Path) -> None:
+        out = d / "out"
+        out.mkdir()
+        from scenarios.sweep.run import make_specs  # the key the sweep will look for
+
+        key = make_specs("paper-50", ["st-ql"], [0], 5, ["grid"])[0].key
+        (out / "runs.partial.jsonl").write_text(line % key + "\n")
+
+    return Case(f"resume2:{kind}", [*SWEEP, "--resume"], "ok|error2", setup, _no_nan("out"))
+
+
 GENERATORS = [(toml_case, 4), (map_case, 2), (scen_case, 2), (checkpoint_case, 3),
               (resume_case, 3), (path_case, 3), (empty_case, 1), (number_case, 2),
-              (cache_case, 1), (signal_case, 1), (env_case, 1), (full_disk_case, 1)]
+              (cache_case, 1), (signal_case, 1), (env_case, 1), (full_disk_case, 1),
+              (link_case, 2), (view_case, 2), (numba_full_case, 1), (obstacles_case, 1),
+              (gym_case, 2), (results_case, 1)]
 
 
 def _env(extra: dict[str, str]) -> dict[str, str]:
@@ -617,12 +734,15 @@ def run_case(case: Case, work: Path, timeout: float) -> tuple[str, str]:
         with open(mnt / "filler", "wb") as f:
             f.write(b"\0" * (2048 - 60) * 1024)
         case.argv = [a.replace("{mnt}", str(mnt)) for a in case.argv]
+        case.env = {k: v.replace("{mnt}", str(mnt)) for k, v in case.env.items()}
     try:
         case.setup(d)
         env = _env({k: (str(d / v) if k == "XDG_CACHE_HOME" else v)
                     for k, v in case.env.items()})
         env["HOME"] = str(d)
-        proc = subprocess.Popen([PY, "-m", "scenarios.cli", *case.argv], cwd=d,
+        argv = [PY, "-c", case.python] if case.python else [PY, "-m", "scenarios.cli",
+                                                               *case.argv]
+        proc = subprocess.Popen(argv, cwd=d,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                 encoding="utf-8", errors="replace", env=env,
                                 start_new_session=True,  # (a PNG may go to stdout)

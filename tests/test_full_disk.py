@@ -92,3 +92,17 @@ def test_a_read_only_file_system_is_one_line_before_any_work(read_only, args):
     errors = [line for line in got.stderr.splitlines() if line.startswith("rnhql")]
     assert len(errors) == 1 and "Fix:" in errors[0], got.stderr
     assert "env steps" not in got.stdout  # refused before training, not after it
+
+
+def test_a_full_numba_cache_is_one_line_naming_it(full_disk, tmp_path):
+    """NUMBA_CACHE_DIR on a full disk: numba's own write error names no file, and read as
+    "an output file"; it names the cache and the fix."""
+    got = subprocess.run([*CLI, "train", "paper-40", "--method", "st-ql", "--episodes", "5"],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=600,
+                         env={"PYTHONPATH": str(REPO), "PATH": "/usr/bin:/bin",
+                              "HOME": str(tmp_path), "NUMBA_CACHE_DIR": str(full_disk)})
+    assert got.returncode == 1, got.stderr
+    assert "Traceback" not in got.stderr
+    errors = [line for line in got.stderr.splitlines() if line.startswith("rnhql")]
+    assert len(errors) == 1 and "numba's kernel cache" in errors[0], got.stderr
+    assert str(full_disk) in errors[0] and "NUMBA_CACHE_DIR" in errors[0]

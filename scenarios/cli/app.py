@@ -212,6 +212,18 @@ def _say(line: str) -> None:
 WRITE_ERRNOS = {errno.ENOSPC, errno.EROFS, errno.EACCES, errno.EDQUOT, errno.EIO, errno.EFBIG}
 
 
+def _in_numba_cache(err: OSError) -> bool:
+    """Whether ``err`` was raised while numba saved a compiled kernel to its disk cache (its
+    error names no file: without this it read as "an output file")."""
+    tb = err.__traceback__
+    while tb is not None:
+        name = tb.tb_frame.f_code.co_filename.replace(os.sep, "/")
+        if "/numba/" in name and "caching" in name:
+            return True
+        tb = tb.tb_next
+    return False
+
+
 class Terminated(KeyboardInterrupt):
     """SIGTERM (a batch scheduler, ``timeout``): the same clean-up as Ctrl-C, exit 143."""
 
@@ -258,6 +270,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = err.filename or "an output file"
         if err.strerror and str(where) in str(err.strerror):  # our own one-line messages
             print(f"rnhql: error: {err.strerror}", file=sys.stderr)
+        elif err.filename is None and _in_numba_cache(err):
+            cache = os.environ.get("NUMBA_CACHE_DIR") or "the packages' __pycache__ folders"
+            print(f"rnhql: error: numba's kernel cache ({cache}): cannot be written "
+                  f"({err.strerror}). Fix: free some space there, or point NUMBA_CACHE_DIR "
+                  "at a folder with room (the compiled kernels take tens of MB)",
+                  file=sys.stderr)
         else:
             print(f"rnhql: error: {where}: cannot be written ({err.strerror}). Fix: free "
                   "some space or write elsewhere", file=sys.stderr)

@@ -511,6 +511,8 @@ def physics_batch(d: dict[str, Any]) -> str:
 
 
 def _took(seconds: float) -> str:
+    if seconds < 1.0:
+        return "under 1 s"
     return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.1f} min"
 
 

@@ -24,9 +24,11 @@ each cell's largest next-cell entropy over its four actions) and ``aliasing.rrd`
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -35,11 +37,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import rerun as rr
 
-from scenarios.artifacts import check_artifact_name, load_artifact, write_artifact
+from scenarios.artifacts import load_artifact, write_artifact
 from scenarios.figures.save import save_figure
 from scenarios.recording.file import RecordingFile
 from scenarios.runs.spec import load
-from scenarios.script_args import script_parser
+from scenarios.script_args import arg, artifact_arg, parse, positional
 from sim.errors import InputError
 from sim.files import atomic_write_text
 from sim.grid import TabularModel
@@ -213,23 +215,22 @@ def write_outputs(out: Path, sc: Scenario, model: TabularModel, result: dict[str
             f"{vmax:g} bits (yellow); grey: blocked or not reaching G."))
 
 
+@dataclass(frozen=True)
+class Args:
+    scenario: str = positional("a built-in name, a .toml or a .map (with --start/--goal)")
+    out: str = arg(None, "output folder: aliasing.json, heat map PNG, recording (required)",
+                   metavar="DIR", required=True)
+    fidelity: str = arg("exact", "exact (default), a preset (noisy, slippery, uncalibrated, "
+                        "open-loop, localised) or knobs")
+    repeats: int = arg(20, "drives per (cell, action)")
+    seed: int = arg(0, "noise and start-pose seed")
+    rewards: str | None = arg(None, "reward scheme (does not change aliasing)")
+    artifact: str | None = artifact_arg("aliasing")
+
+
 def main(argv: list[str] | None = None) -> int:
-    ap = script_parser(__doc__)
-    ap.add_argument("scenario", help="a built-in name, a .toml or a .map (with --start/--goal)")
-    ap.add_argument("--fidelity", default="exact",
-                    help="exact (default), a preset (noisy, slippery, uncalibrated, "
-                         "open-loop, localised) or knobs")
-    ap.add_argument("--repeats", type=int, default=20, help="drives per (cell, action)")
-    ap.add_argument("--seed", type=int, default=0, help="noise and start-pose seed")
-    ap.add_argument("--rewards", default=None, help="reward scheme (does not change aliasing)")
-    ap.add_argument("--out", required=True, type=Path, metavar="DIR",
-                    help="output folder: aliasing.json, heat map PNG, recording")
-    ap.add_argument("--artifact", default=None, metavar="NAME",
-                    help="also write docs/results/aliasing.NAME.json (the docs' table and "
-                         "heat map)")
-    args = ap.parse_args(argv)
-    if args.artifact:
-        check_artifact_name(ap, args.artifact)
+    args = parse(Args, __doc__, argv)
+    args = dataclasses.replace(args, out=Path(args.out))
     run(args)
     return 0
 

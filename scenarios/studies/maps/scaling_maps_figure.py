@@ -29,7 +29,7 @@ from scenarios.figures.mpl import pyplot
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 from scenarios.runs.spec import load
-from scenarios.script_args import script_parser
+from scenarios.script_args import arg, parse, parser_of, positional
 from scenarios.studies.paper.scaling import fit_exponent
 from sim.files import atomic_write_text
 
@@ -187,29 +187,34 @@ def render_points(names: Sequence[str]) -> None:
             + "\n" + "\n\n".join(tails) + "\n")
 
 
+@dataclass(frozen=True)
+class Args:
+    folders: list[str] = positional(  # noqa: RUF009 (positional is a dataclasses.field)
+        "output folders of scenarios.studies.maps.scaling_maps", nargs="*")
+    artifacts: list[str] | None = arg(  # noqa: RUF009 (arg is a dataclasses.field)
+        None, "read docs/results/scaling-maps.NAME.json instead of folders", nargs="+",
+        metavar="NAME")
+    out: str = arg("results/scaling-maps.png", "the figure (PNG); its table goes beside it "
+                   "as .md")
+
+
 def main(argv: list[str] | None = None) -> int:
-    p = script_parser(__doc__)
-    p.add_argument("folders", nargs="*", type=Path,
-                   help="output folders of scenarios.studies.maps.scaling_maps")
-    p.add_argument("--artifacts", nargs="+", default=None, metavar="NAME",
-                   help="read docs/results/scaling-maps.NAME.json instead of folders")
-    p.add_argument("--out", type=Path, default=Path("results/scaling-maps.png"),
-                   help="the figure (PNG); its table goes beside it as .md")
-    args = p.parse_args(argv)
+    args = parse(Args, __doc__, argv)
     if bool(args.folders) == bool(args.artifacts):
-        p.error("give study folders or --artifacts NAME..., one of the two")
+        parser_of(Args, __doc__).error("give study folders or --artifacts NAME..., one of "
+                                       "the two")
 
     try:
         points = (points_from_artifacts(args.artifacts) if args.artifacts
-                  else read_points(args.folders))
+                  else read_points([Path(f) for f in args.folders]))
     except (FileNotFoundError, json.JSONDecodeError, KeyError, ArtifactError) as err:
         print(f"scaling_maps_figure: error: {err}", file=sys.stderr)
         return 2
-    out = draw(points, args.out)
+    out = draw(points, Path(args.out))
     text = points_text(points)
-    atomic_write_text(args.out.with_suffix(".md"), text)
+    atomic_write_text(Path(args.out).with_suffix(".md"), text)
     print(text)
-    print(f"wrote {out} and {args.out.with_suffix('.md')}", file=sys.stderr)
+    print(f"wrote {out} and {Path(args.out).with_suffix('.md')}", file=sys.stderr)
     return 0
 
 

@@ -538,4 +538,10 @@ def tour_table(d: dict[str, Any]) -> str:
     lines += ["```", "", f"Times: each line run in order in a fresh folder from {where} "
               f"({_took(total)} for the {len(ran)} lines; a first use of a method or of the "
               "physics world compiles its kernels once, so later lines are faster)."]
+    quiet = [r for r in ran if "longest_silence_s" in r]
+    if quiet:
+        worst = max(quiet, key=lambda r: r["longest_silence_s"])
+        lines[-1] += (f" The longest any line printed nothing, its output read as a log "
+                      f"reads it (progress every 5 s): {worst['longest_silence_s']:.1f} s, "
+                      f"`{worst['command']}`.")
     return "\n".join(lines) + "\n"

@@ -36,6 +36,7 @@ def test_the_tours_quick_lines_run_from_an_installed_copy(installed, monkeypatch
     rows = tour.run_tour(installed, installed=True)
     assert [r["command"] for r in rows] == [ln.command for ln in tour.TOUR]
     assert all(r["passed"] for r in rows), [r for r in rows if not r["passed"]]
+    assert all(r["longest_silence_s"] <= 5.0 for r in rows), rows  # never silent
     report = next(r for r in rows if r["command"].startswith("rnhql report"))
     assert report["exit"] == 2  # one line: the artifacts live in the source tree
 

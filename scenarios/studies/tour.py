@@ -16,14 +16,17 @@ The docs' tour block is rendered from the artifact, each line with its measured 
 
 from __future__ import annotations
 
+import itertools
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from scenarios.artifacts import ROOT, write_artifact
 from scenarios.script_args import arg, artifact_arg, parse
@@ -106,7 +109,8 @@ def _own_files(home: Path, package_root: Path) -> None:
 
 def _env(home: Path, package_root: Path) -> dict[str, str]:
     env = dict(os.environ, HOME=str(home), PYTHONPATH=str(package_root),
-               MPLBACKEND="Agg", COLUMNS="100")
+               MPLBACKEND="Agg", COLUMNS="100", PYTHONUNBUFFERED="1")  # lines as a
+    #   terminal shows them, so the silences measured are the user's
     env.pop("RNHQL_SCENARIO_PATH", None)
     return env
 
@@ -128,9 +132,52 @@ def _argv(line: Line, home: Path) -> tuple[list[str], dict[str, str], Path | Non
     return [sys.executable, "-m", "scenarios.cli", *words[1:]], extra, out
 
 
+@dataclass(frozen=True)
+class Finished:
+    """A line's process, run to its end: what it printed, how long it took, and the longest
+    time it printed nothing (from its start to its first line, between lines, and from its
+    last line to its exit) [s]."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+    wall_s: float
+    silence_s: float
+
+
+def _run_timed(argv: list[str], cwd: Path, env: dict[str, str]) -> Finished:
+    """Run ``argv``, noting when each line of its output arrives (both streams)."""
+    stamps: list[float] = []
+    lock = threading.Lock()
+    t0 = time.perf_counter()
+
+    def read(stream: Any, into: list[str]) -> None:
+        for text in stream:
+            with lock:
+                stamps.append(time.perf_counter())
+            into.append(text)
+
+    out: list[str] = []
+    err: list[str] = []
+    with subprocess.Popen(argv, cwd=cwd, env=env, stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True, bufsize=1) as proc:
+        readers = [threading.Thread(target=read, args=(proc.stdout, out)),
+                   threading.Thread(target=read, args=(proc.stderr, err))]
+        for r in readers:
+            r.start()
+        code = proc.wait()
+        for r in readers:
+            r.join()
+    end = time.perf_counter()
+    times = [t0, *sorted(stamps), end]
+    return Finished(code, "".join(out), "".join(err), end - t0,
+                    max(b - a for a, b in itertools.pairwise(times)))
+
+
 def run_tour(package_root: Path, installed: bool) -> list[dict[str, object]]:
-    """Every runnable line in a fresh folder: its wall time [s], exit status, whether it
-    passed, and the last line it printed to stderr when it did not."""
+    """Every runnable line in a fresh folder: its wall time [s], exit status, the longest it
+    printed nothing [s], whether it passed, and the last line it printed to stderr when it
+    did not."""
     rows = []
     with tempfile.TemporaryDirectory(prefix="rnhql-tour-") as tmp:
         home = Path(tmp)
@@ -141,19 +188,18 @@ def run_tour(package_root: Path, installed: bool) -> list[dict[str, object]]:
                 continue
             argv, extra, out = _argv(line, home)
             expected = 2 if installed and line.command.startswith("rnhql report") else 0
-            t0 = time.perf_counter()
-            proc = subprocess.run(argv, capture_output=True, text=True, cwd=home,
-                                  env={**_env(home, package_root), **extra})
-            wall = time.perf_counter() - t0
+            proc = _run_timed(argv, home, {**_env(home, package_root), **extra})
             if out is not None:
                 out.write_text(proc.stdout)
             passed = proc.returncode == expected and TRACEBACK not in proc.stderr
             tail = (proc.stderr.strip().splitlines() or [""])[-1]
+            wall = proc.wall_s
             rows.append({"command": line.command, "ran": True, "wall_s": round(wall, 1),
                          "exit": proc.returncode, "passed": passed,
+                         "longest_silence_s": round(proc.silence_s, 1),
                          **({} if passed else {"stderr": tail[-300:]})})
             print(f"{'ok ' if passed else 'FAIL'} {wall:7.1f} s  exit {proc.returncode}  "
-                  f"{line.command}", flush=True)
+                  f"silent at most {proc.silence_s:4.1f} s  {line.command}", flush=True)
     return rows
 
 

@@ -545,3 +545,14 @@ def tour_table(d: dict[str, Any]) -> str:
                       f"reads it (progress every 5 s): {worst['longest_silence_s']:.1f} s, "
                       f"`{worst['command']}`.")
     return "\n".join(lines) + "\n"
+
+
+def main_job_sentence(d: dict[str, Any]) -> str:
+    """The README's set-up step 1, timed by the tour (its first line)."""
+    row = d["lines"][0]
+    if not row.get("passed"):
+        return f"Step 1's main job failed in the last tour (exit {row['exit']}).\n"
+    where = "a `pip install`" if d["installed"] else "a clone"
+    return (f"Step 1's main job took {_took(row['wall_s'])} after the install, from {where} "
+            "on this project's 2-core machine: its first run compiles every method's kernels "
+            "(numba caches them on disk, so a second run is faster).\n")

@@ -347,6 +347,15 @@ def render(name: str) -> None:
     cog_out(rendered(name))
 
 
+def render_text(name: str, text: Any) -> None:
+    """For a Cog block: ``text(data)`` of artifact ``name`` (a sentence), then the
+    artifact's provenance, as :func:`render` gives a table's."""
+    doc = load_artifact(name)
+    parts = provenance(doc).split("\n\n")
+    head = parts[0] + "\n\n" if stale_parts(doc) else ""
+    cog_out(f"{head}{text(doc['data']).rstrip()}\n\n{parts[-1]}\n")
+
+
 def legacy_note(command: str, known: str = "") -> str:
     """The banner above a table typed by hand before tables were generated: its figures are
     unverified until the study is re-run with ``--artifact`` and the table replaced."""

@@ -171,9 +171,12 @@ MAX_NUM_ENVS = 4096  # robots in one vector env: 100,000 took 24 GB and was kill
 def check_num_envs(num_envs: object) -> None:
     """A vector env's robot count, refused beyond :data:`MAX_NUM_ENVS` (each robot holds its
     own state in one Space)."""
-    if not (isinstance(num_envs, int) and 1 <= num_envs <= MAX_NUM_ENVS):
-        raise ValueError(f"num_envs must be an int in 1..{MAX_NUM_ENVS:,} (robots in one "
-                         f"Space; each holds its own state), got {num_envs!r}")
+    if not (isinstance(num_envs, int) and not isinstance(num_envs, bool)
+            and 1 <= num_envs <= MAX_NUM_ENVS):
+        raise ScenarioError(SOURCE, "num_envs", f"must be an int in 1..{MAX_NUM_ENVS:,} "
+                            f"(robots in one Space; each holds its own state), got "
+                            f"{num_envs!r}", "use fewer envs per vector env, or "
+                            "several vector envs")
 
 
 def episode_limit(value: Any, default: int, fld: str = "steps_per_episode") -> int:

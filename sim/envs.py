@@ -25,6 +25,7 @@ ENV_SPECS = {
 }
 # make_vec(id, num_envs=N, vectorization_mode="vector_entry_point"): N robots in one Space
 VECTOR_ENTRY_POINTS = {
+    "rnhql/GridRoute-v0": "sim.grid.env:grid_vector_env",
     "rnhql/PhysicsRoute-v0": "sim.physics.envs.vector:PhysicsRouteVectorEnv",
     "rnhql/DiffDrive-v0": "sim.physics.envs.vector:DiffDriveVectorEnv",
 }

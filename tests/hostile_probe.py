@@ -650,9 +650,12 @@ def obstacles_case(rng: random.Random) -> Case:
 
 
 GYM_SNIPPETS = {
-    "cell-negative": "Scenario(**{**base, 'blocked_cells': ((-1, 0),)})",
-    "cell-outside": "Scenario(**{**base, 'blocked_cells': ((base['width_m'] * 100, 3),)})",
-    "cell-float": "Scenario(**{**base, 'blocked_cells': ((1.5, 2),)})",
+    "cell-negative": "gym.make('rnhql/GridRoute-v0', scenario=Scenario(**{**base, "
+                     "'blocked_cells': ((-1, 0),)}))",
+    "cell-outside": "gym.make('rnhql/PhysicsRoute-v0', scenario=Scenario(**{**base, "
+                    "'blocked_cells': ((base['width_m'] * 100, 3),)}))",
+    "cell-float": "gym.make('rnhql/GridRoute-v0', scenario=Scenario(**{**base, "
+                  "'blocked_cells': ((1.5, 2),)}))",
     "friction-nan": "PhysicsConfig(friction=float('nan')).validate()",
     "substeps-huge": "PhysicsConfig(substeps=10**7).validate()",
     "dt-tiny": "PhysicsConfig(dt_s=1e-9).validate()",

@@ -103,6 +103,6 @@ def test_a_vector_env_has_a_bounded_number_of_robots():
 
     import sim  # noqa: F401
 
-    with pytest.raises(ValueError, match=r"num_envs must be an int in 1\.\.4,096"):
+    with pytest.raises(ValueError, match=r"num_envs: must be an int in 1\.\.4,096"):
         gym.make_vec("rnhql/PhysicsRoute-v0", num_envs=100_000,
                      vectorization_mode="vector_entry_point", scenario="paper-40")

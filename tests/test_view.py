@@ -219,6 +219,7 @@ def test_the_printed_address_opens_the_recording_in_a_browser(rrd, tmp_path):
     (lambda p: p.mkdir(), [], "is not a regular file"),
     (lambda p: p.write_bytes(b"RRF2"), ["--web", "--port", "65536"], "65536 is not a port"),
     (lambda p: p.write_bytes(b"RRF2"), ["--web", "--port", "-1"], "-1 is not a port"),
+    (lambda p: p.write_text("not a recording"), ["--web"], "is not a Rerun recording"),
 ])
 def test_view_refuses_bad_input_in_one_line(tmp_path, capsys, make, argv_tail, says):
     from scenarios.cli import main

@@ -25,6 +25,8 @@ from scenarios.recording.viewer import (
 )
 from sim.errors import InputError
 
+RRD_MAGIC = b"RRF"  # every .rrd starts "RRF" and a format digit ("RRF2" for rerun 0.41)
+
 
 def _check_display(path: Path) -> None:
     if sys.platform.startswith("linux") and not (
@@ -77,6 +79,11 @@ def cmd_view(args: argparse.Namespace) -> int:
     if path.stat().st_size == 0:
         raise InputError(str(path), "FILE", "is empty (a recording stopped before it wrote "
                          "anything)", "record the run again")
+    with path.open("rb") as f:
+        magic = f.read(3)
+    if magic != RRD_MAGIC:
+        raise InputError(str(path), "FILE", "is not a Rerun recording (it does not start as "
+                         "an .rrd does)", "pass a .rrd written by --record")
     if args.port is not None and not 1 <= args.port <= 65535:
         raise InputError("command line", "--port", f"{args.port} is not a port",
                          "pass a port in 1..65535, e.g. --port 9090")

@@ -42,7 +42,10 @@ class Line:
     runs: bool = True  # False: opens a viewer, not run here
 
 
+MAIN_JOB = ("rnhql compare paper-50 --rewards goal-only --seeds 10 --episodes 3000 --out "
+            "results/paper-50 --record")  # the README's set-up step 1, after the install
 TOUR = (
+    Line(MAIN_JOB, "set-up step 1's main job: every method x 10 seeds, recorded"),
     Line("rnhql scenarios", "named scenarios: size, free cells, optimal route"),
     Line("rnhql train paper-50", "rnh-ql+ (the default method), goal-only rewards (the "
          "default): optimal route in a few dozen episodes"),

@@ -11,6 +11,7 @@ from gymnasium import spaces
 from sim.env_args import (
     SCENARIO_REWARDS,
     SpecOwnLimit,
+    check_num_envs,
     discrete_action,
     env_scenario,
     episode_limit,
@@ -170,3 +171,13 @@ class GridRouteEnv(SpecOwnLimit, gym.Env):
         x, y = self.model.coords[self._s]
         self._canvas.disc(img, x, y, self.scenario.robot.radius_m, AGENT)
         return img
+
+
+def grid_vector_env(num_envs: int, **kwargs: Any) -> gym.vector.SyncVectorEnv:
+    """``gymnasium.make_vec("rnhql/GridRoute-v0", num_envs=N)``: N grid envs stepped in turn,
+    N bounded as the physics vector envs bound theirs (100,000 copies once ran out of
+    memory instead of refusing)."""
+    check_num_envs(num_envs)
+    vector = {k: kwargs.pop(k) for k in ("autoreset_mode", "copy", "observation_mode")
+              if k in kwargs}
+    return gym.vector.SyncVectorEnv([lambda: GridRouteEnv(**kwargs)] * num_envs, **vector)

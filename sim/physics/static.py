@@ -17,6 +17,7 @@ from typing import Any, NamedTuple
 
 import pymunk
 
+from sim.errors import ScenarioError
 from sim.physics import sigint
 from sim.scenario import Scenario
 
@@ -71,38 +72,50 @@ class PhysicsConfig:
         return self.dt_s * self.substeps
 
     def validate(self) -> None:
+        """Refuse settings that crash Chipmunk or run for minutes: a ScenarioError (a
+        ValueError) naming the field, as a scenario file's [physics] table is refused."""
         for name in ("dt_s", "tolerance_m", "tolerance_rad", "timeout_s", "contact_depth_m",
                      "traction_margin"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"PhysicsConfig.{name} must be a finite positive number, "
+                raise _invalid(f"PhysicsConfig.{name} must be a finite positive number, "
                                  f"got {v!r}")
         if not (0.0 <= self.collision_bias <= 1.0):
-            raise ValueError(f"PhysicsConfig.collision_bias must be in [0, 1], "
+            raise _invalid(f"PhysicsConfig.collision_bias must be in [0, 1], "
                              f"got {self.collision_bias!r}")
         if not (isinstance(self.substeps, int) and self.substeps >= 1):
-            raise ValueError(f"PhysicsConfig.substeps must be an int >= 1, got {self.substeps!r}")
+            raise _invalid(f"PhysicsConfig.substeps must be an int >= 1, got {self.substeps!r}")
         if not (isinstance(self.iterations, int) and self.iterations >= 1):
-            raise ValueError(f"PhysicsConfig.iterations must be an int >= 1, "
+            raise _invalid(f"PhysicsConfig.iterations must be an int >= 1, "
                              f"got {self.iterations!r}")
         # Chipmunk aborts the interpreter on a nan coefficient; past these bounds a primitive
         # runs for minutes (a step of 1e-9 s, 10^7 substeps), far from any robot's physics
         if not (math.isfinite(self.friction) and 0.0 <= self.friction <= MAX_FRICTION):
-            raise ValueError(f"PhysicsConfig.friction must be in [0, {MAX_FRICTION:g}], "
+            raise _invalid(f"PhysicsConfig.friction must be in [0, {MAX_FRICTION:g}], "
                              f"got {self.friction!r}")
         if not (isinstance(self.collision_slop_m, int | float)
                 and math.isfinite(self.collision_slop_m) and self.collision_slop_m >= 0):
-            raise ValueError(f"PhysicsConfig.collision_slop_m must be a finite number >= 0, "
+            raise _invalid(f"PhysicsConfig.collision_slop_m must be a finite number >= 0, "
                              f"got {self.collision_slop_m!r}")
         if not MIN_DT_S <= self.dt_s <= MAX_DT_S:
-            raise ValueError(f"PhysicsConfig.dt_s must be in [{MIN_DT_S:g}, {MAX_DT_S:g}] s, "
+            raise _invalid(f"PhysicsConfig.dt_s must be in [{MIN_DT_S:g}, {MAX_DT_S:g}] s, "
                              f"got {self.dt_s!r}")
         if self.substeps > MAX_SUBSTEPS or self.iterations > MAX_ITERATIONS:
-            raise ValueError(f"PhysicsConfig.substeps (<= {MAX_SUBSTEPS}) and iterations "
-                             f"(<= {MAX_ITERATIONS}) are {self.substeps} and {self.iterations}")
+            raise _invalid(f"PhysicsConfig.substeps must be at most {MAX_SUBSTEPS} and "
+                           f"iterations at most {MAX_ITERATIONS}, got {self.substeps} and "
+                           f"{self.iterations}")
         if self.timeout_s > MAX_TIMEOUT_S:
-            raise ValueError(f"PhysicsConfig.timeout_s must be at most {MAX_TIMEOUT_S:g} s, "
+            raise _invalid(f"PhysicsConfig.timeout_s must be at most {MAX_TIMEOUT_S:g} s, "
                              f"got {self.timeout_s!r}")
+
+
+def _invalid(message: str) -> ScenarioError:
+    """``message`` ("PhysicsConfig.<field> must ..., got ...") as the error the CLI prints in
+    one line (exit 2) and a Python caller catches as a ValueError."""
+    field, _, problem = message.partition(" ")
+    return ScenarioError("physics config", field, problem,
+                         "use a value in the range given (PhysicsConfig's defaults are a "
+                         "small indoor robot)")
 
 
 class Contact(NamedTuple):

@@ -1,6 +1,6 @@
 """Peak memory and checkpoint size per method and map size.
 
-    python -m scenarios.bench.memory                          # rooms, 64..512, five methods
+    python -m scenarios.bench.memory                          # rooms, 64..1024, five methods
     python -m scenarios.bench.memory --sizes 256 --methods rnh-ql+ --kind maze
 
 Each measurement is one ``rnhql train MAP --method M --episodes E --save`` in a fresh
@@ -40,7 +40,7 @@ def peak_rss_mb(cmd: list[str], env: dict[str, str]) -> tuple[float, int]:
 
 @dataclass(frozen=True)
 class Args:
-    sizes: str = arg("64,128,256,512", "map sizes [cells a side]")
+    sizes: str = arg("64,128,256,512,1024", "map sizes [cells a side]")
     kind: str = arg("rooms", "map kind (sim.maps.generators)")
     methods: str = arg(",".join(METHODS), "methods")
     episodes: int = arg(20, "training episodes per run")

@@ -27,15 +27,42 @@ from scenarios.studies.maps.scaling_maps import write_problem
 METHODS = ("rnh-ql+", "haql", "rnh-ql", "dyna-q", "st-ql")
 
 
+PEAK_OF_CHILD = """
+import atexit, os, sys
+def _peak():  # this process's own high-water mark: VmHWM of the image exec built
+    with open("/proc/self/status") as f:
+        kb = next(int(line.split()[1]) for line in f if line.startswith("VmHWM:"))
+    with open(os.environ["RNHQL_PEAK_FILE"], "w") as out:
+        out.write(str(kb))
+atexit.register(_peak)
+flag, target, *rest = sys.argv[1:]  # -m MODULE ARGS... or -c CODE
+sys.argv = [target, *rest]
+if flag == "-m":
+    import runpy
+    runpy.run_module(target, run_name="__main__", alter_sys=True)
+else:
+    exec(target)
+"""
+
+
 def peak_rss_mb(cmd: list[str], env: dict[str, str]) -> tuple[float, int]:
-    """(peak RSS [MB] of the process, exit status)."""
-    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    _, status, usage = os.wait4(proc.pid, 0)
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    err = proc.stderr.read().decode() if proc.stderr else ""
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): {err.strip()[-400:]}")
-    return usage.ru_maxrss / 1024.0, proc.returncode  # ru_maxrss is in KiB on Linux
+    """(peak RSS [MB] of the process, exit status). Read inside the child (VmHWM, at its
+    exit): the ``ru_maxrss`` that ``wait4`` gives counts, on Linux, the memory the child
+    shared with this process when it was forked, so a parent that had built a 1024² map
+    made every small run look as large as itself."""
+    assert cmd[0] == sys.executable
+    with tempfile.NamedTemporaryFile(prefix="rnhql-peak-", delete=False) as f:
+        peak_file = Path(f.name)
+    try:
+        proc = subprocess.run([sys.executable, "-c", PEAK_OF_CHILD, *cmd[1:]],
+                              env={**env, "RNHQL_PEAK_FILE": str(peak_file)},
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        if proc.returncode != 0:
+            raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}): "
+                               f"{proc.stderr.decode().strip()[-400:]}")
+        return int(peak_file.read_text()) / 1024.0, proc.returncode
+    finally:
+        peak_file.unlink(missing_ok=True)
 
 
 @dataclass(frozen=True)

@@ -179,3 +179,13 @@ def test_rows_of_several_artifacts_make_one_table_with_each_provenance(tmp_path,
     text = rendered_rows(["aliasing.exact", "aliasing.noisy"])
     assert text.count("| paper-50 |") == 2 and "0.0245" in text
     assert text.count("<sub>Generated from") == 2
+
+
+def test_every_committed_artifact_records_the_study_that_wrote_it():
+    """An artifact without its study's code hash cannot go stale when that study changes
+    (the report would call it fresh for ever): every committed one carries it."""
+    from scenarios.artifacts import RESULTS_DIR, artifact_names, load_artifact
+
+    missing = [n for n in artifact_names(RESULTS_DIR)
+               if "code_sha256" not in load_artifact(n).get("study", {})]
+    assert missing == [], f"re-run these with --artifact: {missing}"

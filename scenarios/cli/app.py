@@ -283,7 +283,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except MemoryError:  # the machine's memory, not a bug: one line (the lock is released,
         #                  the finished runs stay in runs.partial.jsonl for --resume)
         print("rnhql: error: out of memory. Fix: a smaller map or fewer --jobs, or a machine "
-              "with more memory (docs/studies.md gives what 256² and 512² runs take); "
+              "with more memory (docs/studies.md gives what runs up to 1024² take); "
               "--resume keeps the runs already finished", file=sys.stderr)
         return 1
     except Exception as err:

@@ -549,7 +549,9 @@ def tour_table(d: dict[str, Any]) -> str:
 
 def main_job_sentence(d: dict[str, Any]) -> str:
     """The README's set-up step 1, timed by the tour (its first line)."""
-    row = d["lines"][0]
+    row = next((r for r in d["lines"] if r["command"] == d.get("main_job")), None)
+    if row is None:
+        return "The last tour did not time step 1's main job.\n"
     if not row.get("passed"):
         return f"Step 1's main job failed in the last tour (exit {row['exit']}).\n"
     where = "a `pip install`" if d["installed"] else "a clone"

@@ -240,7 +240,7 @@ def main(argv: list[str] | None = None) -> int:
         write_artifact(f"tour.{args.artifact}", "python -m scenarios.studies.tour"
                        + (" --installed" if args.installed else "")
                        + f" --artifact {args.artifact}", [],
-                       {"installed": args.installed, "lines": rows,
+                       {"installed": args.installed, "lines": rows, "main_job": MAIN_JOB,
                         "notes": {ln.command: ln.note for ln in TOUR},
                         "own_file": [ln.command for ln in TOUR if ln.own_file]},
                        study=__file__)

@@ -165,38 +165,3 @@ def test_each_world_is_estimated_from_its_own_rate():
     work.share(None)
     p.close()
     work.share(None)
-
-
-def test_a_physics_loop_says_its_own_time_left_and_progress_takes_its_word():
-    """The loop's runs step together: its longest run decides. Progress takes the loops'
-    own time left for the episodes they hold, and the rate for episodes no loop has begun."""
-    import numpy as np
-
-    from scenarios.runs import work
-    from scenarios.runs.physics import batched_steps_left
-    from scenarios.sweep.backends import Progress
-
-    steps = np.zeros((3, 100), np.int32)
-    steps[0, :10] = 60  # a fast learner, 10 episodes done, 60 steps each
-    steps[1, :10] = 600  # a slow one: every episode runs to the budget
-    done, active = np.array([10, 10, 0]), np.array([True, True, True])
-    assert batched_steps_left(steps, done, active, 100, 600) == 100 * 600  # run 2: no episode
-    active[2] = False
-    assert batched_steps_left(steps, done, active, 100, 600) == 90 * 600  # run 1 decides
-    active[1] = False
-    assert batched_steps_left(steps, done, active, 100, 600) == 90 * 60
-
-    p = Progress(4, enabled=False)
-    p.expect(4, 2000, physics_episodes=1000)
-    left = work.TimeLeft()
-    left.set(120.0, 600)  # the loop holds 600 of the physics episodes left
-    assert work.physics_left(p.counter) == (120.0, 600)
-    work.add_episodes(1000)  # the grid's, done
-    work.add_episodes(100, physics=True)
-    assert p.eta_s(now=0.0) is None  # 300 episodes no loop holds, and no rate for them yet
-    work.add_episodes(100, physics=True)
-    assert p.eta_s(now=5.0) == pytest.approx(120.0 + 200 / 20)  # 200 left outside the loop
-    left.close()
-    assert work.physics_left(p.counter) is None
-    p.close()
-    work.share(None)

@@ -40,7 +40,7 @@ from learning.drivers.train import TrainResult
 from learning.geometry import geometry_of
 from learning.plain.learner import PlainBatchAgent, is_plain
 from scenarios.runs.physics_grading import FinalGrade, Grader, final_policy_label
-from scenarios.runs.work import TimeLeft, add_episodes
+from scenarios.runs.work import add_episodes
 from scenarios.signals import sigint_handled_by
 from sim.grid import TabularModel
 from sim.physics.envs.vector import PhysicsRouteVectorEnv
@@ -49,22 +49,6 @@ from sim.physics.sigint import take_deferred
 from sim.scenario import Scenario
 
 TEST_BATCH = 16  # periodic tests above exact driven together, one env [tests]
-RECENT = 10  # a run's next episodes are expected as long as its last RECENT [episodes]
-SAY_EVERY_S = 0.5  # how often the loop re-estimates its time left [s]
-
-
-def batched_steps_left(steps: np.ndarray, done: np.ndarray, active: np.ndarray,
-                       n_episodes: int, budget: int) -> float:
-    """The batched steps the loop still needs: the most any active run needs, its episodes
-    left times the mean length of its last :data:`RECENT` (the episode budget before its
-    first). Runs step together, so the longest decides; a run that still learns shortens
-    its episodes, so this errs long."""
-    worst = 0.0
-    for i in np.flatnonzero(active):
-        d = int(done[i])
-        length = float(steps[i, max(0, d - RECENT):d].mean()) if d else float(budget)
-        worst = max(worst, (n_episodes - d) * length)
-    return worst
 
 
 @dataclass(frozen=True)
@@ -226,15 +210,13 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     t_learn = t_world = t_ep = 0.0
     t_start = clock()
     stop = StopFlag()
-    time_left, said, batched = TimeLeft(), t_start, 0
-    with sigint_to(stop), contextlib.closing(time_left):
+    with sigint_to(stop):
         start_episodes(active)
         # groups with a run still training (a finished group's calls would do nothing: in a
         # sweep's long tail, most groups are done); renewed when a run finishes
         live = [(ag, b0, b1) for ag, (b0, b1) in zip(agents, bounds, strict=True)]
         while active.any():
             t0 = clock()
-            batched += 1
             for ag, b0, b1 in live:
                 a[b0:b1] = ag.act(active[b0:b1], s[b0:b1])
             t1 = clock()
@@ -293,14 +275,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                 while len(pending) >= TEST_BATCH:
                     run_tests(TEST_BATCH)
                 start_episodes(ended & active)
-                t5 = clock()
-                t_ep += t5 - t4
-                if t5 - said >= SAY_EVERY_S:
-                    said = t5
-                    time_left.set(batched_steps_left(logs.steps, done, active, n_episodes,
-                                                     sc.steps_per_episode)
-                                  * (t5 - t_start) / batched,
-                                  int((n_episodes - done[active]).sum()))
+                t_ep += clock() - t4
             if stop.requested or take_deferred():
                 raise KeyboardInterrupt
         t5 = clock()

@@ -14,12 +14,6 @@ later minute will see). While any worker warms up, the estimate is withheld and 
 rate window restarts (:meth:`Progress.eta_s`): a time left extrapolated from a compile
 was 8x too long on the main command.
 
-A physics loop also says how long it expects to take still (:class:`TimeLeft`): its runs
-step together, so its fast learners' short episodes end early and its slow learners' long
-ones decide the end. An episode rate measured early, while the short episodes flow, once
-put a mixed compare's first estimate at 0.59x the truth on a quiet machine and 3x under on
-a busy one.
-
 The block's lock is shared by the processes, and a worker ended by a signal (the sweep
 ends its workers mid-run) can die holding it: so the counts are read without the lock (an
 aligned 8-byte integer is read whole), and a worker waits for the lock at most
@@ -33,10 +27,8 @@ import multiprocessing
 from collections.abc import Iterable, Iterator
 from typing import Any
 
-EPISODES, WARMING, PHYSICS, PHYSICS_LEFT_MS, PHYSICS_LEFT_EPISODES = range(5)  # slots of
-#   the shared block: episodes (every world), workers warming up, physics episodes among
-#   them; the running physics loops' own estimates of their time left [ms], and the
-#   episodes those loops have left, each summed over the loops
+EPISODES, WARMING, PHYSICS = 0, 1, 2  # slots of the shared block: episodes (every world),
+#                                      workers warming up, physics episodes among them
 LOCK_WAIT_S = 1.0  # a worker waits this long for the block's lock, then counts nothing [s]
 
 _shared: Any = None  # a multiprocessing.Array("q", 2) while a sweep runs, else None
@@ -46,9 +38,8 @@ _warming_here = False  # this process counts in the WARMING slot right now
 
 def new_counter() -> Any:
     """The block of counters worker processes share (passed to the pool's initializer):
-    episodes finished, workers warming up, physics episodes finished, and the running
-    physics loops' time and episodes left."""
-    return multiprocessing.Array("q", 5)
+    episodes finished, workers warming up, physics episodes finished."""
+    return multiprocessing.Array("q", 3)
 
 
 def share(counter: Any) -> None:
@@ -68,14 +59,6 @@ def episodes(counter: Any) -> int:
 def physics_episodes(counter: Any) -> int:
     """The physics episodes ``counter`` holds (a part of :func:`episodes`)."""
     return int(counter.get_obj()[PHYSICS])
-
-
-def physics_left(counter: Any) -> tuple[float, int] | None:
-    """The time the running physics loops expect to need still [s], and the episodes they
-    have left; None while none has said (read without the lock)."""
-    block = counter.get_obj()
-    ms, episodes_left = int(block[PHYSICS_LEFT_MS]), int(block[PHYSICS_LEFT_EPISODES])
-    return (ms / 1000.0, episodes_left) if ms > 0 else None
 
 
 def warming(counter: Any) -> int:
@@ -113,27 +96,6 @@ def _end_warming() -> None:
     if _warming_here:
         _warming_here = False
         _add(WARMING, -1)
-
-
-class TimeLeft:
-    """A physics loop's estimate of its own time left, kept in the shared block (the sum
-    over the loops running): it knows what an episode-rate cannot, that its fast learners'
-    short episodes are over while its slow ones' long episodes are not. Set it as the
-    estimate changes; :meth:`close` takes it back when the loop ends."""
-
-    def __init__(self) -> None:
-        self._ms = self._episodes = 0
-
-    def set(self, seconds: float, episodes_left: int) -> None:
-        ms = max(1, int(seconds * 1000.0))
-        _add(PHYSICS_LEFT_MS, ms - self._ms)
-        _add(PHYSICS_LEFT_EPISODES, episodes_left - self._episodes)
-        self._ms, self._episodes = ms, episodes_left
-
-    def close(self) -> None:
-        _add(PHYSICS_LEFT_MS, -self._ms)
-        _add(PHYSICS_LEFT_EPISODES, -self._episodes)
-        self._ms = self._episodes = 0
 
 
 @contextlib.contextmanager

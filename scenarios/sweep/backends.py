@@ -136,11 +136,6 @@ class Progress:
         left = {"grid": self.episodes_total - self.physics_total - grid_done,
                 "physics": self.physics_total - physics_done}
         total = 0.0
-        running = work.physics_left(self.counter)
-        if running is not None and left["physics"] > 0:  # the loops' own word, and the
-            seconds, theirs = running  # episodes no loop has started at the rate
-            total += seconds
-            left["physics"] = max(0, left["physics"] - theirs)
         for world, n in left.items():
             if n <= 0:
                 continue

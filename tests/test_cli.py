@@ -219,7 +219,7 @@ def test_view_without_a_display_suggests_the_web_viewer(tmp_path, monkeypatch, c
     if not sys.platform.startswith("linux"):
         pytest.skip("display detection is for Linux")
     rrd = tmp_path / "x.rrd"
-    rrd.write_bytes(b"not opened")
+    rrd.write_bytes(b"RRF2 not opened")  # starts as an .rrd does
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     assert main(["view", str(rrd)]) == 2

@@ -13,6 +13,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Sequence
 from importlib.metadata import PackageNotFoundError, version
 
@@ -234,6 +235,56 @@ class HungUp(Terminated):
 
 
 _received: list[int] = []  # SIGTERM/SIGHUP seen while the command ran
+QUIET_S = 5.0  # the longest a command stays silent: then a line says it still works [s]
+
+
+class _Noting:
+    """A text stream that notes when it was last written to (for :class:`_Heartbeat`);
+    everything else is the stream's own."""
+
+    def __init__(self, stream: object, beat: _Heartbeat) -> None:
+        self._stream, self._beat = stream, beat
+
+    def write(self, text: str) -> int:
+        self._beat.last = time.monotonic()
+        return self._stream.write(text)
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._stream, name)
+
+
+class _Heartbeat:
+    """While a command runs, a line on stderr whenever it has printed nothing for
+    :data:`QUIET_S` (a physics world compiling, V* being built, a bench measuring): a
+    command that says nothing for 20 s looks hung. Progress lines and every other output
+    reset the clock."""
+
+    def __init__(self) -> None:
+        self.last = self.start = time.monotonic()
+        self._stop = threading.Event()
+        self._streams = sys.stdout, sys.stderr
+        sys.stdout, sys.stderr = _Noting(sys.stdout, self), _Noting(sys.stderr, self)
+        self._thread = threading.Thread(target=self._run, daemon=True, name="rnhql-heartbeat")
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(0.5):
+            now = time.monotonic()
+            if now - self.last >= QUIET_S:
+                try:
+                    print(f"… still working ({now - self.start:.0f} s)", file=sys.stderr,
+                          flush=True)
+                except (OSError, ValueError):  # the stream was closed under us: stop
+                    return
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join()
+        out, err = self._streams
+        if isinstance(sys.stdout, _Noting):
+            sys.stdout = out
+        if isinstance(sys.stderr, _Noting):
+            sys.stderr = err
 
 
 def _terminate(sig: int, _frame: object) -> None:
@@ -249,6 +300,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for sig in (signal.SIGTERM, signal.SIGHUP):
             if signal.getsignal(sig) is signal.SIG_DFL:  # SIG_IGN (nohup) stays ignored
                 signal.signal(sig, _terminate)
+    beat = _Heartbeat()
     try:
         check_empty_paths(args)
         code = int(args.func(args) or 0)
@@ -303,4 +355,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("rnhql: interrupted", file=sys.stderr)
         return 130
+    finally:
+        beat.stop()
 

@@ -72,7 +72,6 @@ def test_report_refresh_runs_only_commands_it_builds_from_study_entry_points():
 
 def test_a_recording_named_like_a_flag_reaches_the_viewer_as_a_path(tmp_path, monkeypatch):
     from scenarios.cli import view
-    from scenarios.recording import viewer
 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "--version").write_bytes(b"RRF2")
@@ -82,8 +81,8 @@ def test_a_recording_named_like_a_flag_reaches_the_viewer_as_a_path(tmp_path, mo
         def wait(self):
             return 0
 
-    monkeypatch.setattr(viewer, "spawn", lambda argv: seen.append(argv) or Done())
-    monkeypatch.setattr(viewer, "stop_group", lambda proc: None)
+    monkeypatch.setattr(view, "spawn", lambda argv: seen.append(argv) or Done())
+    monkeypatch.setattr(view, "stop_group", lambda proc: None)
     monkeypatch.setattr(view, "_check_display", lambda path: None)
     from scenarios.cli import main
 

@@ -38,7 +38,10 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from scenarios import artifact_heldout  # noqa: F401 (registers the held-out tables)
+from scenarios import (
+    artifact_heldout,  # noqa: F401 (registers the held-out tables)
+    artifact_ladder,  # noqa: F401 (registers the ladder's tables)
+)
 from scenarios.artifact_tables import KINDS
 from sim.errors import InputError
 from sim.files import atomic_write_text

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from scenarios.artifact_tables import ladder_table
+from scenarios.artifact_ladder import ladder_table
 from scenarios.artifacts import ROOT, load_artifact, write_artifact
 from scenarios.figures.plots import draw_map
 from scenarios.figures.save import save_figure

@@ -1,0 +1,213 @@
+"""The fidelity ladder's tables (:mod:`scenarios.studies.ladder.continuous_vs_grid`): how
+well the grid predicts each rung (rho, MMRV, the predictive mark, the control variates),
+P(G) and primitives per method and rung, and every figure. Registered with
+:mod:`scenarios.artifact_tables` on import."""
+
+from __future__ import annotations
+
+import math
+import statistics
+from typing import Any
+
+from scenarios.artifact_tables import _q, renderer
+from sim.physics.fidelity import parse_fidelity
+
+
+@renderer("ladder")
+def ladder_table(d: dict[str, Any]) -> str:
+    """The fidelity ladder: how well the grid predicts each rung (rank correlation), P(G)
+    and primitives per method and rung (trained at the rung, and transferred from the grid)
+    against V*, then every figure per map, rung, method and where it was trained."""
+    if "rungs" not in d:  # artifacts written before the predictivity and V* were kept
+        return ladder_full(d)
+    return "\n".join([ladder_predictivity(d), ladder_compact(d, physics=True),
+                      ladder_compact(d, physics=False), "#### Every figure", "",
+                      ladder_full(d)])
+
+
+def _rho(p: dict[str, Any]) -> str:
+    if p["rho"] is None:
+        return "— (no spread)"
+    ci = p["ci95"]
+    return f"{p['rho']:+.2f} [{ci[0]:+.2f}, {ci[1]:+.2f}]" if ci else f"{p['rho']:+.2f}"
+
+
+def _mmrv(p: dict[str, Any], digits: int) -> str:
+    ci = p.get("mmrv_ci95")
+    v = f"{p['mmrv']:.{digits}f}"
+    return f"{v} [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]" if ci else v
+
+
+_LADDER_FIGURES = (("deployed", "deployed [primitives]", 1), ("p_goal", "P(G)", 2),
+                   ("learning", "learning [steps]", 1))
+
+
+def _v_star(d: dict[str, Any], c: dict[str, Any]) -> str:
+    opt = c["optimum"]
+    exact = next((r["physics_opt"] for r in d["rows"] if r["map"] == c["map"]
+                  and r["physics_opt"]), None)
+    return ("— (hidden state: not Markov in cells)" if opt is None
+            and parse_fidelity(c["rung"]).hidden_state else
+            f"1 · {exact} (the physics world's BFS route)" if opt is None and exact
+            and c["rung"] == "exact" else "—" if opt is None else
+            f"{opt['p_goal_within_budget']:.3f} · {opt['expected_primitives']:.1f}")
+
+
+def ladder_predictivity(d: dict[str, Any]) -> str:
+    """Spearman's rho of the methods' ranks, grid vs rung, per map and rung; with MMRV, the
+    predictive mark and the control-variate table where the artifact has them."""
+    rungs = d["rungs"]
+    if "mmrv" not in rungs[0]["predictivity"]["deployed"]:
+        return _ladder_rho_only(d)
+    lines = ["#### Does the grid rank the methods as the rung does? (SRCC and MMRV)", "",
+             "Per figure: Spearman's ρ between the methods' order in the grid (grid-trained "
+             "runs, the grid's own figures) and at the rung (runs trained and driven there), "
+             "then the mean maximum rank violation (MMRV, SIMPLER; in the figure's units: how "
+             "much worse at the rung a method the grid ranked better can be), each with a 95 % "
+             "bootstrap interval over seeds (`scenarios/studies/ladder/predictivity.py`). "
+             "✓: the rung is *predictive* of the figure, ρ ≥ 0.85 and MMRV within one seed "
+             "spread (the median over methods of the rung's interquartile range of seeds). "
+             "*Deployed*: expected primitives of the final policy from S, a miss costing the "
+             "episode budget; *P(G)*: its chance of reaching G; *learning*: mean training "
+             "episode length. — (no spread): a world cannot tell the methods apart.", "",
+             "| map | rung | " + " | ".join(f"ρ {t} | MMRV {t}" for _, t, _ in _LADDER_FIGURES)
+             + " | V* at the rung: P*(G) · E[primitives] |",
+             "|---|---|" + "---|---|" * len(_LADDER_FIGURES) + "---|"]
+    for c in rungs:
+        pr = c["predictivity"]
+        cells = [f"{_rho(pr[f])} | {_mmrv(pr[f], k)}{' ✓' if pr[f]['predictive'] else ''}"
+                 for f, _, k in _LADDER_FIGURES]
+        lines.append(f"| {c['map']} | {c['rung']} | " + " | ".join(cells)
+                     + f" | {_v_star(d, c)} |")
+    lines += ["", _first_not_predictive(rungs), "", _control_variates(rungs)]
+    return "\n".join(lines) + "\n"
+
+
+def _first_not_predictive(rungs: list[dict[str, Any]]) -> str:
+    """Per map, the first rung (in the study's order) not predictive of where a policy
+    ends up (deployed and P(G))."""
+    out = []
+    for m in dict.fromkeys(c["map"] for c in rungs):
+        miss = next((c["rung"] for c in rungs if c["map"] == m and not all(
+            c["predictivity"][f]["predictive"] for f in ("deployed", "p_goal"))), None)
+        out.append(f"{m}: {miss}" if miss else f"{m}: none (every rung predictive)")
+    return ("The first rung where the grid stops predicting the deployed policy (deployed "
+            "and P(G) both ✓ up to it): " + "; ".join(out) + ".")
+
+
+def _control_variates(rungs: list[dict[str, Any]]) -> str:
+    """The grid as a control variate for the rung's seeds, per map and rung."""
+    lines = ["#### The grid as a control variate for the rung's seeds", "",
+             "Seed k's grid run and rung run share the seed's streams. Where their figures "
+             "correlate (r), the rung's mean corrected by the grid's has variance (1 − r²) "
+             "times the plain mean's, with the grid's mean pinned by many cheap grid seeds "
+             "(Sim2Val, SureSim). Per figure: the median over methods of r² (the variance "
+             "removed, range over methods) · the rung seeds that give the interval of the "
+             "study's seeds (median over methods).", "",
+             "| map | rung | " + " | ".join(t for _, t, _ in _LADDER_FIGURES) + " |",
+             "|---|---|" + "---|" * len(_LADDER_FIGURES)]
+    for c in rungs:
+        cells = []
+        for f, _, _ in _LADDER_FIGURES:
+            cv = list(c["predictivity"][f]["control_variate"].values())
+            if not cv:
+                cells.append("—")
+                continue
+            red = [v["variance_reduction"] for v in cv]
+            need = float(statistics.median([v["seeds_with_grid"] for v in cv]))
+            cells.append(f"{statistics.median(red):.2f} ({min(red):.2f}–{max(red):.2f}) · "
+                         f"{need:g} of {cv[0]['seeds']}")
+        lines.append(f"| {c['map']} | {c['rung']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _ladder_rho_only(d: dict[str, Any]) -> str:
+    """The table of artifacts written before MMRV and the control variates were kept."""
+    lines = ["#### Does the grid rank the methods as the rung does? (SRCC)", "",
+             "Spearman's ρ between the methods' order in the grid (grid-trained runs, the "
+             "grid's own figures) and at the rung (runs trained and driven there), with a 95 % "
+             "bootstrap interval over seeds (`scenarios/studies/ladder/predictivity.py`). "
+             "*Deployed*: expected primitives of the final policy from S, a miss costing the "
+             "episode budget; *learning*: mean training episode length. 1: the grid orders "
+             "the methods exactly as the rung does; — (no spread): one of the two worlds "
+             "cannot tell the methods apart (every median equal).", "",
+             "| map | rung | ρ deployed | ρ learning | V* at the rung: P*(G) · E[primitives] |",
+             "|---|---|---|---|---|"]
+    for c in d["rungs"]:
+        lines.append(f"| {c['map']} | {c['rung']} | {_rho(c['predictivity']['deployed'])} | "
+                     f"{_rho(c['predictivity']['learning'])} | {_v_star(d, c)} |")
+    return "\n".join(lines) + "\n"
+
+
+def ladder_compact(d: dict[str, Any], physics: bool) -> str:
+    """P(G) median · primitives median per map x method (rows) and rung (columns)."""
+    rows = [r for r in d["rows"] if (r["trained"] != "grid") == physics]
+    rungs = list(dict.fromkeys(r["rung"] for r in rows))
+    title = ("Trained at the rung" if physics else
+             "Trained in the grid, driven at the rung (transfer)")
+    lines = [f"#### {title}: P(G) · primitives", "",
+             "Median over seeds of each seed's share of drives reaching G · mean primitives "
+             "of those drives (— none reached G); reliable seeds (P(G) ≥ 0.98) after the "
+             "slash.", "",
+             "| map | method | " + " | ".join(rungs) + " |",
+             "|---|---|" + "---|" * len(rungs)]
+    for m in dict.fromkeys(r["map"] for r in rows):
+        for method in dict.fromkeys(r["method"] for r in rows if r["map"] == m):
+            cells = []
+            for rung in rungs:
+                r = next((x for x in rows if x["map"] == m and x["method"] == method
+                          and x["rung"] == rung), None)
+                if r is None:
+                    cells.append("")
+                    continue
+                prims = "—" if r["primitives"][0] is None else f"{r['primitives'][0]:.1f}"
+                cells.append(f"{r['p_goal'][0]:.2f} · {prims} / {r['reliable']}")
+            lines.append(f"| {m} | {method} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def ladder_full(d: dict[str, Any]) -> str:
+    """Every figure: one row per map, rung, method and where it was trained."""
+    rows = d["rows"]
+    best: dict[tuple[str, str], float] = {}
+    for r in rows:
+        if r["metres"][0] is not None:
+            k = (r["map"], r["rung"])
+            best[k] = min(best.get(k, math.inf), r["metres"][0])
+    n = max((r["rollouts"] for r in rows), default=0)
+    lines = [
+        "Each row: a method trained in the grid (its final greedy policy then *driven* at "
+        "the rung: transfer) or in physics at the rung. Every final policy is driven from S "
+        f"at the rung (once at `exact`, {n} times above it, each drive its own noise "
+        "stream); figures are median [q25, q75] over seeds of each seed's mean over its "
+        "drives. *P(G)*: share of drives reaching G; *reliable*: seeds with P(G) ≥ 0.98; "
+        "*primitives*, *driven*, *sim time*: over the drives that reached G; *vs best*: "
+        "that median over the best at this map and rung; */ continuous*: over the disc's "
+        "any-angle optimum (Theta*); *aliasing*: share of (cell, action) pairs with more "
+        f"than one next cell ({d['repeats']} drives each).", "",
+        "| map | rung | aliasing | method | trained in | P(G) | reliable | primitives | "
+        "driven (m) | vs best | / continuous | sim time to G (s) | contacts per drive | "
+        "contacts per training episode |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        med = r["metres"][0]
+        vs = "—" if med is None else f"{med / best[(r['map'], r['rung'])]:.3f}"
+        ratio = "—" if r["ratio"][0] is None else f"{r['ratio'][0]:.3f}"
+        tc = "—" if r["train_contacts"][0] is None else _q(r["train_contacts"], 2)
+        lines.append(
+            f"| {r['map']} | {r['rung']} | {r['aliasing']:.3f} | {r['method']} | "
+            f"{r['trained']} | {_q(r['p_goal'], 2)} | {r['reliable']}/{r['seeds']} | "
+            f"{_q(r['primitives'], 1, '—')} | {_q(r['metres'], 1, '—')} | {vs} | {ratio} | "
+            f"{_q(r['sim_time'], 1, '—')} | {_q(r['contacts'], 1)} | {tc} |")
+    maps = list(dict.fromkeys(r["map"] for r in rows))
+    lines += ["", "Optima per map: " + "; ".join(
+        f"{m}: grid {next(r['grid_opt'] for r in rows if r['map'] == m)} moves, physics "
+        f"(exact) {_physics_opt(rows, m)} moves, continuous "
+        + next(("—" if r["cont"] is None else f"{r['cont']:.2f} m")
+               for r in rows if r["map"] == m) for m in maps) + "."]
+    return "\n".join(lines) + "\n"
+
+
+def _physics_opt(rows: list[dict[str, Any]], m: str) -> str:
+    return next((str(r["physics_opt"]) for r in rows if r["map"] == m and r["physics_opt"]),
+                "—")

@@ -404,3 +404,23 @@ def test_train_resume_says_where_it_resumes_from(tmp_path, capsys):
                  "--resume", agent]) == 0
     assert f"resuming {agent}: 20 of 30 episodes done, training the other 10" in \
         capsys.readouterr().out
+
+
+def test_a_silent_command_says_it_still_works_and_a_viewer_does_not(monkeypatch, capsys):
+    """Whatever a command does, it never stays silent past QUIET_S: a line says it still
+    works, and any output resets the clock; a viewer (served until Ctrl-C) is left alone."""
+    import time
+
+    from scenarios.cli import app
+
+    monkeypatch.setattr(app, "QUIET_S", 0.3)
+    beat = app._Heartbeat()
+    time.sleep(1.0)
+    beat.stop()
+    err = capsys.readouterr().err
+    assert "… still working" in err
+    quiet = app._Heartbeat(enabled=False)
+    time.sleep(0.6)
+    quiet.stop()
+    assert capsys.readouterr().err == ""
+    assert "view" in app.NO_HEARTBEAT

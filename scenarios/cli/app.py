@@ -236,6 +236,8 @@ class HungUp(Terminated):
 
 _received: list[int] = []  # SIGTERM/SIGHUP seen while the command ran
 QUIET_S = 5.0  # the longest a command stays silent: then a line says it still works [s]
+NO_HEARTBEAT = ("view", "report")  # a viewer serves until Ctrl-C; report's studies print
+#                                   to the terminal themselves, past our streams
 
 
 class _Noting:
@@ -259,13 +261,16 @@ class _Heartbeat:
     command that says nothing for 20 s looks hung. Progress lines and every other output
     reset the clock."""
 
-    def __init__(self) -> None:
+    def __init__(self, enabled: bool = True) -> None:
         self.last = self.start = time.monotonic()
         self._stop = threading.Event()
         self._streams = sys.stdout, sys.stderr
-        sys.stdout, sys.stderr = _Noting(sys.stdout, self), _Noting(sys.stderr, self)
-        self._thread = threading.Thread(target=self._run, daemon=True, name="rnhql-heartbeat")
-        self._thread.start()
+        self._thread: threading.Thread | None = None
+        if enabled:
+            sys.stdout, sys.stderr = _Noting(sys.stdout, self), _Noting(sys.stderr, self)
+            self._thread = threading.Thread(target=self._run, daemon=True,
+                                            name="rnhql-heartbeat")
+            self._thread.start()
 
     def _run(self) -> None:
         while not self._stop.wait(0.5):
@@ -279,7 +284,8 @@ class _Heartbeat:
 
     def stop(self) -> None:
         self._stop.set()
-        self._thread.join()
+        if self._thread is not None:
+            self._thread.join()
         out, err = self._streams
         if isinstance(sys.stdout, _Noting):
             sys.stdout = out
@@ -300,7 +306,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for sig in (signal.SIGTERM, signal.SIGHUP):
             if signal.getsignal(sig) is signal.SIG_DFL:  # SIG_IGN (nohup) stays ignored
                 signal.signal(sig, _terminate)
-    beat = _Heartbeat()
+    beat = _Heartbeat(enabled=args.command not in NO_HEARTBEAT)
     try:
         check_empty_paths(args)
         code = int(args.func(args) or 0)

@@ -11,6 +11,7 @@ import errno
 import os
 import signal
 import subprocess
+import threading
 import uuid
 import warnings
 from pathlib import Path
@@ -92,6 +93,46 @@ def _flush(stream: rr.RecordingStream, part: Path) -> None:
                 raise
 
 
+CLOSE_AFTER_FAILURE_S = 5.0  # a stream whose writer already failed gets this long to let go
+
+
+def _disconnect(stream: rr.RecordingStream, part: Path, limit_s: float) -> None:
+    """Disconnect ``stream`` from its file in a helper thread, waiting at most ``limit_s``.
+
+    Why a thread: when Rerun's file writer stops on a full disk while a flush is pending,
+    ``disconnect`` waits in Rust for an answer that never comes, with Ctrl-C unheard (seen
+    1 run in 5 of a recorded sweep on a full disk). The stuck thread is a daemon and keeps
+    the stream alive, so the stream is never dropped (its drop would wait the same way);
+    Rerun's own at-exit shutdown is taken off for the same reason.
+    """
+    failure: list[BaseException] = []
+
+    def work() -> None:
+        try:
+            stream.disconnect()
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+            failure.append(exc)
+
+    helper = threading.Thread(target=work, name="rnhql-recording-close", daemon=True)
+    helper.start()
+    waited = 0.0
+    while helper.is_alive():
+        helper.join(FLUSH_STEP_S)
+        waited += FLUSH_STEP_S
+        if helper.is_alive() and (waited >= limit_s or no_space_left(part)):
+            _ABANDONED.append(helper)
+            rr.unregister_shutdown()  # its at-exit flush would wait on this stream forever
+            full = no_space_left(part)
+            raise OSError(errno.ENOSPC if full else errno.EIO,
+                          os.strerror(errno.ENOSPC) if full
+                          else "Rerun's writer did not let go of the file", str(part))
+    if failure:
+        raise failure[0]
+
+
+_ABANDONED: list[threading.Thread] = []  # closes that never returned (see _disconnect)
+
+
 class RecordingFile:
     """An explicit RecordingStream with a file sink at ``<path>.part``, renamed on close."""
 
@@ -126,13 +167,13 @@ class RecordingFile:
                                   stacklevel=2)
             try:
                 _flush(self.stream, self.part)
-                self.stream.disconnect()
+                _disconnect(self.stream, self.part, FLUSH_TIMEOUT_S)
                 if not self.part.exists():
                     raise OSError(errno.EIO, "the recording's file is gone", str(self.part))
                 move_into_place(self.part, self.path)
             except Exception as exc:  # e.g. a full disk: Rerun's writer stops
                 with contextlib.suppress(Exception):
-                    self.stream.disconnect()
+                    _disconnect(self.stream, self.part, CLOSE_AFTER_FAILURE_S)
                 self.part.unlink(missing_ok=True)
                 atexit.unregister(self.close)
                 if isinstance(exc, InputError):  # the path itself (a FIFO nobody reads): one

@@ -1,4 +1,5 @@
-"""The fidelity ladder's bias, open-loop and localisation knobs against their analytic models.
+"""The fidelity ladder's bias, open-loop, localisation, latency and slip knobs against their
+analytic models.
 
 The reference world (PhysicsWorld + PrimitiveController) has wheel noise and carried pose
 only; these knobs live in the batched kernel, so each is checked against something other
@@ -64,6 +65,17 @@ def test_presets_say_what_they_are_and_exact_is_unchanged():
         parse_fidelity("noisy,wheel_ratio_sigma=0.5")
     with pytest.raises(ValueError, match="reference controller drives wheel noise"):
         PrimitiveController(OPEN, PhysicsConfig(), PRESETS["uncalibrated"])
+    lat, slip = PRESETS["latency"], PRESETS["slip"]
+    assert lat.latency and lat.hidden_state and not lat.slips and lat.carried_pose
+    assert slip.slips and slip.hidden_state and not slip.latency and slip.carried_pose
+    with pytest.raises(ScenarioError, match="lag_tau_s: needs carried_pose"):
+        parse_fidelity("lag_tau_s=0.2")
+    with pytest.raises(ScenarioError, match="slip_fraction: has no effect without slip_rate"):
+        parse_fidelity("noisy,slip_fraction=0.5")
+    with pytest.raises(ScenarioError, match="slip_fraction: must be in 0.0..1.0"):
+        parse_fidelity("slip,slip_fraction=1.5")
+    with pytest.raises(ScenarioError, match="command_delay_s: is 10 control periods"):
+        RouteBatch(OPEN, 1, fidelity=parse_fidelity("latency,command_delay_s=1.0"))
 
 
 def test_the_bias_is_drawn_once_per_run_from_the_physics_stream():
@@ -212,3 +224,71 @@ def test_the_learner_sees_the_believed_cell_and_the_world_ends_the_episode_at_th
             seen_apart += disc.state_of(bx, by) != disc.state_of(x, y)
         ended += int(term.sum())
     assert seen_apart > 0 and ended > 0
+
+
+def _open_loop_drive(fid: str, n: int, seed: int = 0) -> RouteBatch:
+    """``n`` robots, each with its own stream, driving one cell RIGHT open loop (one leg,
+    the plan's commands, no feedback) from a centre facing it."""
+    b = RouteBatch(OPEN, n, fidelity=parse_fidelity(f"open_loop=true,carried_pose=true,{fid}"),
+                   trajectories=True)
+    for i, child in enumerate(np.random.SeedSequence(seed).spawn(n)):
+        b.set_noise_rng(i, np.random.default_rng(child))
+        b.place(i, *CENTRE, 0.0)
+    out = b.step(np.array([RIGHT] * n))
+    assert out.reached.all() and not out.bumped.any()
+    return b
+
+
+def test_latency_delivers_each_command_late_and_through_a_first_order_lag():
+    """Per step, the robot moves by the speed a first-order lag of the delayed commands gives
+    (``s_k = c_k + (s_(k-1) - c_k) exp(-T / tau)``, ``c_k = u_(k - delay)``), one step later
+    (positions integrate first): the sampled solution of the lag ODE, to rounding."""
+    period = PhysicsConfig().control_period_s
+    u = _drive_profile()
+    for tau, delay in ((0.2, 0.1), (0.5, 0.0), (0.0, 0.3)):
+        b = _open_loop_drive(f"lag_tau_s={tau},command_delay_s={delay}", 1)
+        tr = b.trajectory(0)
+        moved = np.hypot(*np.diff(tr[:, :2], axis=0).T)
+        n = round(delay / period)
+        c = np.concatenate([np.zeros(n), u])[:len(u)]
+        keep = math.exp(-period / tau) if tau else 0.0
+        s, speed = np.zeros(len(u)), 0.0
+        for k in range(len(u)):
+            speed = c[k] + (speed - c[k]) * keep
+            s[k] = speed
+        np.testing.assert_allclose(moved, np.concatenate([[0.0], s[:-1]]) * period,
+                                   rtol=0, atol=1e-12)
+        assert moved.sum() < 1.0 - 0.05  # the late, lagging wheels fall short of the cell
+
+
+def test_slip_events_deliver_the_renewal_models_expected_travel():
+    """Each wheel slips as a Poisson process sampled per period, for whole periods: the
+    mean path of an open-loop drive is the plan's speeds times each period's expected
+    delivered fraction, from the slip's Markov chain (free -> slipping D periods -> free)."""
+    rate, frac, dur = 2.0, 0.2, 0.3
+    period = PhysicsConfig().control_period_s
+    u = _drive_profile()
+    n = 1500
+    b = _open_loop_drive(f"slip_rate_hz={rate},slip_fraction={frac},slip_duration_s={dur}",
+                         n, seed=3)
+    got = b.primitive_metres()
+    p = -math.expm1(-rate * period)
+    d = math.ceil(dur / period - 1e-9)
+    left = np.zeros(d)  # P(slip periods left after this one = r), r = 0 .. d-1
+    left[0] = 1.0
+    expected_factor = []
+    for _ in range(len(u)):
+        free = left[0]
+        slipping = 1.0 - free + free * p
+        expected_factor.append(1.0 - (1.0 - frac) * slipping)
+        nxt = np.zeros(d)
+        nxt[0] = free * (1.0 - p) + left[1] if d > 1 else free * (1.0 - p) + free * p
+        if d > 1:
+            nxt[1:-1] = left[2:]
+            nxt[-1] = free * p
+        left = nxt
+    want = float(np.sum(u[:-1] * np.array(expected_factor[:-1]))) * period
+    se = got.std(ddof=1) / math.sqrt(n)
+    assert abs(got.mean() - want) < 4 * se, (got.mean(), want, se)
+    assert want < 0.95 and (got < 1.0 - 1e-6).mean() > 0.5  # slips did cost travel
+    assert (np.abs(got - 1.0) < 1e-9).any()  # ... and a few drives had none (P about 1 %)

@@ -22,7 +22,7 @@ from sim.scenario_io import resolve_scenario
 POSE_TOL_M = 1e-9
 
 
-@pytest.mark.parametrize("fid", ["exact", "wheel_noise=0.05", "noisy"])
+@pytest.mark.parametrize("fid", ["exact", "wheel_noise=0.05", "noisy", "latency", "slip"])
 @pytest.mark.parametrize("name", ["paper-40", "arena"])
 def test_batch_robot_equals_the_reference_world(name, fid):
     """Every step through cpSpaceStep (the reference: PhysicsWorld + PrimitiveController) vs

@@ -39,6 +39,22 @@ a real robot does:
   pose plus normal errors ``fix_sigma_m`` per axis and ``fix_sigma_rad``. The learner's
   state is the *believed* cell; contacts, the reward and reaching G are the true pose's.
   Needs carried pose (a bump does not teleport a robot to a centre it does not know).
+- ``lag_tau_s`` [s], ``command_delay_s`` [s]: command latency. Each wheel's speed follows
+  its command through a first-order lag of time constant ``lag_tau_s`` (a motor and its
+  speed loop; MRPT's differential-drive simulator uses the same model, tau = 1.8 s on its
+  reference robot), and the command reaches the wheels ``command_delay_s`` late (a bus, a
+  driver's queue), rounded to whole control periods (at most :data:`MAX_DELAY_PERIODS`).
+  The lag is exact for a command held over a period (``keep = exp(-period / tau)``), applied
+  once per period: the delivered speed is constant within a period, as every other knob's.
+  Wheel speeds and the commands in flight carry from primitive to primitive; a bump stops
+  the motors (both are cleared).
+- ``slip_rate_hz`` [1/s], ``slip_fraction`` [-], ``slip_duration_s`` [s]: slip events.
+  Each wheel that is not slipping starts a slip in a control period with probability
+  ``1 - exp(-slip_rate_hz * period)`` (a Poisson process sampled once per period, from one
+  normal of the robot's stream per wheel); a slipping wheel delivers ``slip_fraction`` of
+  its speed for ``slip_duration_s`` (rounded up to whole periods). A wet patch, dust, a
+  wheel lifted by a cable. The odometry of ``localisation`` reads the delivered motion: a
+  slip is not an odometry error here (encoders on a slipping wheel would over-count).
 
 What each preset stands for is written beside it in :data:`PRESETS`. Every knob is
 deterministic per seed: the noise comes from the generator the env (or the sweep) gives
@@ -61,6 +77,11 @@ MAX_BIAS_SIGMA = 0.1  # a 10 % wheel-radius or wheelbase error is a broken robot
 MAX_ODOMETRY_ALPHA = 1.0  # odometry variance per squared motion; beyond, odometry is noise
 MAX_FIX_SIGMA_M = 1.0  # [m]
 MAX_FIX_SIGMA_RAD = math.pi / 4  # [rad]
+MAX_LAG_TAU_S = 5.0  # a wheel that takes longer to answer is not driving primitives [s]
+MAX_DELAY_PERIODS = 8  # commands in flight a robot keeps (the kernel's ring per robot)
+MAX_COMMAND_DELAY_S = 1.0  # [s]; also at most MAX_DELAY_PERIODS control periods
+MAX_SLIP_RATE_HZ = 10.0  # [1/s]
+MAX_SLIP_DURATION_S = 5.0  # [s]
 RENAMED = {"rough": "slippery"}  # old preset names: what they were renamed to
 
 
@@ -88,6 +109,11 @@ class Fidelity:
     fix_every: int = 0  # localisation: an absolute fix every this many primitives (0: never)
     fix_sigma_m: float = 0.0  # the fix's position error, per axis [m]
     fix_sigma_rad: float = 0.0  # the fix's heading error [rad]
+    lag_tau_s: float = 0.0  # first-order lag of each wheel's speed on its command [s] (0: none)
+    command_delay_s: float = 0.0  # commands reach the wheels this late [s], whole periods
+    slip_rate_hz: float = 0.0  # slip events per wheel and second [1/s] (0: none)
+    slip_fraction: float = 0.3  # a slipping wheel delivers this fraction of its speed [-]
+    slip_duration_s: float = 0.3  # how long a slip lasts [s] (rounded up to whole periods)
 
     @property
     def label(self) -> str:
@@ -117,8 +143,19 @@ class Fidelity:
         """Where the robot stands within its cell is not known to what plans its moves (open
         loop), or its cell itself is an estimate (localisation): the world is not Markov in
         the stochastic model's states, so V* (:mod:`sim.physics.models.stochastic`) is not
-        defined at this rung."""
-        return self.open_loop or self.localisation
+        defined at this rung. Latency and slip carry state between primitives too (wheel
+        speeds, commands in flight, a slip under way)."""
+        return (self.open_loop or self.localisation or self.latency or self.slips)
+
+    @property
+    def latency(self) -> bool:
+        """The wheels answer late: a lag or a delay (state carried between primitives)."""
+        return self.lag_tau_s > 0.0 or self.command_delay_s > 0.0
+
+    @property
+    def slips(self) -> bool:
+        """Slip events are drawn."""
+        return self.slip_rate_hz > 0.0
 
     def knobs(self) -> dict[str, object]:
         """Every knob by name (what records carry)."""
@@ -152,6 +189,23 @@ class Fidelity:
                 "use e.g. 0.05 (5 cm)")
         _number(source, "fix_sigma_rad", self.fix_sigma_rad, 0.0, MAX_FIX_SIGMA_RAD,
                 "use e.g. 0.05 (about 3 degrees)")
+        _number(source, "lag_tau_s", self.lag_tau_s, 0.0, MAX_LAG_TAU_S,
+                "use e.g. 0.2 (a small robot's motors); 0: no lag")
+        _number(source, "command_delay_s", self.command_delay_s, 0.0, MAX_COMMAND_DELAY_S,
+                "use e.g. 0.1 (one control period); 0: none")
+        _number(source, "slip_rate_hz", self.slip_rate_hz, 0.0, MAX_SLIP_RATE_HZ,
+                "use e.g. 0.5 (a slip every 2 s per wheel); 0: none")
+        _number(source, "slip_fraction", self.slip_fraction, 0.0, 1.0,
+                "use e.g. 0.3 (a slipping wheel delivers 30 %)")
+        _number(source, "slip_duration_s", self.slip_duration_s, 0.0, MAX_SLIP_DURATION_S,
+                "use e.g. 0.3")
+        if (self.slip_rate_hz > 0.0 or self.lag_tau_s > 0.0 or self.command_delay_s > 0.0) \
+                and not self.carried_pose:
+            key = "slip_rate_hz" if self.slip_rate_hz > 0.0 else (
+                "lag_tau_s" if self.lag_tau_s > 0.0 else "command_delay_s")
+            raise ScenarioError(source, key, "needs carried_pose=true",
+                                "wheels that answer late or slip do not stop on a cell "
+                                "centre after a bump: add carried_pose=true")
         if self.localisation and not self.carried_pose:
             raise ScenarioError(source, "localisation", "needs carried_pose=true",
                                 "a robot that localises is never placed back on a centre it "
@@ -162,9 +216,38 @@ class Fidelity:
         if unused:
             raise ScenarioError(source, unused[0], "has no effect without localisation=true",
                                 "add localisation=true, or drop the knob")
+        default = Fidelity()
+        unused = [k for k in ("slip_fraction", "slip_duration_s")
+                  if getattr(self, k) != getattr(default, k) and not self.slips]
+        if unused:
+            raise ScenarioError(source, unused[0], "has no effect without slip_rate_hz > 0",
+                                "add e.g. slip_rate_hz=0.5, or drop the knob")
 
 
 _FIRST_KNOBS = ("wheel_noise", "carried_pose", "bumper_travel_m")  # always in labels
+
+
+def delay_periods(fidelity: Fidelity, period_s: float, source: str = "fidelity") -> int:
+    """``command_delay_s`` in whole control periods of ``period_s`` [s] (nearest), refused
+    beyond :data:`MAX_DELAY_PERIODS` (the commands a robot keeps in flight)."""
+    n = round(fidelity.command_delay_s / period_s)
+    if n > MAX_DELAY_PERIODS:
+        raise ScenarioError(source, "command_delay_s", f"is {n} control periods of "
+                            f"{period_s} s; at most {MAX_DELAY_PERIODS} are kept in flight",
+                            f"use at most {MAX_DELAY_PERIODS * period_s:g} s, or a longer "
+                            "control period")
+    return n
+
+
+def lag_keep(fidelity: Fidelity, period_s: float) -> float:
+    """The part of a wheel's speed error left after one control period: exp(-period / tau)
+    (0 without a lag: the wheel answers within the period)."""
+    return math.exp(-period_s / fidelity.lag_tau_s) if fidelity.lag_tau_s > 0.0 else 0.0
+
+
+def slip_start_probability(fidelity: Fidelity, period_s: float) -> float:
+    """Probability that a wheel not slipping starts a slip in one control period."""
+    return -math.expm1(-fidelity.slip_rate_hz * period_s)
 
 
 def _number(source: str, key: str, value: object, lo: float, hi: float, hint: str) -> None:
@@ -198,6 +281,13 @@ PRESETS = {
                           odometry_rot_rot=0.002, odometry_rot_trans=0.0015,
                           odometry_trans_trans=0.001, odometry_trans_rot=0.0001,
                           fix_every=5, fix_sigma_m=0.05, fix_sigma_rad=0.03),
+    # noisy, and the wheels answer late: a first-order lag of 0.2 s on each wheel's speed
+    # (a small robot's motors and speed loop) and commands one control period late (0.1 s)
+    "latency": Fidelity(name="latency", **_NOISY, lag_tau_s=0.2, command_delay_s=0.1),
+    # noisy, and wheels slip now and then: a slip every 10 s per wheel, each 0.3 s long,
+    # a slipping wheel delivering 30 % (a dusty or wet floor, a wheel over a cable)
+    "slip": Fidelity(name="slip", **_NOISY, slip_rate_hz=0.1, slip_fraction=0.3,
+                     slip_duration_s=0.3),
 }
 
 

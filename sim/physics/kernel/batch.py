@@ -148,7 +148,7 @@ class RouteBatch:
         self.chipmunk_s = 0.0  # wall time in Chipmunk contact checks so far [s]
         # each robot's normals for wheel noise, drawn in blocks from its own generator
         self._noise = np.zeros((n_robots, NOISE_BLOCK if fid.wheel_noise > 0
-                                              or fid.localisation else 2))
+                                              or fid.localisation or fid.slips else 2))
         self._npos = np.full(n_robots, self._noise.shape[1], dtype=np.int64)  # next normal
         self._nend = self._npos.copy()  # end of the normals drawn so far in the block
         self._nblock = np.full(n_robots, FIRST_NOISE_BLOCK, dtype=np.int64)

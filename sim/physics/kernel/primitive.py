@@ -54,14 +54,19 @@ from sim.physics.kernel.queries import (
     odometry,
     sweep_step,
 )
-from sim.physics.kernel.state import Geometry, Params, Phase, Scratch, Status
+from sim.physics.kernel.state import SENT_RING, Geometry, Params, Phase, Scratch, Status
 from sim.physics.reference.controller import (
+    SETTLE_M_S,
     Leg,
     at_target,
     cell_of,
+    lag_wheel,
     leg_command,
     plan_leg,
+    slip_step,
+    twist_to_wheels,
     wheel_twist,
+    wheels_twist,
 )
 from sim.physics.static import DEEPER_M, HOLD_STEP_M
 
@@ -123,9 +128,11 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
     along within 10 um of parallel.
     """
     p, prof, g, s = Params(*pt), Profiles(*prof_t), Geometry(*geo_t), Scratch(*st)
-    noisy = p.wheel_noise > 0.0 or p.carried_pose or p.biased or p.open_loop or p.localisation
+    noisy = (p.wheel_noise > 0.0 or p.carried_pose or p.biased or p.open_loop or p.localisation
+             or p.latency or p.slips)
     fixes = p.localisation and p.fix_every > 0
-    normals = (2 if p.wheel_noise > 0.0 else 0) + (3 if p.localisation else 0)  # per command
+    normals = ((2 if p.wheel_noise > 0.0 else 0) + (3 if p.localisation else 0)  # per command
+               + (2 if p.slips else 0))
     for i in range(robots.shape[0]):
         if not active[i]:
             continue
@@ -165,10 +172,17 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
                 k = rb.cmd
                 if rb.cmd_set != k:  # a new command: its twist, as the wheels deliver it
                     vx, vy, w = leg_command(leg, k, prof.turn_caps, prof.drive_caps)
-                    if math.isnan(w):  # all driven
-                        break
+                    if math.isnan(w):  # all driven; with latency a stop until settled
+                        if not p.latency:
+                            break
+                        if rb.nleg < 0:
+                            rb.nleg = k
+                        if (k - rb.nleg >= p.delay
+                                and max(abs(rb.wl), abs(rb.wr)) <= SETTLE_M_S):
+                            break
+                        vx = vy = w = 0.0
                     if noisy:
-                        e_left = e_right = 0.0
+                        e_left = e_right = z_left = z_right = 0.0
                         if normals:
                             j = npos[i]
                             if j + normals > nend[i]:
@@ -180,10 +194,17 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
                             if p.localisation:  # this period's odometry noise
                                 rb.o1, rb.o2, rb.o3 = noise[i, j], noise[i, j + 1], noise[i, j + 2]
                                 j += 3
+                            if p.slips:  # this period's slip draws, one per wheel
+                                z_left, z_right = noise[i, j], noise[i, j + 1]
+                                j += 2
                             npos[i] = j
-                        vx, vy, w = wheel_twist(vx, vy, w, rb.th, e_left, e_right,
-                                                p.wheel_noise, p.wheel_base_m, rb.gain_l,
-                                                rb.gain_r, rb.base_k)
+                        if p.latency or p.slips:
+                            vx, vy, w = _deliver(rb, p, vx, vy, w, e_left, e_right, z_left,
+                                                 z_right)
+                        else:
+                            vx, vy, w = wheel_twist(vx, vy, w, rb.th, e_left, e_right,
+                                                    p.wheel_noise, p.wheel_base_m, rb.gain_l,
+                                                    rb.gain_r, rb.base_k)
                     rb.cvx, rb.cvy, rb.cw = vx, vy, w
                     rb.cmd_set = k
                 while rb.sub < p.substeps:
@@ -261,6 +282,35 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
 
 
 @njit(cache=True)
+def _deliver(rb, p, vx, vy, w, e_left, e_right, z_left, z_right):
+    """One period's twist through latency and slip (as
+    :meth:`sim.physics.reference.controller.PrimitiveController._deliver`): the wheel
+    command joins those in flight (``rb.sent``), the one sent ``p.delay`` periods ago reaches
+    the motors (nothing before that: they stand), each wheel lags toward it, slips or not
+    (:func:`slip_step`), and :func:`wheels_twist` adds the noise and the per-run bias."""
+    vl, vr = twist_to_wheels(math.hypot(vx, vy), w, p.wheel_base_m)
+    if p.latency:
+        slot = rb.nsent % SENT_RING
+        rb.sent[slot, 0], rb.sent[slot, 1] = vl, vr
+        rb.nsent += 1
+        if rb.nsent > p.delay:
+            back = (rb.nsent - 1 - p.delay) % SENT_RING
+            vl, vr = rb.sent[back, 0], rb.sent[back, 1]
+        else:
+            vl = vr = 0.0
+        rb.wl = vl = lag_wheel(vl, rb.wl, p.lag_keep)
+        rb.wr = vr = lag_wheel(vr, rb.wr, p.lag_keep)
+    f_left = f_right = 1.0
+    if p.slips:
+        f_left, rb.slip_l = slip_step(rb.slip_l, z_left, p.slip_p, p.slip_duration_s, p.period,
+                                      p.slip_fraction)
+        f_right, rb.slip_r = slip_step(rb.slip_r, z_right, p.slip_p, p.slip_duration_s,
+                                       p.period, p.slip_fraction)
+    return wheels_twist(vl, vr, rb.th, e_left, e_right, p.wheel_noise, p.wheel_base_m,
+                        rb.gain_l, rb.gain_r, rb.base_k, f_left, f_right)
+
+
+@njit(cache=True)
 def _plan(rb, p, turn_sums, drive_sums):
     """Plan a leg from the pose (:func:`plan_leg`); False when there is nothing to do. The
     pose is the one the controller knows: the estimate with localisation; in open loop
@@ -271,12 +321,14 @@ def _plan(rb, p, turn_sums, drive_sums):
         x, y, th = (rb.cell_x + 0.5) * p.cell_m, (rb.cell_y + 0.5) * p.cell_m, rb.bth
     else:
         x, y, th = rb.x, rb.y, rb.th
-    leg = plan_leg(x, y, th, rb.tx, rb.ty, rb.head, p.tol_m, p.period, turn_sums, drive_sums)
+    leg = plan_leg(x, y, th, rb.tx, rb.ty, rb.head, p.tol_m, p.period, turn_sums, drive_sums,
+                   p.tol_rad if p.latency else math.inf)
     rb.nturn, rb.tsign, rb.tscale = leg.nturn, leg.tsign, leg.tscale
     rb.ndrive, rb.dscale, rb.ex, rb.ey, rb.dist = (leg.ndrive, leg.dscale, leg.ex, leg.ey,
                                                    leg.dist)
     rb.cmd = rb.sub = 0
     rb.cmd_set = -1
+    rb.nleg = -1
     return leg.nturn > 0 or leg.ndrive > 0
 
 
@@ -359,6 +411,8 @@ def _bump(rb, p, g, s):
     ``exact`` resting there if that centre overlaps a shape: noise lets a robot stop within
     tolerance of a centre that is not clear)."""
     rb.vx = rb.vy = rb.w = rb.cvx = rb.cvy = rb.cw = 0.0
+    rb.wl = rb.wr = rb.slip_l = rb.slip_r = 0.0  # the bumper stops the motors: nothing
+    rb.nsent = 0  # in flight, no slip under way
     rb.bumped = True
     rb.forced = False
     if p.localisation:  # the travel of the period the contact ended

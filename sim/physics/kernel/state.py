@@ -22,7 +22,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from sim.physics.fidelity import Fidelity
+from sim.physics.fidelity import MAX_DELAY_PERIODS, Fidelity, delay_periods, lag_keep, \
+    slip_start_probability
 
 __all__ = ["FIDELITY_KNOBS", "ROBOT", "Geometry", "Params", "Phase", "Robots", "Scratch", "Status",
            "by_name", "params_of"]
@@ -78,7 +79,14 @@ ROBOT = np.dtype([
     # steps inside it need no sweep; sim.physics.kernel.queries.new_clear_ball) [m];
     # radius <= 0: none
     ("clear_x", _F), ("clear_y", _F), ("clear_r", _F),
+    # latency and slip (sim.physics.fidelity): each wheel's lagged speed [m/s]; the wheel
+    # commands sent, a ring of the last SENT_RING (left, right) [m/s], and how many were
+    # sent since the motors last stopped; each wheel's slip time left [s]
+    ("wl", _F), ("wr", _F), ("sent", _F, (MAX_DELAY_PERIODS + 1, 2)), ("nsent", _I),
+    ("slip_l", _F), ("slip_r", _F),
+    ("nleg", _I),  # latency: the leg's command count, once its commands are driven (-1)
 ], align=True)
+SENT_RING = MAX_DELAY_PERIODS + 1  # a command sent MAX_DELAY_PERIODS ago is still kept
 
 # Python's view: every field of ROBOT as a 1-D array of length N (views into the records)
 Robots = NamedTuple("Robots", [(name, np.ndarray) for name in ROBOT.names])  # type: ignore[misc]
@@ -111,6 +119,11 @@ _DRIVE_FIELDS = [
     ("radius_m", float),  # robot radius [m]
     ("wheel_base_m", float),  # [m]
     ("biased", bool),  # fidelity: a per-run wheel bias is drawn
+    ("latency", bool),  # fidelity: the wheels lag or get their commands late
+    ("lag_keep", float),  # ... the part of a wheel's speed error left after a period [-]
+    ("delay", int),  # ... commands reach the wheels this many control periods late
+    ("slips", bool),  # fidelity: slip events are drawn
+    ("slip_p", float),  # ... the chance a wheel starts a slip in a control period [-]
 ]
 _KNOB_TYPES = typing.get_type_hints(Fidelity)
 FIDELITY_KNOBS = tuple(f.name for f in dataclasses.fields(Fidelity) if f.name != "name")
@@ -121,7 +134,10 @@ Params = NamedTuple("Params", [*_DRIVE_FIELDS,  # type: ignore[misc]
 def params_of(fidelity: Fidelity, **drive: float | int) -> Params:
     """The kernel's constants: the drive's (``drive``, by name) and the fidelity's knobs,
     each under its own name."""
-    return Params(**drive, biased=fidelity.biased,
+    period = float(drive["period"])
+    return Params(**drive, biased=fidelity.biased, latency=fidelity.latency,
+                  lag_keep=lag_keep(fidelity, period), delay=delay_periods(fidelity, period),
+                  slips=fidelity.slips, slip_p=slip_start_probability(fidelity, period),
                   **{k: getattr(fidelity, k) for k in FIDELITY_KNOBS})
 
 

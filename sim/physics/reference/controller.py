@@ -39,7 +39,7 @@ from numba import njit
 from sim.grid.actions import ACTION_DELTAS, ACTION_HEADINGS
 from sim.grid.discretiser import Discretiser
 from sim.physics.drive_profiles import DriveLimits, profile_index, profiles
-from sim.physics.fidelity import Fidelity
+from sim.physics.fidelity import Fidelity, delay_periods, lag_keep, slip_start_probability
 from sim.physics.static import DEEPER_M
 
 if TYPE_CHECKING:
@@ -50,6 +50,12 @@ if TYPE_CHECKING:
 # bearing up to rounding (~1e-13 rad), and a "turn" of that size would still cost
 # two control periods (command + stop).
 MIN_TURN_RAD = 1e-9
+
+# With latency a leg's commands end before its wheels do: the controller holds a stop until
+# the commands in flight are delivered and both wheels turn slower than this [m/s] (a
+# first-order lag delivers the whole commanded travel once it settles), then checks the
+# target. At 1 cm/s the drift still to come is 1.5 mm and 0.6 degrees at tau = 0.2 s.
+SETTLE_M_S = 0.01
 
 
 # ------------------------------------------------------------------ kinematics
@@ -96,15 +102,50 @@ def wheel_twist(vx: float, vy: float, omega: float, heading: float, e_left: floa
     motion along the robot's ``heading`` [rad] (a diff drive cannot move sideways). With
     gains and ``base_k`` 1 the arithmetic is the unbiased one, bit for bit."""
     vl, vr = twist_to_wheels(math.hypot(vx, vy), omega, wheel_base_m)
+    return wheels_twist(vl, vr, heading, e_left, e_right, wheel_noise, wheel_base_m,
+                        gain_left, gain_right, base_k, 1.0, 1.0)
+
+
+@njit(cache=True, inline="always")
+def wheels_twist(vl: float, vr: float, heading: float, e_left: float, e_right: float,
+                 wheel_noise: float, wheel_base_m: float, gain_left: float, gain_right: float,
+                 base_k: float, slip_left: float, slip_right: float
+                 ) -> tuple[float, float, float]:
+    """:func:`wheel_twist` from the wheels' speeds [m/s] the motors drive (after any lag),
+    each also times its slip factor (1: no slip)."""
     if wheel_noise > 0.0:
         vl *= 1.0 + wheel_noise * e_left
         vr *= 1.0 + wheel_noise * e_right
+    if slip_left != 1.0 or slip_right != 1.0:
+        vl *= slip_left
+        vr *= slip_right
     if gain_left != 1.0 or gain_right != 1.0 or base_k != 1.0:
         vl *= gain_left
         vr *= gain_right
         wheel_base_m *= base_k
     v, w = wheels_to_twist(vl, vr, wheel_base_m)
     return v * math.cos(heading), v * math.sin(heading), w
+
+
+@njit(cache=True, inline="always")
+def lag_wheel(command: float, speed: float, keep: float) -> float:
+    """A wheel's speed after one control period of a first-order lag toward ``command``
+    (``keep = exp(-period / tau)``; 0: the command at once)."""
+    return command + (speed - command) * keep
+
+
+@njit(cache=True, inline="always")
+def slip_step(left_s: float, z: float, start_p: float, duration_s: float, period_s: float,
+              fraction: float) -> tuple[float, float]:
+    """One control period of a wheel's slip events: (the factor its speed is delivered with,
+    the slip time left after the period [s]). ``z``: the wheel's normal for the period,
+    turned into a uniform (a slip starts when it is below ``start_p``); drawn every period
+    whether or not the wheel slips, so the stream's layout does not depend on the slips."""
+    if left_s > 1e-9:  # a slip under way
+        return fraction, left_s - period_s
+    if 0.5 * math.erfc(-z / math.sqrt(2.0)) < start_p:
+        return fraction, duration_s - period_s
+    return 1.0, 0.0
 
 
 # ------------------------------------------------------------------ one leg
@@ -126,10 +167,14 @@ class Leg(NamedTuple):
 
 @njit(cache=True, inline="always")
 def plan_leg(x: float, y: float, th: float, tx: float, ty: float, heading: float,
-             tol_m: float, period_s: float, turn_sums: np.ndarray, drive_sums: np.ndarray
-             ) -> Leg:
+             tol_m: float, period_s: float, turn_sums: np.ndarray, drive_sums: np.ndarray,
+             split_turn_rad: float = math.inf) -> Leg:
     """From the pose (x, y, th): turn to face the target (tx, ty) and drive to it when it is
-    further than ``tol_m``; otherwise only turn to ``heading``. Nothing to do: both 0."""
+    further than ``tol_m``; otherwise only turn to ``heading``. Nothing to do: both 0.
+
+    A turn larger than ``split_turn_rad`` is a leg of its own, the drive planned after it
+    (with latency: a drive begun while the wheels still turn would leave the line; the
+    controller lets the turn settle first, :data:`SETTLE_M_S`)."""
     dx, dy = tx - x, ty - y
     dist = math.hypot(dx, dy)
     drive = dist > tol_m
@@ -142,7 +187,7 @@ def plan_leg(x: float, y: float, th: float, tx: float, ty: float, heading: float
             raise ValueError("turn longer than the profile table")
         nturn, tscale = n + 1, total / turn_sums[n]
         tsign = -1.0 if turn < 0.0 else 1.0
-    if not drive:
+    if not drive or abs(turn) > split_turn_rad:
         return Leg(nturn, tsign, tscale, 0, 0.0, 0.0, 0.0, 0.0)
     total = dist / period_s
     n = profile_index(drive_sums, total)
@@ -175,9 +220,11 @@ def leg_command(leg: Leg, k: int, turn_caps: np.ndarray, drive_caps: np.ndarray
 @njit(cache=True)
 def plan_commands(x: float, y: float, th: float, tx: float, ty: float, heading: float,
                   tol_m: float, period_s: float, turn_caps: np.ndarray, turn_sums: np.ndarray,
-                  drive_caps: np.ndarray, drive_sums: np.ndarray) -> tuple[Leg, np.ndarray]:
+                  drive_caps: np.ndarray, drive_sums: np.ndarray,
+                  split_turn_rad: float = math.inf) -> tuple[Leg, np.ndarray]:
     """:func:`plan_leg` and every :func:`leg_command` of it (float64[n, 3]) in one call."""
-    leg = plan_leg(x, y, th, tx, ty, heading, tol_m, period_s, turn_sums, drive_sums)
+    leg = plan_leg(x, y, th, tx, ty, heading, tol_m, period_s, turn_sums, drive_sums,
+                   split_turn_rad)
     n = (leg.nturn + 1 if leg.nturn > 0 else 0) + (leg.ndrive + 1 if leg.ndrive > 0 else 0)
     cmds = np.empty((n, 3))
     for k in range(cmds.shape[0]):
@@ -238,6 +285,10 @@ class PrimitiveController:
                 "kernel and are tested against their analytic models (tests/test_ladder_knobs.py)")
         period = config.control_period_s
         self._period = period
+        self._keep = lag_keep(fid, period)
+        self._delay = delay_periods(fid, period)
+        self._slip_p = slip_start_probability(fid, period)
+        self._split_turn_rad = config.tolerance_rad if fid.latency else math.inf
         self.profiles = profiles(lim, period, scenario.cell_size_m)
         self._tol_m = config.tolerance_m
         self._tol_rad = config.tolerance_rad
@@ -268,7 +319,7 @@ class PrimitiveController:
           tolerance of a centre that is not clear): then it rests there.
         """
         fid, disc = self.fidelity, self.disc
-        if fid.wheel_noise > 0.0 and rng is None:
+        if (fid.wheel_noise > 0.0 or fid.slips) and rng is None:
             raise ValueError("this fidelity has wheel noise: pass rng")
         x, y, th = pose = world.pose
         ix, iy = cell_of(x, y, disc.cell_size_m, disc.nx, disc.ny)
@@ -282,7 +333,7 @@ class PrimitiveController:
         bumped = reached = False
         while True:
             leg, cmds = plan_commands(*pose, tx, ty, heading, self._tol_m, self._period,
-                                      *self.profiles)
+                                      *self.profiles, self._split_turn_rad)
             if not cmds.shape[0]:  # nothing left to do (only when already exactly on target)
                 reached = True
                 break
@@ -321,13 +372,61 @@ class PrimitiveController:
         traj = world.trajectory
         for k, (vx, vy, w) in enumerate(commands):
             e = rng.standard_normal(2) if sigma > 0.0 else (0.0, 0.0)
-            world.set_twist(*wheel_twist(vx, vy, w, world.pose[2], e[0], e[1], sigma, base))
+            if fid.latency or fid.slips:
+                z = rng.standard_normal(2) if fid.slips else (0.0, 0.0)
+                world.set_twist(*self._deliver(world, vx, vy, w, e, z))
+            else:
+                world.set_twist(*wheel_twist(vx, vy, w, world.pose[2], e[0], e[1], sigma,
+                                             base))
             turning = 0 < nturn and k <= nturn  # the turn and the stop after it
-            for _ in range(sub):  # each step guarded by its own cast
-                if (self._held_step(world, turning) if fid.carried_pose or world.resting
-                        else world.advance(1, traj)):
+            if self._steps(world, turning, sub, traj):
+                return True
+        if fid.latency:  # hold a stop until the wheels settle (SETTLE_M_S)
+            held = 0
+            while held < self._delay or max(abs(world.wheels.left),
+                                             abs(world.wheels.right)) > SETTLE_M_S:
+                e = rng.standard_normal(2) if sigma > 0.0 else (0.0, 0.0)
+                z = rng.standard_normal(2) if fid.slips else (0.0, 0.0)
+                world.set_twist(*self._deliver(world, 0.0, 0.0, 0.0, e, z))
+                held += 1
+                if self._steps(world, False, sub, traj):
                     return True
         return False
+
+    def _steps(self, world: PhysicsWorld, turning: bool, sub: int, traj: list) -> bool:
+        """A control period's ``sub`` physics steps, each guarded by its own cast; True when
+        one ended in a bump."""
+        for _ in range(sub):
+            if (self._held_step(world, turning) if self.fidelity.carried_pose or world.resting
+                    else world.advance(1, traj)):
+                return True
+        return False
+
+    def _deliver(self, world: PhysicsWorld, vx: float, vy: float, w: float, e: Any,
+                 z: Any) -> tuple[float, float, float]:
+        """One period's twist through latency and slip (the kernel's rule, see
+        :func:`sim.physics.kernel.primitive.advance`): the command joins those in flight, the
+        one sent ``delay`` periods ago reaches the motors, each wheel lags toward it, slips
+        or not, and :func:`wheels_twist` delivers it with the wheel noise ``e``."""
+        fid, wheels, base = self.fidelity, world.wheels, self.limits.wheel_base_m
+        vl, vr = twist_to_wheels(math.hypot(vx, vy), w, base)
+        if fid.latency:
+            wheels.sent.append((vl, vr))
+            vl, vr = (wheels.sent[-1 - self._delay] if len(wheels.sent) > self._delay
+                      else (0.0, 0.0))
+            del wheels.sent[:-1 - self._delay]
+            wheels.left = vl = lag_wheel(vl, wheels.left, self._keep)
+            wheels.right = vr = lag_wheel(vr, wheels.right, self._keep)
+        f_left = f_right = 1.0
+        if fid.slips:
+            f_left, wheels.slip_left = slip_step(wheels.slip_left, z[0], self._slip_p,
+                                                 fid.slip_duration_s, self._period,
+                                                 fid.slip_fraction)
+            f_right, wheels.slip_right = slip_step(wheels.slip_right, z[1], self._slip_p,
+                                                   fid.slip_duration_s, self._period,
+                                                   fid.slip_fraction)
+        return wheels_twist(vl, vr, world.pose[2], e[0], e[1], fid.wheel_noise, base, 1.0, 1.0,
+                            1.0, f_left, f_right)
 
     def _held_step(self, world: PhysicsWorld, turning: bool) -> bool:
         """One guarded step with carried pose, or of a robot resting against a surface;

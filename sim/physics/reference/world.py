@@ -80,6 +80,19 @@ except ImportError:  # pragma: no cover - another pymunk layout
 _MISSING = object()
 
 
+class WheelState:
+    """What the motors carry from one control period to the next at the latency and slip
+    rungs (:mod:`sim.physics.fidelity`): each wheel's lagged speed [m/s], the wheel commands
+    sent and not yet delivered, each wheel's slip time left [s]. All at rest when placed."""
+
+    __slots__ = ("left", "right", "sent", "slip_left", "slip_right")
+
+    def __init__(self) -> None:
+        self.left = self.right = 0.0
+        self.sent: list[tuple[float, float]] = []
+        self.slip_left = self.slip_right = 0.0
+
+
 class PhysicsWorld:
     """One episode's Pymunk world. Build a new one per reset (see the module doc).
 
@@ -130,6 +143,7 @@ class PhysicsWorld:
         self.contact_counts = dict.fromkeys(STATIC_KINDS, 0)
         self.trajectory: list[tuple[float, float, float]] = [(x, y, th)]
         self.resting = False  # at rest against a surface (see hold)
+        self.wheels = WheelState()  # latency and slip: what the motors carry (at rest)
         self.solve_contacts = True  # False: contacts take no part in the velocity solve
         self._pending: list[Contact] = []
         self._bind_fast()
@@ -237,6 +251,7 @@ class PhysicsWorld:
             body.velocity, body.angular_velocity = (0.0, 0.0), 0.0
         self.space.reindex_shapes_for_body(self.robot)
         self.resting = resting
+        self.wheels = WheelState()  # motors stopped, nothing in flight
 
     # --------------------------------------------------------- collision queries
     def cast_free_distance(self, x0: float, y0: float, x1: float, y1: float,

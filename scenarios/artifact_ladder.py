@@ -211,3 +211,35 @@ def ladder_full(d: dict[str, Any]) -> str:
 def _physics_opt(rows: list[dict[str, Any]], m: str) -> str:
     return next((str(r["physics_opt"]) for r in rows if r["map"] == m and r["physics_opt"]),
                 "—")
+
+
+@renderer("primitives")
+def primitives_table(d: dict[str, Any]) -> str:
+    """What one primitive does at each rung (:mod:`scenarios.studies.ladder.primitives`):
+    outcomes, time, end pose, and the bumper re-firing against the grid's count."""
+    def mm(q: list[float] | None) -> list[float | None]:
+        return [None if q is None else v * 1000.0 for v in (q or [None] * 3)]
+
+    def pct(x: float | None) -> str:
+        return "—" if x is None else f"{100 * x:.0f} %"
+
+    head = ("| map | rung | reached | bumped | timed out | s per primitive | along-track "
+            "[mm] | cross-track [mm] | \\|cross\\| p95 [mm] | \\|heading\\| p95 [°] | "
+            "P(bump \\| bumped before) | P(bump \\| moved before) | grid blocks it |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+    lines = []
+    for r in d["rows"]:
+        lines.append(
+            f"| {r['map']} | `{r['preset']}` | {pct(r['reached'])} | {pct(r['bumped'])} | "
+            f"{pct(r['timeout'])} | {_q(r['seconds'], 1)} | {_q(mm(r['end_along_m']), 1)} | "
+            f"{_q(mm(r['end_cross_m']), 1)} | {1000 * r['end_cross_p95_m']:.1f} | "
+            f"{math.degrees(r['end_heading_p95_rad']):.1f} | {pct(r['rebump'])} | "
+            f"{pct(r['bump_after_move'])} | {pct(r['grid_blocks_after_bump'])} |")
+    note = (f"\n\n{d['robots']} robots × {d['moves']} uniformly random primitives per (map, "
+            "rung), each robot with its own noise stream, its pose carried from move to move "
+            f"as the rung says; `timeout_s` = {d['timeout_s']:g} s. End pose: every primitive "
+            "that did not bump, against the target cell's centre and the action's heading "
+            "(median [quartiles]). *Grid blocks it*: of the moves right after a bump, the "
+            "share the grid itself blocks from the cell the robot is in (the count a bumper "
+            "that never re-fires would give, up to where the contact left the robot).")
+    return head + "\n".join(lines) + note + "\n"

@@ -20,6 +20,10 @@ from sim.scenario_io import resolve_scenario
 # exact, 3e-12 m with wheel noise, 2e-10 m at noisy, 4e-10 m at rough (the surface's hold
 # and the bumper included); 1e-9 m holds for all of them.
 POSE_TOL_M = 1e-9
+# Latency carries each wheel's speed from period to period, so a rounding difference lives on
+# through the settle instead of being contracted by the feedback at once: worst 2.5e-9 m
+# (heading, rad) over paper-40's 2500 primitives, typically 1e-13.
+LATENCY_POSE_TOL_M = 1e-8
 
 
 @pytest.mark.parametrize("fid", ["exact", "wheel_noise=0.05", "noisy", "latency", "slip"])
@@ -37,6 +41,7 @@ def test_batch_robot_equals_the_reference_world(name, fid):
     ctl = PrimitiveController(sc, cfg, fidelity)
     batch = RouteBatch(sc, 1, cfg, trajectories=True, fidelity=fidelity)
     starts = model.start_states
+    tol = LATENCY_POSE_TOL_M if fidelity.latency else POSE_TOL_M
     bumps = contacts = resting_starts = resting_bumps = 0
     for k in range(2500):
         if k % 250 == 0:  # a new episode from a random start cell, a new noise stream
@@ -54,19 +59,22 @@ def test_batch_robot_equals_the_reference_world(name, fid):
         out = batch.step(np.array([a]))
         assert ref == tuple(int(v[0]) for v in out), k
         assert bool(batch.robots[0]["resting"]) == world.resting, k
-        np.testing.assert_allclose(batch.pose(0), world.pose, rtol=0, atol=POSE_TOL_M)
+        np.testing.assert_allclose(batch.pose(0), world.pose, rtol=0, atol=tol)
         np.testing.assert_allclose(batch.trajectory(0), np.array(world.trajectory), rtol=0,
-                                   atol=POSE_TOL_M)
+                                   atol=tol)
         got = sorted(batch.contacts[0][n_batch:])
         want = sorted(world.contacts[n_world:])
         assert [(c.step, c.kind) for c in got] == [(c.step, c.kind) for c in want], k
         for c, d in zip(got, want, strict=True):
-            np.testing.assert_allclose(c[2:], d[2:], rtol=0, atol=POSE_TOL_M)
+            np.testing.assert_allclose(c[2:], d[2:], rtol=0, atol=tol)
         bumps += ref.bumped
         contacts += ref.contacts
+        # a bump without a new contact is the bumper pressed home by a robot that rested
+        # (within bumper_release_m of a surface: the switch was still held)
+        assert not (ref.bumped and ref.contacts == 0) or was_resting, k
         resting_starts += was_resting
         resting_bumps += was_resting and ref.bumped
-    assert bumps > 50 and contacts >= bumps  # the test saw plenty of bumps
+    assert bumps > 50 and contacts >= 0.8 * bumps  # the test saw plenty of bumps
     if fidelity.carried_pose:  # ... and primitives from a resting pose: slides, turns, bumps
         assert resting_starts > 50 and 20 < resting_bumps < resting_starts
 

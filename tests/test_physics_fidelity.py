@@ -130,8 +130,10 @@ def test_every_knob_reaches_the_kernel_under_its_own_name():
 
     knobs = [f.name for f in dataclasses.fields(Fidelity) if f.name != "name"]
     assert list(FIDELITY_KNOBS) == knobs and set(knobs) <= set(Params._fields)
-    drive = {f: 0 for f in Params._fields if f not in knobs and f != "biased"}
+    derived = ("biased", "latency", "lag_keep", "delay", "slips", "slip_p")  # from the knobs
+    drive = {f: 0.1 if f == "period" else 0 for f in Params._fields
+             if f not in knobs and f not in derived}
     for fid in PRESETS.values():
         p = params_of(fid, **drive)
         assert all(getattr(p, k) == getattr(fid, k) for k in knobs), fid.name
-        assert p.biased == fid.biased
+        assert p.biased == fid.biased and p.latency == fid.latency and p.slips == fid.slips

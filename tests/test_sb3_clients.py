@@ -26,7 +26,7 @@ SMALL = Scenario("small", 6.0, 6.0, (1, 1), (4, 4), obstacles=(Circle(3.0, 2.0, 
 def _wheel_level(name: str) -> bool:
     """A rung DiffDrive takes: wheel noise only (it refuses the primitive-level knobs)."""
     f = PRESETS[name]
-    return not (f.biased or f.open_loop or f.localisation)
+    return not (f.biased or f.open_loop or f.localisation or f.latency or f.slips)
 
 
 @pytest.mark.parametrize("rewards", list(REWARD_SCHEMES))

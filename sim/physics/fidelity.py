@@ -16,7 +16,11 @@ a real robot does:
   bumper reports: a contact with a surface it was not touching, or a drive that presses
   into the surface it rests on by ``bumper_travel_m`` [m] (a switch with mm of travel);
   the surface holds the disc meanwhile (it slides along it, it does not sink in), and a
-  turn in place against it turns.
+  turn in place against it turns. The switch has hysteresis: the robot rests against the
+  surface until it has moved more than ``bumper_release_m`` [m] away from every surface;
+  within that band a move back toward it presses the bumper again (no new bump before
+  ``bumper_travel_m``), where a switch without it would fire anew at each re-touch (wheel
+  noise during a turn in place lifts the disc 0.1-6 mm off the surface).
 - ``wheel_ratio_sigma``, ``wheelbase_sigma`` [-]: a systematic error per robot, drawn once
   per run from the robot's physics stream (UMBmark's two dominant odometry errors):
   ``E_d = 1 + wheel_ratio_sigma * e`` (right over left wheel diameter; the mean diameter
@@ -73,6 +77,7 @@ from sim.errors import ScenarioError
 
 MAX_WHEEL_NOISE = 0.5  # beyond this a "primitive" is no longer a move to a neighbour
 MAX_BUMPER_TRAVEL_M = 0.005  # PhysicsConfig.contact_depth_m: no step goes deeper [m]
+MAX_BUMPER_RELEASE_M = 0.05  # a switch that stays pressed further off is not a bumper [m]
 MAX_BIAS_SIGMA = 0.1  # a 10 % wheel-radius or wheelbase error is a broken robot, not a bias
 MAX_ODOMETRY_ALPHA = 1.0  # odometry variance per squared motion; beyond, odometry is noise
 MAX_FIX_SIGMA_M = 1.0  # [m]
@@ -94,6 +99,8 @@ class Fidelity:
     carried_pose: bool = False  # after a contact the robot stays where it stopped
     bumper_travel_m: float = 0.002  # carried pose: a drive pressing into the surface the
     #   robot rests on reports a new bump after this much travel [m] (a bumper switch)
+    bumper_release_m: float = 0.003  # ... and it rests against surfaces until this far from
+    #   all of them [m] (the switch's hysteresis; 0: released at once when contact ends)
     wheel_ratio_sigma: float = 0.0  # per-run bias: sigma of E_d - 1, E_d = right/left wheel
     #   diameter (UMBmark), drawn once per run from the robot's physics stream [-]
     wheelbase_sigma: float = 0.0  # per-run bias: sigma of E_b - 1, E_b = actual/nominal
@@ -131,7 +138,8 @@ class Fidelity:
     @property
     def is_exact(self) -> bool:
         return self == dataclasses.replace(PRESETS["exact"], name=self.name,
-                                           bumper_travel_m=self.bumper_travel_m)
+                                           bumper_travel_m=self.bumper_travel_m,
+                                           bumper_release_m=self.bumper_release_m)
 
     @property
     def biased(self) -> bool:
@@ -170,6 +178,8 @@ class Fidelity:
             raise ScenarioError(source, "bumper_travel_m", f"must be in (0, "
                                 f"{MAX_BUMPER_TRAVEL_M}] m, got {self.bumper_travel_m!r}",
                                 "use e.g. 0.002 (2 mm)")
+        _number(source, "bumper_release_m", self.bumper_release_m, 0.0, MAX_BUMPER_RELEASE_M,
+                "use e.g. 0.003 (3 mm); 0: no hysteresis")
         for key in ("carried_pose", "open_loop", "localisation"):
             if not isinstance(getattr(self, key), bool):
                 raise ScenarioError(source, key, f"must be true or false, got "

@@ -121,11 +121,13 @@ class DiffDriveEnv(SpecOwnLimit, gym.Env):
         self.scenario = sc = env_scenario(scenario, rewards)
         self.rewards = sc.rewards
         self.fidelity = fidelity_arg(fidelity, sc)
-        if self.fidelity.biased or self.fidelity.open_loop or self.fidelity.localisation:
+        fid = self.fidelity
+        if fid.biased or fid.open_loop or fid.localisation or fid.latency or fid.slips:
             raise ValueError(
-                f"fidelity {self.fidelity.label}: DiffDrive-v0 takes wheel speeds, so the "
-                "bias, open-loop and localisation knobs (which act on motion primitives and "
-                "what plans them) do not apply; use wheel_noise here, or PhysicsRoute-v0")
+                f"fidelity {fid.label}: DiffDrive-v0 takes wheel speeds, so the bias, "
+                "open-loop, localisation, latency and slip knobs (which act on motion "
+                "primitives and what plans them) do not apply; use wheel_noise here, or "
+                "PhysicsRoute-v0")
         self._shared = shared  # the vector env's Space (None: a Space of its own)
         self.model = build_model(sc)
         self.start = check_start(start, self.model)

@@ -53,6 +53,7 @@ from sim.physics.kernel.queries import (
     new_touch,
     odometry,
     sweep_step,
+    within,
 )
 from sim.physics.kernel.state import SENT_RING, Geometry, Params, Phase, Scratch, Status
 from sim.physics.reference.controller import (
@@ -337,7 +338,7 @@ def _rest(rb, p, g, s, depth0):
     """After a step of a resting robot: a step that went deeper into what it rests on is held
     (:func:`_held`), and on a drive it presses the bumper; at ``bumper_travel_m`` the robot
     stays where it was before the step (True: a bump). A step that leaves it touching
-    nothing ends the resting."""
+    nothing and further than ``bumper_release_m`` from every shape ends the resting."""
     depth1 = depth_at(p, g, s, rb.x, rb.y)
     if depth1 > depth0 + DEEPER_M:
         into = _held(rb, p, g, s)
@@ -347,7 +348,8 @@ def _rest(rb, p, g, s, depth0):
                 rb.forced = True
                 rb.x, rb.y, rb.th = rb.px, rb.py, rb.pth
                 return True
-    elif depth1 <= 0.0:
+    elif depth1 <= 0.0 and not (p.bumper_release_m > 0.0
+                                and within(p, g, s, rb.x, rb.y, p.bumper_release_m)):
         rb.resting = False
     return False
 

@@ -146,3 +146,12 @@ def depth_at(p, g, s, x, y):
     s.counters[0] += 1
     return overlap_depth(g.circles, g.walls, g.boxes, p.cell_m, p.nx, p.ny, g.grid_start,
                          g.grid_items, s.seen, s.counters[0], p.radius_m, x, y)
+
+
+@njit(cache=True, inline="always")
+def within(p, g, s, x, y, margin):
+    """Whether the disc at (x, y) is closer than ``margin`` [m] to any static shape (the
+    bumper's release band): the overlap of a disc ``margin`` larger."""
+    s.counters[0] += 1
+    return overlap_depth(g.circles, g.walls, g.boxes, p.cell_m, p.nx, p.ny, g.grid_start,
+                         g.grid_items, s.seen, s.counters[0], p.radius_m + margin, x, y) > 0.0

@@ -436,8 +436,9 @@ class PrimitiveController:
         deeper in (by more than 1e-12 m) is held (:meth:`PhysicsWorld.hold`): it keeps only
         its motion along the surface, and on a drive (not while ``turning``) the part taken
         away presses the bumper; at ``bumper_travel_m`` it is a bump, and the robot stays
-        where it was before that step. A step that leaves it touching nothing ends the
-        resting. Otherwise a contact begins when Chipmunk's narrow phase finds the disc, at
+        where it was before that step. A step that leaves it touching nothing, further than
+        ``bumper_release_m`` from every shape, ends the resting (the switch's hysteresis).
+        Otherwise a contact begins when Chipmunk's narrow phase finds the disc, at
         the pose the step leaves, touching a shape it did not touch at the step's start
         (Chipmunk's own ``begin`` would fire at the pose before the hold).
         """
@@ -457,7 +458,8 @@ class PrimitiveController:
                         world.trajectory.append(world.pose)
                         world.record_contacts(world.touching_shapes())
                         return True
-            elif depth1 <= 0.0:
+            elif depth1 <= 0.0 and not (self.fidelity.bumper_release_m > 0.0 and world.within_m(
+                    self.fidelity.bumper_release_m)):
                 world.resting = False
         world.trajectory.append(world.pose)
         known = {info.shape for info in before}

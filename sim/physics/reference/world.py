@@ -295,6 +295,13 @@ class PhysicsWorld:
         """Deepest overlap of the robot with static geometry right now [m] (0 if none)."""
         return self.deepest(self.touching_shapes())
 
+    def within_m(self, margin_m: float) -> bool:
+        """Whether the robot's disc is closer than ``margin_m`` [m] to any static shape
+        (Chipmunk's nearest-point query from its centre)."""
+        reach = self.radius_m + margin_m
+        info = self.space.point_query_nearest(self.robot.position, reach, self._query_filter)
+        return info is not None and info.distance < reach
+
     def touching_shapes(self) -> list[pymunk.ShapeQueryInfo]:
         """What the robot's disc touches now (Chipmunk's narrow phase, ``cpSpaceShapeQuery``)."""
         return self.space.shape_query(self.robot_shape)

@@ -3,7 +3,7 @@
     python -m scenarios.studies.ladder.continuous_vs_grid --out results/continuous-vs-grid
 
 Maps (default: paper-40 open circles, rooms-1 rooms, maze-1 maze, caves-40 a generated
-cave map) x rungs (exact, noisy, uncalibrated, open-loop, localised: see
+cave map) x rungs (exact, noisy, uncalibrated, open-loop, localised, latency, slip: see
 :mod:`sim.physics.fidelity`) x methods x 10 seeds. At each rung every method is trained
 in the grid (its final greedy policy then *driven* at the rung: transfer) and in physics
 at the rung. Each (map, rung) is one ordinary comparison in ``OUT/MAP/RUNG/``
@@ -97,7 +97,7 @@ def overlay(results: dict[str, Any], scenario: str, method: str, path: Path) -> 
 
 STUDY_MAPS = ("paper-40", "rooms-1", "maze-1", "caves-40")  # open, rooms, maze, caves
 STUDY_METHODS = ("rnh-ql+", "haql", "dyna-q", "q-lambda", "st-ql", "rnh-ql")
-STUDY_RUNGS = ("exact", "noisy", "uncalibrated", "open-loop", "localised")
+STUDY_RUNGS = ("exact", "noisy", "uncalibrated", "open-loop", "localised", "latency", "slip")
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ import math
 import statistics
 from typing import Any
 
-from scenarios.artifact_tables import _q, renderer
+from scenarios.artifact_tables import _q, renderer, row_renderer
 from sim.physics.fidelity import parse_fidelity
 
 
@@ -243,3 +243,30 @@ def primitives_table(d: dict[str, Any]) -> str:
             "share the grid itself blocks from the cell the robot is in (the count a bumper "
             "that never re-fires would give, up to where the contact left the robot).")
     return head + "\n".join(lines) + note + "\n"
+
+
+@renderer("crosscheck")
+def crosscheck_one(d: dict[str, Any]) -> str:
+    return crosscheck_rows([d])
+
+
+@row_renderer("crosscheck")
+def crosscheck_rows(ds: list[dict[str, Any]]) -> str:
+    """``rnhql crosscheck``: this physics against IR-SIM, per (scenario, rung)."""
+    def f(x: float | None, digits: int = 3) -> str:
+        return "—" if x is None else f"{x:.{digits}f}"
+
+    lines = ["| scenario | fidelity | pairs × drives | bump or not agrees | mean \\|P(bump) "
+             "gap\\| | outcome class agrees | total variation | where the grid blocks: "
+             "class agrees | policy: P(G) here / IR-SIM | primitives to G here / IR-SIM |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for d in ds:
+        a, blocked = d["strata"]["all"], d["strata"]["grid-blocked"]
+        pol = "; ".join(f"{n}: {p['p_goal_rnhql']:.2f} / {p['p_goal_irsim']:.2f}"
+                        for n, p in d["policies"].items()) or "—"
+        prim = "; ".join(f"{f(p['primitives_rnhql'], 1)} / {f(p['primitives_irsim'], 1)}"
+                         for p in d["policies"].values()) or "—"
+        lines.append(f"| {d['scenario']} | `{d['fidelity']}` | {d['pairs']} × {d['repeats']} | "
+                     f"{f(a['bump_agree'])} | {f(a['bump_gap'])} | {f(a['class_agree'])} | "
+                     f"{f(a['tv'])} | {f(blocked['class_agree'])} | {pol} | {prim} |")
+    return "\n".join(lines) + "\n"

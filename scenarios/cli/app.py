@@ -176,6 +176,31 @@ def build_parser() -> argparse.ArgumentParser:
                         "renders)")
     p.set_defaults(func=models.cmd_optimum)
 
+    p = sub.add_parser("crosscheck", help="the same primitives (and policies) in IR-SIM, an "
+                                          "independent simulator: how far it agrees with "
+                                          "this physics at a fidelity")
+    add_scenario_args(p)
+    add_fidelity_arg(p)
+    p.add_argument("--pairs", type=int, default=60, metavar="N",
+                   help="(cell, action) pairs, a third each where the grid blocks the move, "
+                        "where it is free next to an obstacle, and in the open (default 60)")
+    p.add_argument("--repeats", type=int, default=4, metavar="R",
+                   help="drives of each pair in each simulator above exact (default 4)")
+    p.add_argument("--policy", action="append", choices=["optimal"],
+                   help="also drive this policy from S in both: optimal (the grid's)")
+    p.add_argument("--agent", action="append", metavar="FILE",
+                   help="also drive this saved agent's greedy policy from S in both "
+                        "(rnhql train --save); repeatable")
+    p.add_argument("--drives", type=int, default=5, metavar="N",
+                   help="drives of each policy from S in each simulator above exact "
+                        "(default 5)")
+    p.add_argument("--seed", type=int, default=0, help="pairs, headings and noise seed")
+    p.add_argument("--json", metavar="FILE.json", help="also write the figures as JSON")
+    p.add_argument("--artifact", default=None, metavar="NAME",
+                   help="also write docs/results/crosscheck.NAME.json (docs/fidelity.md's "
+                        "table)")
+    p.set_defaults(func=models.cmd_crosscheck)
+
     p = sub.add_parser("view", help="open a .rrd recording in the Rerun viewer")
     p.add_argument("file", metavar="FILE.rrd", help="a recording written by --record")
     p.add_argument("--web", action="store_true",

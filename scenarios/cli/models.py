@@ -1,4 +1,5 @@
-"""The physics world at a fidelity as a stochastic model: ``rnhql optimum`` and ``rnhql aliasing``.
+"""The physics world at a fidelity as a stochastic model: ``rnhql optimum`` and ``rnhql aliasing``;
+and checked by an independent simulator: ``rnhql crosscheck``.
 
 ``rnhql optimum``: V*, the optimum of the physics world at a fidelity (the yardstick).
 
@@ -13,6 +14,7 @@ the exact optimum and the continuous one, with what the model cost to build; wit
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import time
 from pathlib import Path
@@ -26,6 +28,7 @@ from scenarios.cli.args import (
     seed_value,
 )
 from scenarios.sweep.outdir import check_output_file
+from sim.errors import InputError
 from sim.grid.actions import ACTION_NAMES
 from sim.physics.fidelity import parse_fidelity
 from sim.physics.models.build import cache_dir, digest, stochastic_model
@@ -45,6 +48,7 @@ from sim.physics.models.transition import physics_model
 from sim.physics.static import PhysicsConfig
 
 MAX_ROLLOUTS = 100_000
+MAX_PAIRS = 10_000  # crosscheck: (cell, action) pairs (IR-SIM drives about 20 a second)
 MAX_REPEATS = 100_000  # aliasing: drives per (cell, action)
 
 
@@ -157,3 +161,80 @@ def cmd_aliasing(args: argparse.Namespace) -> int:
                            "exact", repeats=args.repeats, seed=args.seed, rewards=args.rewards,
                            out=out, artifact=args.artifact))
     return 0
+
+
+def cmd_crosscheck(args: argparse.Namespace) -> int:
+    """``rnhql crosscheck``: the same primitives, and policies, in IR-SIM (see
+    :mod:`sim.physics.crosscheck.agreement`): how far the two simulators agree."""
+    from learning.compiled.readout import greedy_actions
+    from learning.drivers.checkpoint import load_checkpoint
+    from learning.geometry import geometry_of
+    from scenarios.runs.spec import layout_digest, load
+    from sim.files import atomic_write_text
+    from sim.physics.crosscheck.agreement import (
+        CrosscheckOptions,
+        crosscheck,
+        grid_optimal_policy,
+    )
+    from sim.physics.crosscheck.irsim_world import _irsim, check_rung
+
+    if args.artifact:
+        check_artifact_target(args.artifact)
+    if args.json:
+        check_output_file(Path(args.json), "--json", ".json")
+    fid = parse_fidelity(args.fidelity)
+    check_rung(fid)  # before any work: a rung IR-SIM cannot model is refused
+    _irsim()  # ... and a missing IR-SIM
+    options = CrosscheckOptions(pairs=positive(args.pairs, "--pairs", MAX_PAIRS),
+                                repeats=positive(args.repeats, "--repeats", MAX_REPEATS),
+                                policy_drives=positive(args.drives, "--drives", MAX_ROLLOUTS),
+                                seed=seed_value(args.seed, "--seed"))
+    name, start, goal = scenario_key(args)
+    sc, model = load(name, start, goal, getattr(args, "rewards", None))
+    policies = {}
+    for word in args.policy or []:
+        if word != "optimal":
+            raise InputError("command line", "--policy", f"{word!r} is not a policy name",
+                             "use --policy optimal (the grid's), or --agent FILE")
+        policies["grid optimal"] = grid_optimal_policy(model)
+    for path in args.agent or []:
+        ckpt = load_checkpoint(path, None, model.n_states, geometry_of(model))
+        ckpt.check_problem({"layout": layout_digest(name, start, goal)})
+        policies[f"{ckpt.method} ({Path(path).name})"] = greedy_actions(ckpt.state)
+    compile_notice(0, physics=True)
+    print(f"{sc.name} at {fid.label}: the same primitives in this physics and in IR-SIM")
+    result = crosscheck(sc, model, fid, options, policies)
+    _print_crosscheck(result)
+    if args.json:
+        atomic_write_text(Path(args.json), json.dumps(result, indent=1) + "\n")
+        print(f"wrote {args.json}")
+    if args.artifact:
+        words = ["rnhql crosscheck", name, "--fidelity", fid.name if fid.label == fid.name
+                 else args.fidelity, "--pairs", str(options.pairs), "--repeats",
+                 str(options.repeats), "--drives", str(options.policy_drives), "--seed",
+                 str(options.seed)]
+        words += [w for p in args.policy or [] for w in ("--policy", p)]
+        words += [w for p in args.agent or [] for w in ("--agent", p)]
+        words += ["--artifact", args.artifact]
+        path = write_artifact(f"crosscheck.{args.artifact}", " ".join(words),
+                              ["physics-exact", "physics-noisy"], result)
+        print(f"wrote {path}")
+    return 0
+
+
+def _print_crosscheck(r: dict) -> None:
+    def f(x: float | None, digits: int = 3) -> str:
+        return "—" if x is None else f"{x:.{digits}f}"
+
+    sec = r["seconds"]
+    print(f"  {r['pairs']} (cell, action) pairs x {r['repeats']} drive(s): "
+          f"{sec['rnhql']:.1f} s here, {sec['irsim']:.1f} s in IR-SIM")
+    print("  stratum             pairs  bump-or-not agrees  |P(bump) gap|  class agrees  "
+          "total variation")
+    for name, t in r["strata"].items():
+        print(f"  {name:<18} {t['pairs']:>6}  {f(t['bump_agree']):>18}  "
+              f"{f(t['bump_gap']):>13}  {f(t['class_agree']):>12}  {f(t['tv']):>15}")
+    for name, p in r["policies"].items():
+        print(f"  policy {name}: P(G) {p['p_goal_rnhql']:.2f} here, {p['p_goal_irsim']:.2f} "
+              f"in IR-SIM over {p['drives']} drive(s); primitives to G "
+              f"{f(p['primitives_rnhql'], 1)} here, {f(p['primitives_irsim'], 1)} in IR-SIM")

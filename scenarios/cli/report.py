@@ -37,7 +37,8 @@ def _took(wall_s: float | None) -> str:
     return f"{wall_s / 60:.0f} min" if wall_s >= 90 else f"{wall_s:.0f} s"
 
 
-ARTIFACT_SUBCOMMANDS = ("aliasing", "optimum")  # rnhql subcommands that write artifacts
+# rnhql subcommands that write artifacts
+ARTIFACT_SUBCOMMANDS = ("aliasing", "optimum", "crosscheck")
 STUDY_PACKAGES = ("scenarios.studies", "scenarios.studies.paper", "scenarios.studies.ladder",
                   "scenarios.studies.maps", "scenarios.bench")  # where the studies live
 SAFE_WORD = re.compile(r"[A-Za-z0-9_.,=:+;@%-]+(/[A-Za-z0-9_.,=:+;@%-]+)*")
@@ -46,7 +47,7 @@ SAFE_WORD = re.compile(r"[A-Za-z0-9_.,=:+;@%-]+(/[A-Za-z0-9_.,=:+;@%-]+)*")
 def argv_of(command: str, source: str = "an artifact") -> list[str]:
     """The argv ``rnhql report --refresh`` runs for an artifact's ``command``, built by this
     tool, never the text itself: the command must be a study entry point of this package
-    (``rnhql aliasing|optimum ...`` or ``python -m PACKAGE.NAME ...``, PACKAGE one of
+    (``rnhql aliasing|optimum|crosscheck ...`` or ``python -m PACKAGE.NAME ...``, PACKAGE one of
     :data:`STUDY_PACKAGES` and NAME a module that exists), run with this interpreter, no
     shell, and its arguments plain words and relative paths inside the checkout (no ``..``,
     no absolute path). An artifact
@@ -69,8 +70,9 @@ def argv_of(command: str, source: str = "an artifact") -> list[str]:
             raise refuse(f"runs {module!r}, not a study of this package")
         head, args = [sys.executable, "-m", module], words[3:]
     else:
-        raise refuse("is not a study entry point of this package (rnhql aliasing or "
-                     "optimum, python -m scenarios.studies.ROOM.* or scenarios.bench.*)")
+        raise refuse("is not a study entry point of this package (rnhql aliasing, "
+                     "optimum or crosscheck, python -m scenarios.studies.ROOM.* or "
+                     "scenarios.bench.*)")
     for arg in args:
         if not SAFE_WORD.fullmatch(arg) or ".." in arg.split("/"):
             raise refuse(f"passes {arg!r}, not a plain word or a relative path in the "

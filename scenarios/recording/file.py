@@ -110,7 +110,7 @@ def _disconnect(stream: rr.RecordingStream, part: Path, limit_s: float) -> None:
     def work() -> None:
         try:
             stream.disconnect()
-        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+        except BaseException as exc:
             failure.append(exc)
 
     helper = threading.Thread(target=work, name="rnhql-recording-close", daemon=True)

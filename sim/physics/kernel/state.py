@@ -22,8 +22,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from sim.physics.fidelity import MAX_DELAY_PERIODS, Fidelity, delay_periods, lag_keep, \
-    slip_start_probability
+from sim.physics.fidelity import (
+    MAX_DELAY_PERIODS,
+    Fidelity,
+    delay_periods,
+    lag_keep,
+    slip_start_probability,
+)
 
 __all__ = ["FIDELITY_KNOBS", "ROBOT", "Geometry", "Params", "Phase", "Robots", "Scratch", "Status",
            "by_name", "params_of"]

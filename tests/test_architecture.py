@@ -32,7 +32,7 @@ FORBIDDEN = {
 # package's face, its ``__init__``, may hand on any of its rooms' names)
 ROOMS = {
     "learning": ("", "parts", "plain", "methods", "compiled", "drivers"),
-    "sim.physics": ("", "reference", "kernel", "envs", "models"),
+    "sim.physics": ("", "reference", "kernel", "envs", "models", "crosscheck"),
 }
 
 

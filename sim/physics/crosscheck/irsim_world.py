@@ -33,6 +33,7 @@ The mapping, one knob at a time:
 from __future__ import annotations
 
 import math
+import sys
 import tempfile
 from pathlib import Path
 
@@ -111,24 +112,26 @@ def _world_yaml(sc: Scenario, fid: Fidelity, period_s: float) -> str:
 
 def _irsim():
     """IR-SIM, imported quietly: at import it tries GUI backends for matplotlib, printing a
-    line for each that fails, and switches the process's backend; both are undone."""
+    line for each that fails, and switches the process's backend. The lines are dropped; a
+    backend the caller had already chosen is put back (nothing here draws, or imports
+    matplotlib itself: ``sim`` does not draw)."""
     import contextlib
     import io
 
-    import matplotlib
-
-    backend = matplotlib.get_backend()
+    mpl = sys.modules.get("matplotlib")
+    backend = mpl.get_backend() if mpl is not None else None
     try:
         with contextlib.redirect_stdout(io.StringIO()):
             import irsim  # optional (rnhql[crosscheck])
         from loguru import logger  # IR-SIM's logger: a line per collision otherwise
     except ImportError:
         raise CrosscheckError("rnhql crosscheck", "IR-SIM", "is not installed (an optional "
-                              "extra)",
-                              "pip install 'rnhql[crosscheck]' (or pip install ir-sim)") from None
+                              "extra)", "pip install 'rnhql[crosscheck]' (or pip install "
+                              "ir-sim)") from None
     finally:
-        with contextlib.suppress(Exception):
-            matplotlib.use(backend)
+        if mpl is not None:
+            with contextlib.suppress(Exception):
+                mpl.use(backend)
     logger.disable("irsim")
     return irsim
 

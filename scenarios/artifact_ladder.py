@@ -242,6 +242,17 @@ def primitives_table(d: dict[str, Any]) -> str:
             "(median [quartiles]). *Grid blocks it*: of the moves right after a bump, the "
             "share the grid itself blocks from the cell the robot is in (the count a bumper "
             "that never re-fires would give, up to where the contact left the robot).")
+    arc = d.get("blind_arc")
+    if arc:
+        q = arc["cross_track_over_arc"]
+        note += (f"\n\nA blind drive curves less than the arc it stands for: a noise-free "
+                 f"open-loop drive of {arc['length_m']:g} m with a per-run wheel-ratio bias "
+                 f"ends {q[0]:.2f} [{q[1]:.2f}, {q[2]:.2f}] of the continuous arc's cross-track "
+                 f"error ({arc['robots']} robots, median [quartiles]): each period's twist "
+                 "follows the heading at the period's start, one physics step late, as "
+                 "Chipmunk steps a velocity set once per period. Open-loop figures are "
+                 "therefore optimistic by that much; with feedback the controller corrects "
+                 "it within the primitive.")
     return head + "\n".join(lines) + note + "\n"
 
 

@@ -11,6 +11,9 @@ pose from move to move as the rung says, on each map and at each rung. Per (map,
 - the end pose of every primitive that did not bump, against the target cell's centre and
   the action's heading: along-track and cross-track [m], heading [rad] (the "offline
   replay error" of the reality-gap literature, one primitive at a time);
+- (once) how a blind drive curves: a noise-free open-loop drive of one cell with a per-run
+  wheel bias, its cross-track error against the continuous arc's of the same curvature
+  (each period's twist follows the heading at the period's start, as Chipmunk steps it);
 - the bumper re-firing: P(a move bumps | the move before it bumped), against P(it bumps |
   the move before did not), and against the grid's count (the share of those moves the
   grid itself blocks, from the cell the robot is in). ``noisy`` is also run with
@@ -32,9 +35,11 @@ import numpy as np
 from scenarios.artifacts import write_artifact
 from scenarios.script_args import arg, artifact_arg, parse
 from sim.grid import build_model
+from sim.grid.actions import ACTION_HEADINGS
 from sim.physics.fidelity import PRESETS, parse_fidelity
 from sim.physics.kernel.batch import RouteBatch
 from sim.physics.static import PhysicsConfig
+from sim.scenario import Scenario
 from sim.scenario_io import resolve_scenario
 
 DEFAULT_RUNGS = (*PRESETS, "noisy,bumper_release_m=0")
@@ -117,6 +122,31 @@ def drive(map_name: str, rung: str, robots: int, moves: int, seed: int) -> dict[
     }
 
 
+def blind_arc(robots: int, seed: int) -> dict[str, Any]:
+    """A noise-free open-loop drive of one cell (1 m) with a 2 % wheel-ratio bias, from a
+    centre in free space: its cross-track error over the continuous arc's, ``(1 - cos(k L))
+    / k`` for the curvature ``k = (g_r - g_l) / (b E_b)`` the bias gives (quartiles over
+    robots; 1 would be the arc, below 1 an optimistic drive)."""
+    sc = Scenario(name="open", width_m=12.0, height_m=12.0, start=(2, 6), goal=(9, 6))
+    fid = parse_fidelity("open_loop=true,carried_pose=true,wheel_ratio_sigma=0.02")
+    batch = RouteBatch(sc, robots, PhysicsConfig(), fidelity=fid, contact_records=False)
+    streams = np.random.SeedSequence(seed).spawn(robots)
+    x0, y0 = 4.5, 6.5
+    for i in range(robots):
+        batch.set_noise_rng(i, np.random.default_rng(streams[i]))
+        batch.place(i, x0, y0, 0.0)
+    batch.step(np.full(robots, ACTION_HEADINGS.index(0.0)))
+    base, length = sc.robot.wheel_base_m, sc.cell_size_m
+    ratios = []
+    for i in range(robots):
+        g_l, g_r, e_b = batch.bias(i)
+        k = (g_r - g_l) / (base * e_b)
+        arc = (1.0 - math.cos(k * length)) / k
+        ratios.append((batch.pose(i)[1] - y0) / arc)
+    return {"robots": robots, "length_m": length, "cross_track_over_arc":
+            _quartiles(np.array(ratios))}
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parse(Args, __doc__, argv)
     maps = [m.strip() for m in args.maps.split(",") if m.strip()]
@@ -129,6 +159,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{row['map']} {rung}: reached {row['reached']:.3f} bumped "
                   f"{row['bumped']:.3f} timeout {row['timeout']:.3f} re-bump "
                   f"{row['rebump']} grid {row['grid_blocks_after_bump']}", flush=True)
+    arc = blind_arc(args.robots, args.seed)
+    print(f"blind drive: cross-track over the arc's {arc['cross_track_over_arc']}", flush=True)
     if args.artifact:
         rung_arg = ";".join(rungs)
         command = (f"python -m scenarios.studies.ladder.primitives --maps {','.join(maps)} "
@@ -137,6 +169,7 @@ def main(argv: list[str] | None = None) -> int:
         write_artifact(f"primitives.{args.artifact}", command, ["physics-exact",
                                                                  "physics-noisy"],
                        {"rows": rows, "robots": args.robots, "moves": args.moves,
+                        "blind_arc": arc,
                         "timeout_s": PhysicsConfig().timeout_s}, study=__file__)
     return 0
 

@@ -171,6 +171,7 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
     from learning.geometry import geometry_of
     from scenarios.runs.spec import layout_digest, load
     from sim.files import atomic_write_text
+    from sim.physics.crosscheck import agreement
     from sim.physics.crosscheck.agreement import (
         CrosscheckOptions,
         crosscheck,
@@ -217,7 +218,8 @@ def cmd_crosscheck(args: argparse.Namespace) -> int:
         words += [w for p in args.agent or [] for w in ("--agent", p)]
         words += ["--artifact", args.artifact]
         path = write_artifact(f"crosscheck.{args.artifact}", " ".join(words),
-                              ["physics-exact", "physics-noisy"], result)
+                              ["physics-exact", "physics-noisy"], result,
+                              study=agreement.__file__)  # its edits make the table stale
         print(f"wrote {path}")
     return 0
 

@@ -126,7 +126,9 @@ def add_fidelity_arg(p: argparse.ArgumentParser) -> None:
                         "uncalibrated (noisy + a per-run wheel-diameter and wheelbase bias, 1 "
                         "%% sigma), open-loop (uncalibrated, primitives without feedback), "
                         "localised (uncalibrated, pose from odometry and a fix every 5 "
-                        "primitives); or a preset then knobs, e.g. noisy,wheel_noise=0.1 "
+                        "primitives), latency (noisy, wheels lagging 0.2 s, commands a "
+                        "period late), slip (noisy, a wheel slip every 10 s); or a preset "
+                        "then knobs, e.g. noisy,wheel_noise=0.1 "
                         "(every knob, with units: docs/fidelity.md). Above exact, "
                         "greedy tests drive 10 rollouts and the final policy 50 (physics "
                         "runs only)")

@@ -55,20 +55,17 @@ from sim.physics.kernel.queries import (
     sweep_step,
     within,
 )
-from sim.physics.kernel.state import SENT_RING, Geometry, Params, Phase, Scratch, Status
+from sim.physics.kernel.state import Geometry, Params, Phase, Scratch, Status
+from sim.physics.kernel.wheels import deliver
 from sim.physics.reference.controller import (
     SETTLE_M_S,
     Leg,
     at_target,
     cell_of,
-    lag_wheel,
     leg_command,
     plan_leg,
-    slip_step,
-    twist_to_wheels,
-    wheel_twist,
-    wheels_twist,
 )
+from sim.physics.reference.wheels import wheel_twist
 from sim.physics.static import DEEPER_M, HOLD_STEP_M
 
 _DELTAS = np.array(ACTION_DELTAS, dtype=np.int64)
@@ -200,8 +197,8 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
                                 j += 2
                             npos[i] = j
                         if p.latency or p.slips:
-                            vx, vy, w = _deliver(rb, p, vx, vy, w, e_left, e_right, z_left,
-                                                 z_right)
+                            vx, vy, w = deliver(rb, p, vx, vy, w, e_left, e_right, z_left,
+                                                z_right)
                         else:
                             vx, vy, w = wheel_twist(vx, vy, w, rb.th, e_left, e_right,
                                                     p.wheel_noise, p.wheel_base_m, rb.gain_l,
@@ -280,35 +277,6 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
         if active[i] and robots[i].status != Status.DONE:
             waiting += 1
     return waiting
-
-
-@njit(cache=True)
-def _deliver(rb, p, vx, vy, w, e_left, e_right, z_left, z_right):
-    """One period's twist through latency and slip (as
-    :meth:`sim.physics.reference.controller.PrimitiveController._deliver`): the wheel
-    command joins those in flight (``rb.sent``), the one sent ``p.delay`` periods ago reaches
-    the motors (nothing before that: they stand), each wheel lags toward it, slips or not
-    (:func:`slip_step`), and :func:`wheels_twist` adds the noise and the per-run bias."""
-    vl, vr = twist_to_wheels(math.hypot(vx, vy), w, p.wheel_base_m)
-    if p.latency:
-        slot = rb.nsent % SENT_RING
-        rb.sent[slot, 0], rb.sent[slot, 1] = vl, vr
-        rb.nsent += 1
-        if rb.nsent > p.delay:
-            back = (rb.nsent - 1 - p.delay) % SENT_RING
-            vl, vr = rb.sent[back, 0], rb.sent[back, 1]
-        else:
-            vl = vr = 0.0
-        rb.wl = vl = lag_wheel(vl, rb.wl, p.lag_keep)
-        rb.wr = vr = lag_wheel(vr, rb.wr, p.lag_keep)
-    f_left = f_right = 1.0
-    if p.slips:
-        f_left, rb.slip_l = slip_step(rb.slip_l, z_left, p.slip_p, p.slip_duration_s, p.period,
-                                      p.slip_fraction)
-        f_right, rb.slip_r = slip_step(rb.slip_r, z_right, p.slip_p, p.slip_duration_s,
-                                       p.period, p.slip_fraction)
-    return wheels_twist(vl, vr, rb.th, e_left, e_right, p.wheel_noise, p.wheel_base_m,
-                        rb.gain_l, rb.gain_r, rb.base_k, f_left, f_right)
 
 
 @njit(cache=True)

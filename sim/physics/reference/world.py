@@ -55,6 +55,7 @@ from typing import Any
 import pymunk
 
 from sim.physics import sigint
+from sim.physics.reference.wheels import WheelState
 from sim.physics.static import (
     HOLD_STEP_M,
     STATIC_CATEGORY,
@@ -78,19 +79,6 @@ except ImportError:  # pragma: no cover - another pymunk layout
 
 
 _MISSING = object()
-
-
-class WheelState:
-    """What the motors carry from one control period to the next at the latency and slip
-    rungs (:mod:`sim.physics.fidelity`): each wheel's lagged speed [m/s], the wheel commands
-    sent and not yet delivered, each wheel's slip time left [s]. All at rest when placed."""
-
-    __slots__ = ("left", "right", "sent", "slip_left", "slip_right")
-
-    def __init__(self) -> None:
-        self.left = self.right = 0.0
-        self.sent: list[tuple[float, float]] = []
-        self.slip_left = self.slip_right = 0.0
 
 
 class PhysicsWorld:

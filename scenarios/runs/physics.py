@@ -39,6 +39,7 @@ from learning.drivers.batch_agent import BatchAgent
 from learning.drivers.train import TrainResult
 from learning.geometry import geometry_of
 from learning.plain.learner import PlainBatchAgent, is_plain
+from scenarios.runs.physics_fused import FusedRuns
 from scenarios.runs.physics_grading import FinalGrade, Grader, final_policy_label
 from scenarios.runs.work import add_episodes
 from scenarios.signals import sigint_handled_by
@@ -136,7 +137,7 @@ class _Logs:
 def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGroup],
                        n_episodes: int, test_every: int = 10, fidelity: Any = None,
                        recorded: dict[int, RecordedRun] | None = None,
-                       split: dict[str, float] | None = None
+                       split: dict[str, float] | None = None, fused: bool = True
                        ) -> list[list[PhysicsTrainResult]]:
     """Train every run of every group at once; results per group, per run.
 
@@ -144,7 +145,9 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     given, receives the wall time [s] of the parts of the loop: ``learner`` (act and
     update), ``kernel`` (the world's compiled call), ``chipmunk`` (casts and contact
     checks), ``episodes`` (ends, greedy tests, starts), ``driver`` (the rest of the loop)
-    and ``final`` (final grading), plus ``primitives``.
+    and ``final`` (final grading), plus ``primitives``, and ``fused``: the compiled calls
+    that drive unrecorded runs of compiled learners whole (:mod:`scenarios.runs.physics_fused`;
+    ``fused=False`` steps them in lock-step with the rest, as before: the same runs).
     """
     # lazy: scenarios.recording (rerun) costs 270 ms in every run's process
     from scenarios.recording.hooks import ChunkLogger, EpisodeTaps
@@ -206,12 +209,55 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
             logs.tests_e[i].append(e)
             logs.tests_l[i].append(length)
 
+    def test_due(i: int, ag: Any, k: int) -> None:
+        """Run ``i`` (row ``k`` of ``ag``) ended an episode whose greedy test is due."""
+        if grader.in_rollouts and i not in views:
+            # the policy now; driven with other runs' tests (run_tests)
+            pending.append((i, greedy_actions(ag.state(k)), int(done[i])))
+            return
+        length, route = grader.test(ag.state(k), grading_seeds[i], int(done[i]))
+        logs.tests_e[i].append(int(done[i]))
+        logs.tests_l[i].append(length)
+        if i in views:
+            views[i].after_chunk(int(done[i]), logs.arrays(i, done[i]), ag.state(k), route)
+
     clock = time.perf_counter
-    t_learn = t_world = t_ep = 0.0
+    t_learn = t_world = t_ep = t_fused = 0.0
     t_start = clock()
     stop = StopFlag()
     with sigint_to(stop):
         start_episodes(active)
+        # runs of compiled learners that are not recorded: one compiled call drives many
+        # primitives of each (scenarios.runs.physics_fused); the rest step in lock-step below
+        loop = {"s": s, "a": a, "t": t, "ret": ret, "contacts": contacts, "done": done,
+                "wall": wall}
+        drivers = fused_groups(agents, bounds, recorded, world.batch, start_h, starts,
+                             _rules(sc, model, world), n_episodes, test_every,
+                             loop) if fused else []
+        while any(f.live for _, f in drivers):
+            for ag, f in drivers:
+                if not f.live:
+                    continue
+                t0 = clock()
+                due, _, ended_n = f.drive()
+                t1 = clock()
+                t_fused += t1 - t0
+                if ended_n:
+                    add_episodes(ended_n, physics=True)
+                for k in due:
+                    test_due(f.b0 + k, ag, k)
+                    f.tested(k)
+                t_ep += clock() - t1
+            while len(pending) >= TEST_BATCH:
+                run_tests(TEST_BATCH)
+            if stop.requested or take_deferred():
+                raise KeyboardInterrupt
+        for _, f in drivers:
+            f.write_logs(logs)
+            active[f.b0:f.b0 + f.agent.n] &= ~f.mine
+            parked = np.zeros(n, bool)
+            parked[f.b0:f.b0 + f.agent.n] = f.mine
+            world.park(parked)
         # groups with a run still training (a finished group's calls would do nothing: in a
         # sweep's long tail, most groups are done); renewed when a run finishes
         live = [(ag, b0, b1) for ag, (b0, b1) in zip(agents, bounds, strict=True)]
@@ -256,19 +302,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                         if i in recorded:
                             env.log_to(i, recorded[i].recorder, e)
                         if done[i] % test_every == 0 or done[i] == n_episodes:
-                            if grader.in_rollouts and i not in views:
-                                # the policy now; driven with other runs' tests, below
-                                pending.append((i, greedy_actions(ag.state(int(k))),
-                                                int(done[i])))
-                            else:
-                                length, route = grader.test(ag.state(int(k)),
-                                                            grading_seeds[i], int(done[i]))
-                                logs.tests_e[i].append(int(done[i]))
-                                logs.tests_l[i].append(length)
-                                if i in views:
-                                    views[i].after_chunk(int(done[i]),
-                                                         logs.arrays(i, done[i]),
-                                                         ag.state(int(k)), route)
+                            test_due(i, ag, int(k))
                         if done[i] == n_episodes:
                             active[i] = False
                             live = [(g, b0, b1) for g, b0, b1 in live if active[b0:b1].any()]
@@ -293,11 +327,32 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                         for agent, i in runs[b0:b1]])
     if split is not None:
         b = world.batch
-        split.update(learner=t_learn, kernel=b.kernel_s, chipmunk=b.chipmunk_s,
-                     episodes=t_ep, driver=t_loop - t_learn - t_world - t_ep,
+        split.update(learner=t_learn, kernel=b.kernel_s, chipmunk=b.chipmunk_s, fused=t_fused,
+                     episodes=t_ep, driver=t_loop - t_learn - t_world - t_ep - t_fused,
                      world_python=t_world - b.kernel_s - b.chipmunk_s,
                      final=clock() - t_start - t_loop, primitives=float(logs.steps.sum()))
     return results
+
+
+def fused_groups(agents: list[Any], bounds: list[tuple[int, int]], recorded: dict[int, Any],
+                 batch: Any, start_h: np.ndarray, starts: np.ndarray, rules: np.ndarray,
+                 n_episodes: int, test_every: int, loop: dict[str, np.ndarray]
+                 ) -> list[tuple[Any, FusedRuns]]:
+    """(agent, its fused runs) for each group of compiled learners with unrecorded runs."""
+    out = []
+    for ag, (b0, b1) in zip(agents, bounds, strict=True):
+        rows = np.array([k for k in range(b1 - b0) if b0 + k not in recorded], np.int64)
+        if isinstance(ag, BatchAgent) and rows.size:
+            out.append((ag, FusedRuns(ag, rows, b0, batch, start_h[b0:b1], starts, rules,
+                                      n_episodes, test_every, loop)))
+    return out
+
+
+def _rules(sc: Scenario, model: TabularModel, world: PhysicsRouteVectorEnv) -> np.ndarray:
+    """The env's rules as :func:`scenarios.runs.physics_fused.drive_runs` reads them."""
+    rw = sc.rewards
+    return np.array([model.goal, rw.goal, rw.bump, rw.step, sc.steps_per_episode,
+                     world.batch.config.dt_s], np.float64)
 
 
 def batch_agent(cfg: Any, geom: Any, learner_rngs: list[np.random.Generator],

@@ -286,6 +286,10 @@ class PhysicsRouteVectorEnv(VectorEnv):
                 infos.update(final)
         return self._obs.copy(), rewards.astype(np.float64), terminated, truncated, infos
 
+    def park(self, mask: np.ndarray) -> None:
+        """Sub-envs in ``mask`` sit out every step until reset (their robots driven elsewhere)."""
+        self._needs_reset |= np.asarray(mask, dtype=bool)
+
     def trajectory(self, i: int) -> np.ndarray:
         """float64[n, 3]: sub-env ``i``'s pose before its last primitive, then after each
         physics step of it (needs ``trajectories=True``)."""

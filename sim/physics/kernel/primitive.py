@@ -77,26 +77,30 @@ def begin_all(robots, actions, active, cell_m, nx, ny, localised):
     """Start grid ``actions[i]`` for every ``active`` robot from its pose (its cell as the
     discretiser says, clamped into the grid; with ``localised`` the pose it believes)."""
     for i in range(robots.shape[0]):
-        if not active[i]:
-            continue
-        rb, a = robots[i], actions[i]
-        if localised:
-            rb.cell_x, rb.cell_y = cell_of(rb.bx, rb.by, cell_m, nx, ny)
-        else:
-            rb.cell_x, rb.cell_y = cell_of(rb.x, rb.y, cell_m, nx, ny)
-        rb.action = a
-        rb.tx = (rb.cell_x + _DELTAS[a, 0] + 0.5) * cell_m
-        rb.ty = (rb.cell_y + _DELTAS[a, 1] + 0.5) * cell_m
-        rb.head = _HEADINGS[a]
-        rb.steps0 = rb.steps
-        rb.bumped = rb.reached = rb.timeout = rb.forced = False
-        rb.ncontact = 0
-        rb.press = 0.0
-        rb.phase = Phase.PLAN
-        rb.cmd_set = -1
-        rb.ntraj = 0
-        rb.status = Status.RUNNING
-        rb.fresh = True
+        if active[i]:
+            begin_one(robots[i], actions[i], cell_m, nx, ny, localised)
+
+
+@njit(cache=True, inline="always")
+def begin_one(rb, a, cell_m, nx, ny, localised):
+    """Start grid action ``a`` for one robot from its pose (:func:`begin_all`'s body)."""
+    if localised:
+        rb.cell_x, rb.cell_y = cell_of(rb.bx, rb.by, cell_m, nx, ny)
+    else:
+        rb.cell_x, rb.cell_y = cell_of(rb.x, rb.y, cell_m, nx, ny)
+    rb.action = a
+    rb.tx = (rb.cell_x + _DELTAS[a, 0] + 0.5) * cell_m
+    rb.ty = (rb.cell_y + _DELTAS[a, 1] + 0.5) * cell_m
+    rb.head = _HEADINGS[a]
+    rb.steps0 = rb.steps
+    rb.bumped = rb.reached = rb.timeout = rb.forced = False
+    rb.ncontact = 0
+    rb.press = 0.0
+    rb.phase = Phase.PLAN
+    rb.cmd_set = -1
+    rb.ntraj = 0
+    rb.status = Status.RUNNING
+    rb.fresh = True
 
 
 @njit(cache=True)
@@ -126,157 +130,163 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
     along within 10 um of parallel.
     """
     p, prof, g, s = Params(*pt), Profiles(*prof_t), Geometry(*geo_t), Scratch(*st)
-    noisy = (p.wheel_noise > 0.0 or p.carried_pose or p.biased or p.open_loop or p.localisation
-             or p.latency or p.slips)
-    fixes = p.localisation and p.fix_every > 0
-    normals = ((2 if p.wheel_noise > 0.0 else 0) + (3 if p.localisation else 0)  # per command
-               + (2 if p.slips else 0))
     for i in range(robots.shape[0]):
-        if not active[i]:
-            continue
-        rb = robots[i]
-        if rb.status == Status.DONE or rb.status == Status.IDLE:
-            continue
-        if rb.status == Status.CONTACT:
-            _bump(rb, p, g, s)
-            continue
-        if rb.status == Status.CHECK:  # no contact began: finish that step (the solve)
-            _solve(rb, p)
-            rb.sub += 1
-        rb.status = Status.RUNNING
-        while rb.status == Status.RUNNING:
-            if rb.fresh:  # the primitive's first call: the fix's normals, when one is due
-                if fixes and rb.nfix + 1 >= p.fix_every:
-                    j = npos[i]
-                    if j + 3 > nend[i]:
-                        rb.status = Status.NOISE
-                        break
-                    rb.f1, rb.f2, rb.f3 = noise[i, j], noise[i, j + 1], noise[i, j + 2]
-                    npos[i] = j + 3
-                rb.fresh = False
-            if rb.phase == Phase.PLAN:
-                if not _plan(rb, p, prof.turn_sums, prof.drive_sums):
-                    _done(rb, p, reached=True)
-                    break
-                rb.phase = Phase.GUARD
-            if rb.phase == Phase.GUARD:
-                rb.limit = math.inf
-                if rb.ndrive > 0 and not noisy and not guard_leg(rb, p, s.guards):
-                    cast_guard(rb, p, g, s)
-                rb.phase = Phase.DRIVE
-            leg = Leg(rb.nturn, rb.tsign, rb.tscale, rb.ndrive, rb.dscale, rb.ex, rb.ey,
-                      rb.dist)
-            while rb.status == Status.RUNNING:  # the leg's commands, one per control period
-                k = rb.cmd
-                if rb.cmd_set != k:  # a new command: its twist, as the wheels deliver it
-                    vx, vy, w = leg_command(leg, k, prof.turn_caps, prof.drive_caps)
-                    if math.isnan(w):  # all driven; with latency a stop until settled
-                        if not p.latency:
-                            break
-                        if rb.nleg < 0:
-                            rb.nleg = k
-                        if (k - rb.nleg >= p.delay
-                                and max(abs(rb.wl), abs(rb.wr)) <= SETTLE_M_S):
-                            break
-                        vx = vy = w = 0.0
-                    if noisy:
-                        e_left = e_right = z_left = z_right = 0.0
-                        if normals:
-                            j = npos[i]
-                            if j + normals > nend[i]:
-                                rb.status = Status.NOISE
-                                break
-                            if p.wheel_noise > 0.0:
-                                e_left, e_right = noise[i, j], noise[i, j + 1]
-                                j += 2
-                            if p.localisation:  # this period's odometry noise
-                                rb.o1, rb.o2, rb.o3 = noise[i, j], noise[i, j + 1], noise[i, j + 2]
-                                j += 3
-                            if p.slips:  # this period's slip draws, one per wheel
-                                z_left, z_right = noise[i, j], noise[i, j + 1]
-                                j += 2
-                            npos[i] = j
-                        if p.latency or p.slips:
-                            vx, vy, w = deliver(rb, p, vx, vy, w, e_left, e_right, z_left,
-                                                z_right)
-                        else:
-                            vx, vy, w = wheel_twist(vx, vy, w, rb.th, e_left, e_right,
-                                                    p.wheel_noise, p.wheel_base_m, rb.gain_l,
-                                                    rb.gain_r, rb.base_k)
-                    rb.cvx, rb.cvy, rb.cw = vx, vy, w
-                    rb.cmd_set = k
-                while rb.sub < p.substeps:
-                    if noisy:  # one step above exact, in line (as a call: 15 % slower)
-                        held = rb.resting
-                        vx, vy = rb.vx, rb.vy
-                        ln = math.hypot(vx, vy) * p.dt
-                        hit = False
-                        clear = False  # the step stays in the robot's clear ball
-                        if not held:
-                            x1, y1 = rb.x + vx * p.dt, rb.y + vy * p.dt
-                            clear = in_clear_ball(rb, x1, y1)
-                            if not clear:
-                                new_clear_ball(rb, p, g, s)
-                                clear = in_clear_ball(rb, x1, y1)
-                        if clear:  # nothing within CLEAR_MARGIN_M of the step: no sweep
-                            pass  # can hit, no check can find a touch (see new_clear_ball)
-                        elif ln > 1e-12:  # its own guard, as PhysicsWorld.before_step
-                            alpha = sweep_step(p, g, s, rb.x, rb.y, rb.x + vx * p.dt,
-                                           rb.y + vy * p.dt)
-                            hit = alpha < math.inf
-                            if hit and alpha * ln + p.depth_m < ln:
-                                scale = (alpha * ln + p.depth_m) / ln
-                                vx, vy = vx * scale, vy * scale
-                                rb.vx, rb.vy = vx, vy
-                        depth0 = depth_at(p, g, s, rb.x, rb.y) if held else 0.0
-                        integrate(rb, vx, vy, p)
-                        check = hit  # the sweep met a surface: ask Chipmunk
-                        if p.localisation:  # the wheels turned (a hold slides them; below)
-                            moved, yaw = math.hypot(vx, vy) * p.dt, rb.th - rb.pth
-                            rb.odo_d += moved
-                            rb.odo_th += yaw
-                        if held and _rest(rb, p, g, s, depth0):
-                            check = True  # the bumper pressed home
-                            if p.localisation:  # ... before this step's motion: none of it
-                                rb.odo_d -= moved
-                                rb.odo_th -= yaw
-                        elif clear:
-                            pass
-                        elif not hit and (held or 1e-12 < ln < 1e-5):  # where a sweep is
-                            check = new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, False)
-                        elif not hit and ln > 1e-12 and g.boxes.shape[0] and (  # blind
-                                abs(rb.x - rb.px) < 1e-5 or abs(rb.y - rb.py) < 1e-5):
-                            check = new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, True)
-                    else:
-                        check = step_exact(rb, p)
-                    if rb.ntraj < traj.shape[1]:
-                        traj[i, rb.ntraj, 0], traj[i, rb.ntraj, 1] = rb.x, rb.y
-                        traj[i, rb.ntraj, 2] = rb.th
-                        rb.ntraj += 1
-                    if check:
-                        found = contacts_began(rb, p, g, s, contacts[i])
-                        if found < 0:  # Chipmunk decides (the caller's check)
-                            rb.status = Status.CHECK
-                            break
-                        if found > 0 or rb.forced:
-                            rb.ncontact += found
-                            booked[i] = found
-                            _bump(rb, p, g, s)
-                            break
-                    _solve(rb, p)
-                    rb.sub += 1
-                if rb.status == Status.RUNNING:
-                    rb.cmd = k + 1
-                    rb.sub = 0
-                    if p.localisation:
-                        odometry(rb, p)
-            if rb.status == Status.RUNNING:
-                _finish_leg(rb, p)
+        if active[i]:
+            advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g, s)
     waiting = 0  # active robots that need the caller (NOISE, CHECK)
     for i in range(robots.shape[0]):
         if active[i] and robots[i].status != Status.DONE:
             waiting += 1
     return waiting
+
+
+@njit(cache=True)
+def advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g, s):
+    """Robot ``i``'s primitive until it is DONE or needs the caller: :func:`advance`'s body
+    for one robot, the tuples as named ones (the fused training step calls it per robot)."""
+    noisy = (p.wheel_noise > 0.0 or p.carried_pose or p.biased or p.open_loop or p.localisation
+             or p.latency or p.slips)
+    fixes = p.localisation and p.fix_every > 0
+    normals = ((2 if p.wheel_noise > 0.0 else 0) + (3 if p.localisation else 0)  # per command
+               + (2 if p.slips else 0))
+    rb = robots[i]
+    if rb.status == Status.DONE or rb.status == Status.IDLE:
+        return
+    if rb.status == Status.CONTACT:
+        _bump(rb, p, g, s)
+        return
+    if rb.status == Status.CHECK:  # no contact began: finish that step (the solve)
+        _solve(rb, p)
+        rb.sub += 1
+    rb.status = Status.RUNNING
+    while rb.status == Status.RUNNING:
+        if rb.fresh:  # the primitive's first call: the fix's normals, when one is due
+            if fixes and rb.nfix + 1 >= p.fix_every:
+                j = npos[i]
+                if j + 3 > nend[i]:
+                    rb.status = Status.NOISE
+                    break
+                rb.f1, rb.f2, rb.f3 = noise[i, j], noise[i, j + 1], noise[i, j + 2]
+                npos[i] = j + 3
+            rb.fresh = False
+        if rb.phase == Phase.PLAN:
+            if not _plan(rb, p, prof.turn_sums, prof.drive_sums):
+                _done(rb, p, reached=True)
+                break
+            rb.phase = Phase.GUARD
+        if rb.phase == Phase.GUARD:
+            rb.limit = math.inf
+            if rb.ndrive > 0 and not noisy and not guard_leg(rb, p, s.guards):
+                cast_guard(rb, p, g, s)
+            rb.phase = Phase.DRIVE
+        leg = Leg(rb.nturn, rb.tsign, rb.tscale, rb.ndrive, rb.dscale, rb.ex, rb.ey,
+                  rb.dist)
+        while rb.status == Status.RUNNING:  # the leg's commands, one per control period
+            k = rb.cmd
+            if rb.cmd_set != k:  # a new command: its twist, as the wheels deliver it
+                vx, vy, w = leg_command(leg, k, prof.turn_caps, prof.drive_caps)
+                if math.isnan(w):  # all driven; with latency a stop until settled
+                    if not p.latency:
+                        break
+                    if rb.nleg < 0:
+                        rb.nleg = k
+                    if (k - rb.nleg >= p.delay
+                            and max(abs(rb.wl), abs(rb.wr)) <= SETTLE_M_S):
+                        break
+                    vx = vy = w = 0.0
+                if noisy:
+                    e_left = e_right = z_left = z_right = 0.0
+                    if normals:
+                        j = npos[i]
+                        if j + normals > nend[i]:
+                            rb.status = Status.NOISE
+                            break
+                        if p.wheel_noise > 0.0:
+                            e_left, e_right = noise[i, j], noise[i, j + 1]
+                            j += 2
+                        if p.localisation:  # this period's odometry noise
+                            rb.o1, rb.o2, rb.o3 = noise[i, j], noise[i, j + 1], noise[i, j + 2]
+                            j += 3
+                        if p.slips:  # this period's slip draws, one per wheel
+                            z_left, z_right = noise[i, j], noise[i, j + 1]
+                            j += 2
+                        npos[i] = j
+                    if p.latency or p.slips:
+                        vx, vy, w = deliver(rb, p, vx, vy, w, e_left, e_right, z_left,
+                                            z_right)
+                    else:
+                        vx, vy, w = wheel_twist(vx, vy, w, rb.th, e_left, e_right,
+                                                p.wheel_noise, p.wheel_base_m, rb.gain_l,
+                                                rb.gain_r, rb.base_k)
+                rb.cvx, rb.cvy, rb.cw = vx, vy, w
+                rb.cmd_set = k
+            while rb.sub < p.substeps:
+                if noisy:  # one step above exact, in line (as a call: 15 % slower)
+                    held = rb.resting
+                    vx, vy = rb.vx, rb.vy
+                    ln = math.hypot(vx, vy) * p.dt
+                    hit = False
+                    clear = False  # the step stays in the robot's clear ball
+                    if not held:
+                        x1, y1 = rb.x + vx * p.dt, rb.y + vy * p.dt
+                        clear = in_clear_ball(rb, x1, y1)
+                        if not clear:
+                            new_clear_ball(rb, p, g, s)
+                            clear = in_clear_ball(rb, x1, y1)
+                    if clear:  # nothing within CLEAR_MARGIN_M of the step: no sweep
+                        pass  # can hit, no check can find a touch (see new_clear_ball)
+                    elif ln > 1e-12:  # its own guard, as PhysicsWorld.before_step
+                        alpha = sweep_step(p, g, s, rb.x, rb.y, rb.x + vx * p.dt,
+                                       rb.y + vy * p.dt)
+                        hit = alpha < math.inf
+                        if hit and alpha * ln + p.depth_m < ln:
+                            scale = (alpha * ln + p.depth_m) / ln
+                            vx, vy = vx * scale, vy * scale
+                            rb.vx, rb.vy = vx, vy
+                    depth0 = depth_at(p, g, s, rb.x, rb.y) if held else 0.0
+                    integrate(rb, vx, vy, p)
+                    check = hit  # the sweep met a surface: ask Chipmunk
+                    if p.localisation:  # the wheels turned (a hold slides them; below)
+                        moved, yaw = math.hypot(vx, vy) * p.dt, rb.th - rb.pth
+                        rb.odo_d += moved
+                        rb.odo_th += yaw
+                    if held and _rest(rb, p, g, s, depth0):
+                        check = True  # the bumper pressed home
+                        if p.localisation:  # ... before this step's motion: none of it
+                            rb.odo_d -= moved
+                            rb.odo_th -= yaw
+                    elif clear:
+                        pass
+                    elif not hit and (held or 1e-12 < ln < 1e-5):  # where a sweep is
+                        check = new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, False)
+                    elif not hit and ln > 1e-12 and g.boxes.shape[0] and (  # blind
+                            abs(rb.x - rb.px) < 1e-5 or abs(rb.y - rb.py) < 1e-5):
+                        check = new_touch(p, g, s, rb.px, rb.py, rb.x, rb.y, True)
+                else:
+                    check = step_exact(rb, p)
+                if rb.ntraj < traj.shape[1]:
+                    traj[i, rb.ntraj, 0], traj[i, rb.ntraj, 1] = rb.x, rb.y
+                    traj[i, rb.ntraj, 2] = rb.th
+                    rb.ntraj += 1
+                if check:
+                    found = contacts_began(rb, p, g, s, contacts[i])
+                    if found < 0:  # Chipmunk decides (the caller's check)
+                        rb.status = Status.CHECK
+                        break
+                    if found > 0 or rb.forced:
+                        rb.ncontact += found
+                        booked[i] = found
+                        _bump(rb, p, g, s)
+                        break
+                _solve(rb, p)
+                rb.sub += 1
+            if rb.status == Status.RUNNING:
+                rb.cmd = k + 1
+                rb.sub = 0
+                if p.localisation:
+                    odometry(rb, p)
+        if rb.status == Status.RUNNING:
+            _finish_leg(rb, p)
 
 
 @njit(cache=True)

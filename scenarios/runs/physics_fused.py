@@ -1,0 +1,222 @@
+"""The physics training step as one compiled call: act, the primitive's physics, the
+outcome and reward, the update, episode ends and new starts, for every run of a group.
+
+The batched loop (:func:`scenarios.runs.physics.train_physics_runs`) made a Python round
+trip per primitive of every robot: a compiled call to act for each method, the world's
+step (its arguments, a kernel call, an outcome pass, the env's rules in numpy, its info
+dict), a compiled call to update. At ``exact`` that was four fifths of a primitive's cost
+(the kernel alone is about 1 us). Here one compiled call per group of runs (one method,
+one learner type: numba compiles it once per method) drives each run robot by robot until
+it needs Python: a periodic greedy test is due (the run's learner is left as it ended the
+episode), its episodes are all done, Chipmunk must settle a contact the compiled narrow
+phase cannot be sure of (``CHECK``), or the call's budget of primitives is spent (so
+Ctrl-C, progress and queued tests are served within a bounded time).
+
+Each run is the run of the batched loop, draw for draw: the same hooks act and learn on
+its row of the stacked state with its own learner stream
+(:mod:`learning.drivers.batch_agent`), its starts come from its start stream
+(:func:`learning.compiled.hooks.draw_start`), its robot is placed and driven by the
+kernel's own functions (:func:`sim.physics.kernel.primitive.begin_one`,
+:func:`~sim.physics.kernel.primitive.advance_one`), its wheel noise refilled from its noise
+stream in the same blocks as :meth:`sim.physics.kernel.batch.RouteBatch._refill` (numba's
+normals are numpy's, bit for bit), and the reward is the env's rule
+(:meth:`sim.scenario.Rewards.of_moves`). Tested: per-run logs, tests and learned tables equal
+to the batched loop's at ``exact`` and above it.
+
+Wall time: a call's time is shared evenly among the primitives it drove (the batched loop
+shared a step's time among the robots it advanced).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from learning.compiled import hooks
+from learning.compiled.generator_handle import HANDLE_SIZE, generator_from, handle
+from learning.compiled.named_state import row
+from sim.physics.drive_profiles import Profiles
+from sim.physics.kernel.primitive import advance_one, begin_one
+from sim.physics.kernel.state import Geometry, Params, Scratch, Status
+
+ACT, MOVE, START, TEST, FINISHED = 0, 1, 2, 3, 4  # where a run stands between calls
+BUDGET = 2048  # primitives a run drives per call at most: bounds a call to ~10-50 ms a run
+
+
+@njit(cache=True)
+def _refill(i, noise, npos, nend, nblock, rng):
+    """Robot ``i``'s next normals, as :meth:`RouteBatch._refill` draws them: the block goes
+    on (doubling chunks) or a new block starts."""
+    width, end = noise.shape[1], nend[i]
+    if end < width:
+        k = min(nblock[i], width - end)
+        for j in range(end, end + k):
+            noise[i, j] = rng.standard_normal()
+        nend[i] = end + k
+    else:
+        k = min(nblock[i], width)
+        for j in range(k):
+            noise[i, j] = rng.standard_normal()
+        npos[i], nend[i] = 0, k
+    nblock[i] = 2 * k
+
+
+@njit(cache=True)
+def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend, nblock,
+               noise_h, traj, contacts, booked, pt, prof_t, geo_t, st, bias, rules, mine,
+               stage, s, a, t, ret, ncontact, done, wall, callp, logs_i, logs_f, n_episodes,
+               test_every, budget):
+    """Drive every run ``i`` with ``mine[i]`` until it needs Python (see the module).
+
+    ``rules``: float64[6] = goal state, goal reward, bump reward, step reward, steps per
+    episode, physics step [s]. Per-episode logs: ``logs_i`` int64[3, n, episodes] (steps,
+    contacts, primitives of the episode driven in this call), ``logs_f`` float64[6, n,
+    episodes] (return, success, shaping mean, shaping std, wall [s] before this call,
+    simulated time [s]). Returns (primitives driven, episodes ended, runs waiting on a
+    Chipmunk check).
+    """
+    stt = box.state
+    p, prof, g, sc = Params(*pt), Profiles(*prof_t), Geometry(*geo_t), Scratch(*st)
+    goal, r_goal, r_bump, r_step = int(rules[0]), rules[1], rules[2], rules[3]
+    max_steps, dt = int(rules[4]), rules[5]
+    prims = ended = checks = 0
+    for i in range(robots.shape[0]):
+        callp[i] = 0
+        if not mine[i]:
+            continue
+        rb = robots[i]
+        left = budget
+        while left > 0:
+            k = stage[i]
+            if k == START:
+                s0 = hooks.draw_start(generator_from(start_h[i]), starts)
+                s[i] = s0
+                hooks.begin_row(row(stt, i), s0)
+                robots[i] = blank[0]
+                rb.x = rb.bx = (s0 % p.nx + 0.5) * p.cell_m
+                rb.y = rb.by = (s0 // p.nx + 0.5) * p.cell_m
+                rb.gain_l, rb.gain_r, rb.base_k = bias[i, 0], bias[i, 1], bias[i, 2]
+                booked[i] = 0
+                t[i], ret[i], ncontact[i], wall[i], callp[i] = 0, 0.0, 0, 0.0, 0
+                stage[i] = ACT
+            elif k == ACT:
+                a[i] = hooks.act_h(row(stt, i), s[i], learner_h[i])
+                begin_one(rb, a[i], p.cell_m, p.nx, p.ny, p.localisation)
+                stage[i] = MOVE
+            elif k == MOVE:
+                advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g,
+                            sc)
+                if rb.status == Status.NOISE:
+                    _refill(i, noise, npos, nend, nblock, generator_from(noise_h[i]))
+                    continue
+                if rb.status != Status.DONE:  # CHECK: Chipmunk decides, then call again
+                    checks += 1
+                    break
+                booked[i] = 0
+                prims += 1
+                left -= 1
+                callp[i] += 1
+                s2 = rb.state
+                terminated = rb.tstate == goal  # the true cell (s2: the believed one)
+                r = r_goal if terminated else (r_bump if rb.bumped else r_step)
+                t[i] += 1
+                ret[i] += r
+                ncontact[i] += rb.ncontact
+                hooks.update_h(row(stt, i), s[i], a[i], r, s2, terminated, learner_h[i])
+                s[i] = s2
+                if not (terminated or t[i] >= max_steps):
+                    stage[i] = ACT
+                    continue
+                tally = row(stt, i).tally
+                hooks.end(row(stt, i))
+                e = done[i]
+                logs_i[0, i, e], logs_i[1, i, e], logs_i[2, i, e] = t[i], ncontact[i], callp[i]
+                logs_f[0, i, e], logs_f[1, i, e] = ret[i], 1.0 if terminated else 0.0
+                logs_f[2, i, e], logs_f[3, i, e] = tally.f_mean[0], tally.f_std[0]
+                logs_f[4, i, e], logs_f[5, i, e] = wall[i], rb.steps * dt
+                done[i] = e + 1
+                ended += 1
+                callp[i] = 0
+                if done[i] % test_every == 0 or done[i] == n_episodes:
+                    stage[i] = TEST
+                    break
+                stage[i] = START
+            else:  # TEST or FINISHED: Python's turn
+                break
+    return prims, ended, checks
+
+
+class FusedRuns:
+    """The runs of one group (``rows`` of its :class:`BatchAgent`) driven by
+    :func:`drive_runs`; robots ``b0 + k`` of ``batch``. The loop's per-run arrays (``s``,
+    ``t``, ``ret``, ``contacts``, ``done``, ``wall``: views of the group's slice) are
+    shared with the caller, who placed every robot and began its episode."""
+
+    def __init__(self, agent: Any, rows: np.ndarray, b0: int, batch: Any, start_h: np.ndarray,
+                 starts: np.ndarray, rules: np.ndarray, n_episodes: int, test_every: int,
+                 loop: dict[str, np.ndarray]) -> None:
+        n = agent.n
+        self.agent, self.b0, self.batch, self.n_episodes = agent, b0, batch, n_episodes
+        sl = slice(b0, b0 + n)
+        self.mine = np.zeros(n, np.bool_)
+        self.mine[rows] = True
+        self.stage = np.where(self.mine, ACT, FINISHED).astype(np.int64)
+        self.loop = {k: v[sl] for k, v in loop.items()}
+        rngs = batch._noise_rngs[sl]
+        noise_h = np.zeros((n, HANDLE_SIZE), np.uint64)
+        for k, r in enumerate(rngs):
+            if r is not None:
+                noise_h[k] = handle(r)
+        self.logs_i = np.zeros((3, n, n_episodes), np.int64)
+        self.logs_f = np.zeros((6, n, n_episodes))
+        self.callp = np.zeros(n, np.int64)
+        self._args = [agent._box, agent._handles, start_h, starts, batch.robots[sl],
+                      np.zeros(1, batch.robots.dtype), batch._noise[sl], batch._npos[sl],
+                      batch._nend[sl], batch._nblock[sl], noise_h, batch._traj[sl],
+                      batch._booked_rows[sl], batch._booked[sl], *batch._args,
+                      batch._bias[sl], rules, self.mine, self.stage]
+        self._tail = (self.callp, self.logs_i, self.logs_f, n_episodes, test_every, BUDGET)
+
+    @property
+    def live(self) -> bool:
+        """Some run of the group has episodes left."""
+        return bool((self.stage != FINISHED).any())
+
+    def drive(self) -> tuple[list[int], int, int]:
+        """One call: (the group's rows whose greedy test is due, primitives, episodes ended).
+        Chipmunk's checks are answered here; the caller runs the tests, then
+        :meth:`tested`."""
+        lp = self.loop
+        done0 = lp["done"].copy()
+        t0 = time.perf_counter()
+        prims, ended, checks = drive_runs(
+            *self._args, lp["s"], lp["a"], lp["t"], lp["ret"], lp["contacts"], lp["done"],
+            lp["wall"], *self._tail)
+        rate = (time.perf_counter() - t0) / max(prims, 1)
+        lp["wall"][self.mine] += self.callp[self.mine] * rate  # episodes under way
+        for k in np.flatnonzero(lp["done"] != done0):  # episodes ended: their share
+            e0, e1 = int(done0[k]), int(lp["done"][k])
+            self.logs_f[4, k, e0:e1] += self.logs_i[2, k, e0:e1] * rate
+        if checks:
+            status = self.batch.r.status[self.b0:self.b0 + self.agent.n]
+            for k in np.flatnonzero(self.mine & (status == int(Status.CHECK))):
+                self.batch._check(self.b0 + int(k))
+        return np.flatnonzero(self.stage == TEST).tolist(), prims, ended
+
+    def tested(self, k: int) -> None:
+        """Row ``k``'s test is done: it starts its next episode, or is finished."""
+        done = int(self.loop["done"][k])
+        self.stage[k] = FINISHED if done >= self.n_episodes else START
+
+    def write_logs(self, logs: Any) -> None:
+        """The group's fused runs' per-episode logs into the loop's (:class:`_Logs`)."""
+        for k in np.flatnonzero(self.mine):
+            i, e = self.b0 + int(k), int(self.loop["done"][k])
+            li, lf = self.logs_i[:, k, :e], self.logs_f[:, k, :e]
+            logs.steps[i, :e], logs.contacts[i, :e] = li[0], li[1]
+            logs.returns[i, :e], logs.success[i, :e] = lf[0], lf[1] > 0.0
+            logs.shaping_mean[i, :e], logs.shaping_std[i, :e] = lf[2], lf[3]
+            logs.wall[i, :e], logs.sim_time[i, :e] = lf[4], lf[5]

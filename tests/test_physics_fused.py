@@ -107,3 +107,28 @@ def test_split_names_the_fused_time():
     train_physics_runs(sc, model, _groups(("st-ql",)), 5, 5, split=split)
     assert split["fused"] > 0.0 and split["kernel"] == 0.0
     assert split["primitives"] > 0
+
+
+@pytest.mark.parametrize("fidelity", ["exact", "noisy", "localised", "slip"])
+def test_compiled_drives_are_the_stepped_drives(fidelity):
+    """Table policies drive whole in compiled code (sim.physics.kernel.rollout), shown drives
+    step through the env; every figure equals the env's drive of the same policy as a
+    callable (which always steps)."""
+    from sim.physics.models.rollouts import drive_policies, drive_policy
+    from sim.physics.models.solve import shortest_route_policy
+
+    sc, model = load("paper-40", None, None, "goal-only")
+    opt = shortest_route_policy(model)
+    rng = np.random.default_rng(2)
+    tables = [opt] + [np.where(rng.random(opt.size) < 0.05, rng.integers(0, 4, opt.size), opt)
+                      for _ in range(2)]
+    fid = parse_fidelity(fidelity)
+    for kw in ({"keep_routes": True}, {"measure_metres": True, "keep_path": True}):
+        fast = drive_policies(sc, tables, fid, 4, [3, 4, 5], [1, 2, 3], 120, **kw)
+        for table, seed, tag, a in zip(tables, (3, 4, 5), (1, 2, 3), fast, strict=True):
+            b = drive_policy(sc, lambda s, t=table: t[s], fid, 4, seed, tag, 120, **kw)
+            for f in ("reached", "primitives", "contacts", "bumps", "sim_time_s", "metres",
+                      "path", "poses"):
+                np.testing.assert_array_equal(getattr(a, f), getattr(b, f), err_msg=f)
+            assert a.routes == b.routes
+        assert any(r.reached.any() for r in fast)

@@ -248,8 +248,10 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                     test_due(f.b0 + k, ag, k)
                     f.tested(k)
                 t_ep += clock() - t1
+            t1 = clock()
             while len(pending) >= TEST_BATCH:
                 run_tests(TEST_BATCH)
+            t_ep += clock() - t1
             if stop.requested or take_deferred():
                 raise KeyboardInterrupt
         for _, f in drivers:

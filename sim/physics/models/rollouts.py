@@ -23,6 +23,7 @@ from gymnasium.vector import AutoresetMode
 
 from sim.physics.envs.vector import PhysicsRouteVectorEnv
 from sim.physics.fidelity import Fidelity
+from sim.physics.kernel.rollout import drive_batch
 from sim.physics.static import PhysicsConfig
 from sim.scenario import Scenario
 
@@ -126,16 +127,18 @@ def drive_policy(sc: Scenario, policy: np.ndarray | Callable[[np.ndarray], np.nd
                                and not env.batch.records_trajectories):
         raise ValueError("the env to reuse must have n sub-envs (and trajectories if "
                          "metres or the path are wanted)")
+    tables = None
     if callable(policy):
         act = policy
     else:
         table = np.asarray(policy, dtype=np.int64)
+        tables = (table[None], np.zeros(n, np.int64))
 
         def act(s: np.ndarray) -> np.ndarray:
             return table[s]
     r, path, poses = _drive(env, act, rollout_rngs(seed, tag, n),
                             int(max_steps or sc.steps_per_episode), measure_metres, keep_routes,
-                            [0] if keep_path else [])
+                            [0] if keep_path else [], tables)
     empty = np.zeros((0, 3))
     return replace(r, path=path.get(0, empty), poses=poses.get(0, empty))
 
@@ -168,7 +171,7 @@ def drive_policies(sc: Scenario, tables: list[np.ndarray], fidelity: Fidelity, n
     rngs = [r for j in range(m) for r in rollout_rngs(seeds[j], tags[j], n)]
     shown = [j * n for j in range(m)] if keep_path else []
     r, paths, poses = _drive(env, act, rngs, int(max_steps or sc.steps_per_episode),
-                             measure_metres, keep_routes, shown)
+                             measure_metres, keep_routes, shown, (stacked, owner))
     empty = np.zeros((0, 3))
     return [Rollouts(r.reached[j * n:(j + 1) * n], r.primitives[j * n:(j + 1) * n],
                      r.contacts[j * n:(j + 1) * n], r.bumps[j * n:(j + 1) * n],
@@ -179,20 +182,31 @@ def drive_policies(sc: Scenario, tables: list[np.ndarray], fidelity: Fidelity, n
 
 def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
            rngs: list[np.random.Generator], limit: int, measure_metres: bool,
-           keep_routes: bool, shown: list[int]
+           keep_routes: bool, shown: list[int],
+           tables: tuple[np.ndarray, np.ndarray] | None = None
            ) -> tuple[Rollouts, dict[int, np.ndarray], dict[int, np.ndarray]]:
     """Every sub-env of ``env`` driven from S with its noise stream ``rngs[k]``, actions
     ``act(states)``, for at most ``limit`` primitives; with the path and the poses after
     each primitive of the robots ``shown`` (the Rollouts' own ``path`` and ``poses`` are
-    left empty)."""
+    left empty). ``tables``: (policies ``int[m, nS]``, each robot's policy ``int[N]``), the
+    same actions as ``act``: then every drive not ``shown`` runs whole in compiled code
+    (:mod:`sim.physics.kernel.rollout`; the same drives), the shown ones step here."""
     n = env.num_envs
     env.max_episode_steps = limit
     for k, rng in enumerate(rngs):
         env.set_noise_rng(k, rng)
     s, info = env.reset(options={"start": "S"})
+    compiled = np.zeros(n, bool)
+    if tables is not None:
+        compiled[:] = True
+        compiled[shown] = False
+        tallies, visited, c_metres = drive_batch(env.batch, tables[0], tables[1], s.copy(),
+                                                 env.model.goal, limit, keep_routes, compiled,
+                                                 measure_metres)
+        env.park(compiled)  # driven behind the env's back: they sit out until reset
     path = {k: [info["pose"][k:k + 1].copy()] for k in shown}
     poses = {k: [info["pose"][k].copy()] for k in shown}
-    running = np.ones(n, bool)
+    running = ~compiled
     reached = np.zeros(n, bool)
     prims = np.zeros(n, np.int64)
     contacts = np.zeros(n, np.int64)
@@ -219,10 +233,18 @@ def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
         sim_t = np.where(ended, info["time_s"], sim_t)
         running &= ~ended
         s = s2
+    if compiled.any():
+        prims[compiled], contacts[compiled], bumps[compiled] = (v[compiled]
+                                                                for v in tallies[:3])
+        reached[compiled] = tallies[3][compiled] > 0
+        sim_t[compiled] = tallies[4][compiled] * env.config.dt_s
+        if measure_metres:
+            metres[compiled] = c_metres[compiled]
     routes: list[list[int]] = []
     if keep_routes:
-        visited = np.stack(states)
-        routes = [visited[:prims[i] + 1, i].tolist() for i in range(n)]
+        stepped = np.stack(states)
+        routes = [(visited[i] if compiled[i] else stepped[:, i])[:prims[i] + 1].tolist()
+                  for i in range(n)]
     empty = np.zeros((0, 3))
     return (Rollouts(reached, prims, contacts, bumps, sim_t, metres, routes, empty, empty),
             {k: np.concatenate(v) for k, v in path.items()},

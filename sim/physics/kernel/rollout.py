@@ -1,0 +1,110 @@
+"""Greedy drives of table policies, many primitives per compiled call.
+
+A graded drive (:mod:`sim.physics.models.rollouts`) was a Python round trip per primitive:
+the actions looked up, the world's step (its kernel call, outcome pass, the env's rules
+and info), the tallies in numpy. Above ``exact`` the periodic greedy tests of a physics
+run are such drives (ten per test), and they cost as much as the training between them.
+Here each robot drives its policy (``tables[owner[k]]``, an action per state) from where
+it was placed until it reaches G or spends its ``limit`` of primitives, robot by robot,
+with the kernel's own functions (:func:`sim.physics.kernel.primitive.begin_one`,
+:func:`~sim.physics.kernel.primitive.advance_one`). A robot hands back to Python only to
+have its normals refilled or a contact settled by Chipmunk, as the batched step does, so
+every drive is the drive the env would give (tested against it).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from sim.physics import sigint
+from sim.physics.drive_profiles import Profiles
+from sim.physics.kernel.primitive import advance_one, begin_one
+from sim.physics.kernel.state import Geometry, Params, Scratch, Status
+
+
+@njit(cache=True)
+def drive_tables(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t, st,
+                 tables, owner, state, running, rules, tallies, routes, metres, start_xy):
+    """Drive every ``running`` robot until G, its limit, or the caller is needed.
+
+    ``rules``: int64[2] = goal state, primitives per drive at most. ``state[k]``: robot k's
+    state (observed), updated per primitive; ``tallies`` int64[5, N]: primitives,
+    contacts, bumps, reached (0/1), physics steps at the drive's end; ``routes[k, j]`` the
+    state after primitive j (``routes[k, 0]`` is the caller's), when ``routes`` has columns;
+    ``metres[k]`` the path length [m] when ``metres`` has robots (``traj`` must have room:
+    each primitive's steps summed from its start pose, ``start_xy[k]``, as
+    :func:`sim.physics.kernel.readouts.path_lengths` sums them). Returns how many running
+    robots wait for the caller (``NOISE`` or ``CHECK``).
+    """
+    p, prof, g, sc = Params(*pt), Profiles(*prof_t), Geometry(*geo_t), Scratch(*st)
+    goal, limit = rules[0], rules[1]
+    waiting = 0
+    for k in range(robots.shape[0]):
+        if not running[k]:
+            continue
+        rb = robots[k]
+        while True:
+            if rb.status == Status.DONE or rb.status == Status.IDLE:
+                start_xy[k, 0], start_xy[k, 1] = rb.x, rb.y
+                begin_one(rb, tables[owner[k], state[k]], p.cell_m, p.nx, p.ny,
+                          p.localisation)
+            advance_one(k, robots, noise, npos, nend, traj, contacts, booked, p, prof, g, sc)
+            if rb.status != Status.DONE:
+                waiting += 1
+                break
+            booked[k] = 0
+            n = tallies[0, k] + 1
+            tallies[0, k] = n
+            tallies[1, k] += rb.ncontact
+            tallies[2, k] += rb.bumped
+            state[k] = rb.state
+            if metres.shape[0]:
+                x, y, total = start_xy[k, 0], start_xy[k, 1], 0.0
+                for j in range(rb.ntraj):
+                    total += math.hypot(traj[k, j, 0] - x, traj[k, j, 1] - y)
+                    x, y = traj[k, j, 0], traj[k, j, 1]
+                metres[k] += total
+            if routes.shape[1]:
+                routes[k, n] = rb.state
+            if rb.tstate == goal or n >= limit:
+                tallies[3, k] = rb.tstate == goal
+                tallies[4, k] = rb.steps
+                running[k] = False
+                break
+    return waiting
+
+
+def drive_batch(batch, tables: np.ndarray, owner: np.ndarray, state: np.ndarray, goal: int,
+                limit: int, keep_routes: bool, running: np.ndarray, measure_metres: bool
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``running`` robots of ``batch`` (placed, each with a noise stream of its own that
+    nothing else reads) drive ``tables[owner[k]]`` from ``state[k]``: (tallies int64[5, N]
+    as :func:`drive_tables` fills them, routes int64[N, limit + 1] or ``[N, 0]``, metres
+    float64[N] or ``[0]``)."""
+    n = batch.n
+    running = running.copy()
+    tallies = np.zeros((5, n), np.int64)
+    routes = np.zeros((n, limit + 1 if keep_routes else 0), np.int64)
+    if keep_routes:
+        routes[:, 0] = state
+    metres = np.zeros(n if measure_metres else 0)
+    rules = np.array([goal, limit], np.int64)
+    # a drive's stream is its own: its block of normals is drawn whole at the first refill
+    # (the same normals in the same places as chunk by chunk; only unused ones are extra)
+    batch._nblock[:] = batch._noise.shape[1]
+    args = (batch.robots, batch._noise, batch._npos, batch._nend, batch._traj,
+            batch._booked_rows, batch._booked, *batch._args)
+    status, start_xy = batch.r.status, np.zeros((n, 2))
+    while drive_tables(*args, tables, owner, state, running, rules, tallies, routes, metres,
+                       start_xy):
+        for k in np.flatnonzero(running & (status != int(Status.DONE))):
+            if status[k] == int(Status.NOISE):
+                batch._refill(int(k))
+            else:
+                batch._check(int(k))
+        sigint.raise_if_deferred()
+    sigint.raise_if_deferred()
+    return tallies, routes, metres

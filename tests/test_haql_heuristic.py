@@ -10,6 +10,7 @@ import pytest
 
 from learning.geometry import ACTION_DELTAS
 from learning.methods.haql import rederive, rederive_after_wall
+from learning.parts.least_bumped import BUMP_COST_CAP, edge_changed, least_bumped_costs, step_cost
 
 
 def grid_neighbours(nx: int, ny: int) -> np.ndarray:
@@ -50,7 +51,8 @@ def test_wall_by_wall_equals_the_full_rederivation(seed, share):
         for st in (fast, full):
             st["blocked"][s, a] = True
         rederive_after_wall(fast["pi_h"], nb, fast["blocked"], bal, fast["dist"],
-                            fast["queue"], goal, s, a)
+                            fast["queue"], goal, s, a, np.zeros(n, np.int64),
+                            np.zeros(1, np.bool_))
         rederive(full["pi_h"], nb, full["blocked"], bal, full["dist"], full["queue"], goal)
         np.testing.assert_array_equal(fast["dist"], full["dist"])
         np.testing.assert_array_equal(fast["pi_h"], full["pi_h"])
@@ -98,7 +100,8 @@ def test_noisy_bumps_and_unblocks_equal_the_full_rederivation(seed):
     moves = [(s, a) for s in range(n) for a in range(4) if nb[s, a] >= 0]
     fast = dict(bal=np.zeros((n, 4), np.int32), blocked=np.zeros((n, 4), np.bool_),
                 dist=np.zeros(n, np.int32), queue=np.zeros(n, np.int32),
-                pi_h=np.zeros(n, np.int32))
+                pi_h=np.zeros(n, np.int32), cost=np.zeros(n, np.int64),
+                cost_ok=np.zeros(1, np.bool_))
     full = {k: v.copy() for k, v in fast.items()}
     for st in (fast, full):
         rederive(st["pi_h"], nb, st["blocked"], st["bal"], st["dist"], st["queue"], goal)
@@ -113,15 +116,19 @@ def test_noisy_bumps_and_unblocks_equal_the_full_rederivation(seed):
         s2 = s if bump else int(nb[s, a])
         was = bool(full["blocked"][s, a])
         observe(fast["bal"], fast["pi_h"], nb, fast["blocked"], fast["dist"], fast["queue"],
-                goal, s, a, s2, False, not bump)
+                goal, s, a, s2, False, not bump, fast["cost"], fast["cost_ok"])
         observe_by_full_rederivation(full["bal"], full["pi_h"], nb, full["blocked"],
                                      full["dist"], full["queue"], goal, s, a, s2, not bump)
         for k in ("bal", "blocked", "dist", "pi_h"):
             np.testing.assert_array_equal(fast[k], full[k], err_msg=k)
+        if fast["cost_ok"][0]:  # the kept costs are a full Dijkstra's after every count
+            np.testing.assert_array_equal(fast["cost"],
+                                          least_bumped_costs(nb, fast["bal"], goal))
         kinds["unblock"] += was and not full["blocked"][s, a]
         cut = bool((full["dist"] < 0).any())
         kinds["cut" if cut else "uncut"] += 1
     assert min(kinds.values()) > 20, kinds  # every branch was exercised
+    assert fast["cost_ok"][0]  # the costs were kept, not only computed
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -130,7 +137,6 @@ def test_least_bumped_costs_are_dijkstra_s_over_every_move(seed):
     against a plain Dijkstra over every (state, move) pair, on random bump counts."""
     import heapq
 
-    from learning.methods.haql import BUMP_COST_CAP, least_bumped_costs
 
     rng = np.random.default_rng(seed)
     nb = grid_neighbours(11, 7)
@@ -152,3 +158,27 @@ def test_least_bumped_costs_are_dijkstra_s_over_every_move(seed):
                         heapq.heappush(heap, (cu, u))
     got = least_bumped_costs(nb, bal, goal)
     assert got.tolist() == [want.get(s, -1) for s in range(n)]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_kept_costs_equal_a_full_dijkstra_after_every_count(seed):
+    """learning.parts.least_bumped.edge_changed after each +1 or -1 on one move's count (weights
+    that rise on least routes, with and without another tight move, and that fall) equals
+    least_bumped_costs from scratch."""
+    rng = np.random.default_rng(seed)
+    nb = grid_neighbours(10, 9)
+    n = nb.shape[0]
+    goal = int(rng.integers(n))
+    bal = rng.integers(-2, 3, size=(n, 4)).astype(np.int32)
+    cost = least_bumped_costs(nb, bal, goal)
+    moves = [(s, a) for s in range(n) for a in range(4) if nb[s, a] >= 0]
+    changed = 0
+    for _ in range(3000):
+        s, a = moves[rng.integers(len(moves))]
+        w_old = step_cost(bal, s, a, n)
+        bal[s, a] += 1 if rng.random() < 0.55 else -1
+        edge_changed(cost, nb, bal, s, a, w_old)
+        want = least_bumped_costs(nb, bal, goal)
+        changed += int(step_cost(bal, s, a, n) != w_old)
+        np.testing.assert_array_equal(cost, want)
+    assert changed > 500

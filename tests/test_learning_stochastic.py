@@ -124,7 +124,7 @@ def test_haql_blocks_a_move_while_bumps_are_its_most_likely_outcome():
     def see(s, a, s2):
         # a stay is a bump, an arrival here is clean (no grazing in this test)
         observe(st.balance, st.pi_h, fs.neighbour, fs.blocked, fs.distance, fs.queue,
-                fs.goal[0], s, a, s2, False, s2 != s)
+                fs.goal[0], s, a, s2, False, s2 != s, st.cost, st.cost_ok)
 
     s, a = DOOR
     door = sid(3, 1)

@@ -34,23 +34,22 @@ from learning.config import MethodConfig, params_tuple
 from learning.geometry import Geometry
 from learning.parts.free_space import (
     FreeSpace,
-    back_move,
     bfs_distances,
     distances_change,
     lower_distances,
     new_free_space,
     repair_distances,
 )
+from learning.parts.least_bumped import edge_changed, least_bumped_costs, step_cost
 from learning.parts.move_reading import MoveReading, new_move_reading, read_move
 from learning.parts.tabular import argmax_first, argmax_tied, q_learning, row_max
 from learning.parts.tally import Tally, begin_tally, new_tally
 
 HOOK = dict(cache=True, inline="always")
 COUNT_CAP = 1 << 30  # bumps minus arrivals saturate here (int32)
-BUMP_COST_CAP = 1 << 20  # a move's excess bumps in a route's cost (int64 sums stay finite)
 # Added after checkpoints were written: a file without them loads the fresh values (no reward
 # seen yet), relearnt at the next stay and clean arrival (see learning.drivers.checkpoint).
-ADDED = ("reading.r_stay", "reading.r_clean")
+ADDED = ("reading.r_stay", "reading.r_clean", "cost", "cost_ok")
 
 
 Params = params_tuple("Params", __name__, xi=float, beta_h=float, eta=float, explored=bool)
@@ -91,6 +90,8 @@ class State(NamedTuple):
     balance: np.ndarray  # int32[nS, nA]; bumps minus arrivals seen (blocked when > 0)
     free: FreeSpace  # the free-space model pi_H is derived from
     reading: MoveReading  # the rewards of a stay and of a clean arrival (bumps from rewards)
+    cost: np.ndarray  # int64[nS]; least-bumped route costs (learning.parts.least_bumped) ...
+    cost_ok: np.ndarray  # bool[1]; ... kept up to date once first needed (False: not yet)
 
 
 def heuristic_actions(geom: Geometry) -> np.ndarray:
@@ -110,11 +111,12 @@ def heuristic_actions(geom: Geometry) -> np.ndarray:
 def init_state(cfg: HAQL, geom: Geometry, rng: np.random.Generator) -> State:
     n_s, n_a = geom.n_states, geom.n_actions
     st = State(cfg.params(), new_tally(), np.zeros((n_s, n_a)), np.zeros(n_s, np.int32),
-               np.zeros((n_s, n_a), np.int32), new_free_space(geom), new_move_reading())
+               np.zeros((n_s, n_a), np.int32), new_free_space(geom), new_move_reading(),
+               np.zeros(n_s, np.int64), np.zeros(1, np.bool_))
     if cfg.explored:
         fs = st.free
-        rederive(st.pi_h, fs.neighbour, fs.blocked, st.balance, fs.distance, fs.queue,
-                 int(fs.goal[0]))
+        rederive_kept(st.pi_h, fs.neighbour, fs.blocked, st.balance, fs.distance, fs.queue,
+                      int(fs.goal[0]), st.cost, st.cost_ok)
     else:
         st.pi_h[:] = heuristic_actions(geom)
     return st
@@ -133,7 +135,16 @@ def rederive(pi_h, nb, blocked, bal, dist, queue, goal):
     policy of a stochastic world must, instead of at move 0. In a deterministic world a
     state without a route of unblocked moves is walled off from G, so this changes nothing
     a run can reach. Takes the free space's arrays (hooks read a named tuple's fields once,
-    at their top; see :mod:`learning.methods.rnh_ql_plus.rules`)."""
+    at their top; see :mod:`learning.methods.rnh_ql_plus.rules`). The least-bumped costs
+    from scratch: the reference :func:`rederive_kept` is tested against."""
+    rederive_kept(pi_h, nb, blocked, bal, dist, queue, goal, np.zeros(pi_h.shape[0], np.int64),
+                  np.zeros(1, np.bool_))
+
+
+@njit(cache=True)
+def rederive_kept(pi_h, nb, blocked, bal, dist, queue, goal, cost, cost_ok):
+    """:func:`rederive` with the least-bumped costs kept in ``cost`` (computed here first
+    when ``cost_ok[0]`` is False, then kept up to date by :func:`observe`)."""
     bfs_distances(nb, blocked, dist, queue, goal)
     cut = False
     for s in range(pi_h.shape[0]):
@@ -142,15 +153,18 @@ def rederive(pi_h, nb, blocked, bal, dist, queue, goal):
         else:
             cut = True
     if cut:
-        rederive_cut(pi_h, nb, bal, dist, goal)
+        rederive_cut(pi_h, nb, bal, dist, goal, cost, cost_ok)
 
 
 @njit(cache=True)
-def rederive_cut(pi_h, nb, bal, dist, goal):
+def rederive_cut(pi_h, nb, bal, dist, goal, cost, cost_ok):
     """The second half of :func:`rederive`: pi_H of the states without a route of unblocked
     moves (distance -1), from the least-bumped routes; on its own where only the counts
-    changed (the distances, and so every other state's move, are as they were)."""
-    cost = least_bumped_costs(nb, bal, goal)
+    changed (the distances, and so every other state's move, are as they were). ``cost``
+    is kept up to date from the first call on (``cost_ok``)."""
+    if not cost_ok[0]:
+        cost[:] = least_bumped_costs(nb, bal, goal)
+        cost_ok[0] = True
     for s in range(pi_h.shape[0]):
         if dist[s] < 0:
             best, best_c = 0, np.int64(-1)
@@ -165,7 +179,7 @@ def rederive_cut(pi_h, nb, bal, dist, goal):
 
 
 @njit(cache=True)
-def rederive_after_wall(pi_h, nb, blocked, bal, dist, queue, goal, s, a):
+def rederive_after_wall(pi_h, nb, blocked, bal, dist, queue, goal, s, a, cost, cost_ok):
     """pi_H after s's move a was newly blocked, equal to :func:`rederive`'s but in
     O(the states whose distance changed): only s (its own move) and the neighbours of a
     state whose distance changed can point another way. Distances are repaired
@@ -176,20 +190,21 @@ def rederive_after_wall(pi_h, nb, blocked, bal, dist, queue, goal, s, a):
     A full re-derivation at every new wall cost O(walls x states): on a 512² map, hours
     a run (see BENCHMARKS.md)."""
     if any_cut(dist):
-        rederive(pi_h, nb, blocked, bal, dist, queue, goal)
+        rederive_kept(pi_h, nb, blocked, bal, dist, queue, goal, cost, cost_ok)
         return
     if not distances_change(nb, dist, blocked, s, a):
         pi_h[s] = nearest_move(nb, blocked, dist, s)
         return
     changed = repair_distances(nb, blocked, dist, queue, goal, s)
     if changed[0] < 0:  # a state lost its last route (the distances are a full BFS's now)
-        rederive(pi_h, nb, blocked, bal, dist, queue, goal)
+        rederive_kept(pi_h, nb, blocked, bal, dist, queue, goal, cost, cost_ok)
         return
     repoint(pi_h, nb, blocked, dist, s, changed, changed.shape[0])
 
 
 @njit(cache=True)
-def rederive_after_unblock(pi_h, nb, blocked, bal, dist, queue, goal, s, a):
+def rederive_after_unblock(pi_h, nb, blocked, bal, dist, queue, goal, s, a, cost,
+                           cost_ok):
     """pi_H after s's move a was unblocked (a wall that moved after all, in a noisy world),
     equal to :func:`rederive`'s: distances can only fall, and only through s; they are
     lowered by a BFS from s over the moves into it (each state at most once: the first visit
@@ -197,7 +212,7 @@ def rederive_after_unblock(pi_h, nb, blocked, bal, dist, queue, goal, s, a):
     their nearest move again. Where a state has no route (before), the whole of
     :func:`rederive` runs (a cut-off state may have got one back)."""
     if any_cut(dist):
-        rederive(pi_h, nb, blocked, bal, dist, queue, goal)
+        rederive_kept(pi_h, nb, blocked, bal, dist, queue, goal, cost, cost_ok)
         return
     t = nb[s, a]
     if dist[t] + 1 >= dist[s]:  # no distance falls: only s's own move may change
@@ -234,68 +249,6 @@ def any_cut(dist):
 
 
 @njit(cache=True, inline="always")
-def step_cost(bal, s, a, n_s):
-    """A move's cost in :func:`least_bumped_costs`: its excess of bumps over arrivals, in
-    units worth more than any route's length, plus one move."""
-    return np.int64(min(max(bal[s, a], 0), BUMP_COST_CAP)) * np.int64(n_s + 1) + 1
-
-
-@njit(cache=True)
-def least_bumped_costs(nb, bal, goal):
-    """cost[s]: the least (excess bumps x (nS + 1) + moves) of a route from s to G over
-    every arena move (-1: none); Dijkstra from G over the moves reversed, with a binary
-    heap that may hold a state more than once (stale entries are skipped; the costs, the
-    least ones, do not depend on the order moves are relaxed in). Allocates its arrays: it
-    runs only when a route was cut, not on a step."""
-    n_s, n_a = nb.shape
-    cost = np.full(n_s, -1, np.int64)
-    keys = np.empty(n_s * n_a + 1, np.int64)  # a push per move at most, and G
-    vals = np.empty(n_s * n_a + 1, np.int64)
-    cost[goal] = 0
-    keys[0], vals[0] = 0, goal
-    size = 1
-    done = np.zeros(n_s, np.bool_)
-    while size > 0:
-        c, v = keys[0], vals[0]
-        size -= 1
-        keys[0], vals[0] = keys[size], vals[size]
-        i = 0
-        while True:  # sift down
-            left, right, m = 2 * i + 1, 2 * i + 2, i
-            if left < size and keys[left] < keys[m]:
-                m = left
-            if right < size and keys[right] < keys[m]:
-                m = right
-            if m == i:
-                break
-            keys[i], keys[m] = keys[m], keys[i]
-            vals[i], vals[m] = vals[m], vals[i]
-            i = m
-        if done[v]:
-            continue
-        done[v] = True
-        for b in range(n_a):  # the moves into v: its neighbours' opposite moves (the
-            u = nb[v, b]  # arena's moves are symmetric); any order gives the same costs
-            if u < 0 or done[u]:
-                continue
-            a = back_move(b)
-            cu = c + step_cost(bal, u, a, n_s)
-            if cost[u] < 0 or cu < cost[u]:
-                cost[u] = cu
-                j = size
-                keys[j], vals[j] = cu, u
-                size += 1
-                while j > 0:  # sift up
-                    p = (j - 1) // 2
-                    if keys[p] <= keys[j]:
-                        break
-                    keys[p], keys[j] = keys[j], keys[p]
-                    vals[p], vals[j] = vals[j], vals[p]
-                    j = p
-    return cost
-
-
-@njit(cache=True, inline="always")
 def nearest_move(nb, walls, dist, s):
     """The move from s not in ``walls`` to the neighbour with the least ``dist`` (lowest
     index on ties; 0 when no neighbour has a route)."""
@@ -310,12 +263,15 @@ def nearest_move(nb, walls, dist, s):
 
 
 @njit(cache=True, inline="always")
-def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, clean):
+def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, clean, cost,
+            cost_ok):
     """After a move: a bump (stayed in s, or arrived paid the bump's reward: ``clean`` is
     False) counts up, a move that reached its neighbour cleanly down; when the sign flips
     (the move's most likely outcome changed), re-derive pi_H; and where s has no route of
     unblocked moves, whenever pi_H's own move bumps (:func:`rederive`). (A move that
-    drifted into another cell without a bump tells nothing about this one.)"""
+    drifted into another cell without a bump tells nothing about this one.) The least-bumped
+    costs, once needed, follow every count (:func:`learning.parts.least_bumped.edge_changed`)."""
+    w_old = step_cost(bal, s, a, pi_h.shape[0])
     if s2 == nb[s, a] and clean:
         if bal[s, a] > -COUNT_CAP:  # int32: a long run must not wrap round
             bal[s, a] -= 1
@@ -324,18 +280,21 @@ def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, cle
             bal[s, a] += 1
     else:
         return
+    if cost_ok[0]:
+        edge_changed(cost, nb, bal, s, a, w_old)
     now = bal[s, a] > 0
     if now != blocked[s, a]:
         blocked[s, a] = now
         if now:  # a new wall: repair what it changed
-            rederive_after_wall(pi_h, nb, blocked, bal, dist, queue, goal, s, a)
+            rederive_after_wall(pi_h, nb, blocked, bal, dist, queue, goal, s, a, cost, cost_ok)
         else:  # a wall that moved after all (noisy worlds): distances may fall
-            rederive_after_unblock(pi_h, nb, blocked, bal, dist, queue, goal, s, a)
+            rederive_after_unblock(pi_h, nb, blocked, bal, dist, queue, goal, s, a, cost,
+                                   cost_ok)
     elif now and dist[s] < 0 and pi_h[s] == a:
         # cut off, and the least-bumped route's first move bumped again: its cost rose, so
         # the heuristic may now point another way (else it pushes one wall for ever); no
         # move was blocked or unblocked, so only the cut-off states' moves can change
-        rederive_cut(pi_h, nb, bal, dist, goal)
+        rederive_cut(pi_h, nb, bal, dist, goal, cost, cost_ok)
 
 
 @njit(cache=True, inline="always")
@@ -378,7 +337,8 @@ def update(st, s, a, r, s2, terminated, rng):
     q_learning(st.q, s, a, r, s2, terminated, st.par.alpha, st.par.gamma, 0.0)
     if st.par.explored:
         clean = read_move(r_stay, r_clean, s, r, s2, terminated)
-        observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, clean)
+        observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, clean,
+                st.cost, st.cost_ok)
 
 
 @njit(**HOOK)

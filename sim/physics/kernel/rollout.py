@@ -27,7 +27,8 @@ from sim.physics.kernel.state import Geometry, Params, Scratch, Status
 
 @njit(cache=True)
 def drive_tables(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t, st,
-                 tables, owner, state, running, rules, tallies, routes, metres, start_xy):
+                 tables, owner, state, running, rules, tallies, routes, metres, start_xy,
+                 shown, path, npath, poses):
     """Drive every ``running`` robot until G, its limit, or the caller is needed.
 
     ``rules``: int64[2] = goal state, primitives per drive at most. ``state[k]``: robot k's
@@ -36,8 +37,12 @@ def drive_tables(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, 
     state after primitive j (``routes[k, 0]`` is the caller's), when ``routes`` has columns;
     ``metres[k]`` the path length [m] when ``metres`` has robots (``traj`` must have room:
     each primitive's steps summed from its start pose, ``start_xy[k]``, as
-    :func:`sim.physics.kernel.readouts.path_lengths` sums them). Returns how many running
-    robots wait for the caller (``NOISE`` or ``CHECK``).
+    :func:`sim.physics.kernel.readouts.path_lengths` sums them). A robot ``k`` with
+    ``shown[k] = j >= 0`` appends each primitive's trajectory to ``path[j, :npath[j]]``
+    (its start pose, then the pose after every step, heading not wrapped: the env's
+    ``trajectory``) and its pose after the primitive to ``poses[j, n]`` (heading wrapped as
+    the env's ``info["pose"]``). Returns how many running robots wait for the caller
+    (``NOISE`` or ``CHECK``).
     """
     p, prof, g, sc = Params(*pt), Profiles(*prof_t), Geometry(*geo_t), Scratch(*st)
     goal, limit = rules[0], rules[1]
@@ -48,7 +53,7 @@ def drive_tables(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, 
         rb = robots[k]
         while True:
             if rb.status == Status.DONE or rb.status == Status.IDLE:
-                start_xy[k, 0], start_xy[k, 1] = rb.x, rb.y
+                start_xy[k, 0], start_xy[k, 1], start_xy[k, 2] = rb.x, rb.y, rb.th
                 begin_one(rb, tables[owner[k], state[k]], p.cell_m, p.nx, p.ny,
                           p.localisation)
             advance_one(k, robots, noise, npos, nend, traj, contacts, booked, p, prof, g, sc)
@@ -69,6 +74,17 @@ def drive_tables(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, 
                 metres[k] += total
             if routes.shape[1]:
                 routes[k, n] = rb.state
+            j = shown[k]
+            if j >= 0:
+                m = npath[j]
+                path[j, m, 0], path[j, m, 1], path[j, m, 2] = (start_xy[k, 0], start_xy[k, 1],
+                                                               start_xy[k, 2])
+                for r in range(rb.ntraj):
+                    path[j, m + 1 + r, 0], path[j, m + 1 + r, 1] = traj[k, r, 0], traj[k, r, 1]
+                    path[j, m + 1 + r, 2] = traj[k, r, 2]
+                npath[j] = m + 1 + rb.ntraj
+                poses[j, n, 0], poses[j, n, 1] = rb.x, rb.y
+                poses[j, n, 2] = (rb.th + math.pi) % (2.0 * math.pi) - math.pi
             if rb.tstate == goal or n >= limit:
                 tallies[3, k] = rb.tstate == goal
                 tallies[4, k] = rb.steps
@@ -78,14 +94,16 @@ def drive_tables(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, 
 
 
 def drive_batch(batch, tables: np.ndarray, owner: np.ndarray, state: np.ndarray, goal: int,
-                limit: int, keep_routes: bool, running: np.ndarray, measure_metres: bool
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The ``running`` robots of ``batch`` (placed, each with a noise stream of its own that
-    nothing else reads) drive ``tables[owner[k]]`` from ``state[k]``: (tallies int64[5, N]
-    as :func:`drive_tables` fills them, routes int64[N, limit + 1] or ``[N, 0]``, metres
-    float64[N] or ``[0]``)."""
+                limit: int, keep_routes: bool, measure_metres: bool, shown: list[int]
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray],
+                           list[np.ndarray]]:
+    """Every robot of ``batch`` (placed, each with a noise stream of its own that nothing
+    else reads) drives ``tables[owner[k]]`` from ``state[k]``: (tallies int64[5, N] as
+    :func:`drive_tables` fills them, routes int64[N, limit + 1] or ``[N, 0]``, metres
+    float64[N] or ``[0]``, then per robot of ``shown`` its trajectories concatenated and
+    its poses after each primitive)."""
+    running = np.ones(batch.n, np.bool_)
     n = batch.n
-    running = running.copy()
     tallies = np.zeros((5, n), np.int64)
     routes = np.zeros((n, limit + 1 if keep_routes else 0), np.int64)
     if keep_routes:
@@ -97,9 +115,15 @@ def drive_batch(batch, tables: np.ndarray, owner: np.ndarray, state: np.ndarray,
     batch._nblock[:] = batch._noise.shape[1]
     args = (batch.robots, batch._noise, batch._npos, batch._nend, batch._traj,
             batch._booked_rows, batch._booked, *batch._args)
-    status, start_xy = batch.r.status, np.zeros((n, 2))
+    status, start_xy = batch.r.status, np.zeros((n, 3))
+    row = np.full(n, -1, np.int64)
+    row[shown] = np.arange(len(shown))
+    per_primitive = batch._traj.shape[1] + 1 if shown else 0
+    path = np.zeros((len(shown), limit * per_primitive, 3))
+    npath = np.zeros(len(shown), np.int64)
+    poses = np.zeros((len(shown), limit + 1, 3))
     while drive_tables(*args, tables, owner, state, running, rules, tallies, routes, metres,
-                       start_xy):
+                       start_xy, row, path, npath, poses):
         for k in np.flatnonzero(running & (status != int(Status.DONE))):
             if status[k] == int(Status.NOISE):
                 batch._refill(int(k))
@@ -107,4 +131,5 @@ def drive_batch(batch, tables: np.ndarray, owner: np.ndarray, state: np.ndarray,
                 batch._check(int(k))
         sigint.raise_if_deferred()
     sigint.raise_if_deferred()
-    return tallies, routes, metres
+    return (tallies, routes, metres, [path[j, :npath[j]] for j in range(len(shown))],
+            [poses[j, 1:tallies[0, k] + 1] for j, k in enumerate(shown)])

@@ -180,6 +180,27 @@ def drive_policies(sc: Scenario, tables: list[np.ndarray], fidelity: Fidelity, n
                      poses.get(j * n, empty)) for j in range(m)]
 
 
+def _drive_tables(env: PhysicsRouteVectorEnv, tables: tuple[np.ndarray, np.ndarray],
+                  s: np.ndarray, info: dict, limit: int, measure_metres: bool,
+                  keep_routes: bool, shown: list[int]
+                  ) -> tuple[Rollouts, dict[int, np.ndarray], dict[int, np.ndarray]]:
+    """:func:`_drive` of table policies, every drive in compiled code."""
+    n = env.num_envs
+    tallies, visited, metres, paths, poses = drive_batch(
+        env.batch, tables[0], tables[1], s.copy(), env.model.goal, limit, keep_routes,
+        measure_metres, shown)
+    env.park(np.ones(n, bool))  # driven behind the env's back: they sit out until reset
+    prims = tallies[0]
+    routes = [visited[i, :prims[i] + 1].tolist() for i in range(n)] if keep_routes else []
+    empty = np.zeros((0, 3))
+    r = Rollouts(tallies[3] > 0, prims, tallies[1], tallies[2], tallies[4] * env.config.dt_s,
+                 metres if measure_metres else np.full(n, np.nan), routes, empty, empty)
+    return (r, {k: np.concatenate([info["pose"][k:k + 1], p]) for k, p in zip(shown, paths,
+                                                                               strict=True)},
+            {k: np.concatenate([info["pose"][k][None], q]) for k, q in zip(shown, poses,
+                                                                            strict=True)})
+
+
 def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
            rngs: list[np.random.Generator], limit: int, measure_metres: bool,
            keep_routes: bool, shown: list[int],
@@ -189,24 +210,18 @@ def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
     ``act(states)``, for at most ``limit`` primitives; with the path and the poses after
     each primitive of the robots ``shown`` (the Rollouts' own ``path`` and ``poses`` are
     left empty). ``tables``: (policies ``int[m, nS]``, each robot's policy ``int[N]``), the
-    same actions as ``act``: then every drive not ``shown`` runs whole in compiled code
-    (:mod:`sim.physics.kernel.rollout`; the same drives), the shown ones step here."""
+    same actions as ``act``: then every drive runs whole in compiled code
+    (:mod:`sim.physics.kernel.rollout`; the same drives, paths and poses included)."""
     n = env.num_envs
     env.max_episode_steps = limit
     for k, rng in enumerate(rngs):
         env.set_noise_rng(k, rng)
     s, info = env.reset(options={"start": "S"})
-    compiled = np.zeros(n, bool)
     if tables is not None:
-        compiled[:] = True
-        compiled[shown] = False
-        tallies, visited, c_metres = drive_batch(env.batch, tables[0], tables[1], s.copy(),
-                                                 env.model.goal, limit, keep_routes, compiled,
-                                                 measure_metres)
-        env.park(compiled)  # driven behind the env's back: they sit out until reset
+        return _drive_tables(env, tables, s, info, limit, measure_metres, keep_routes, shown)
     path = {k: [info["pose"][k:k + 1].copy()] for k in shown}
     poses = {k: [info["pose"][k].copy()] for k in shown}
-    running = ~compiled
+    running = np.ones(n, bool)
     reached = np.zeros(n, bool)
     prims = np.zeros(n, np.int64)
     contacts = np.zeros(n, np.int64)
@@ -233,18 +248,10 @@ def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
         sim_t = np.where(ended, info["time_s"], sim_t)
         running &= ~ended
         s = s2
-    if compiled.any():
-        prims[compiled], contacts[compiled], bumps[compiled] = (v[compiled]
-                                                                for v in tallies[:3])
-        reached[compiled] = tallies[3][compiled] > 0
-        sim_t[compiled] = tallies[4][compiled] * env.config.dt_s
-        if measure_metres:
-            metres[compiled] = c_metres[compiled]
     routes: list[list[int]] = []
     if keep_routes:
-        stepped = np.stack(states)
-        routes = [(visited[i] if compiled[i] else stepped[:, i])[:prims[i] + 1].tolist()
-                  for i in range(n)]
+        visited = np.stack(states)
+        routes = [visited[:prims[i] + 1, i].tolist() for i in range(n)]
     empty = np.zeros((0, 3))
     return (Rollouts(reached, prims, contacts, bumps, sim_t, metres, routes, empty, empty),
             {k: np.concatenate(v) for k, v in path.items()},

@@ -99,8 +99,10 @@ def test_ctrl_c_stops_physics_training(tmp_path):
 
     assert main(["train", "paper-40", "--method", "st-ql", "--world", "physics",
                  "--episodes", "1"]) == 0
+    # (the fused physics step trains 30,000 episodes at exact in 1.5 s: a run at noisy, whose
+    # greedy tests are drives too, lasts)
     proc = start(["train", "paper-40", "--method", "st-ql", "--world", "physics",
-                  "--episodes", "300"], tmp_path)
+                  "--fidelity", "noisy", "--episodes", "20000"], tmp_path)
     assert wait_for(lambda: proc.poll() is not None, 4.0) is False  # still training
     code, took, err = interrupt(proc)
     assert code == 130, err
@@ -116,7 +118,7 @@ def test_ctrl_c_stops_a_batched_physics_sweep_and_resume_completes_it(tmp_path):
             "2", "--world", "physics", "--jobs", "1"]
     assert main([*warm, "--out", str(tmp_path / "warm")]) == 0
     sweep = ["compare", "paper-40", "--methods", "st-ql,haql", "--seeds", "2", "--episodes",
-             "300", "--world", "grid,physics", "--jobs", "1", "--rewards", "goal-only"]
+             "3000", "--world", "grid,physics", "--jobs", "1", "--rewards", "goal-only"]
     out = tmp_path / "out"
     proc = start([*sweep, "--out", str(out)], tmp_path)
     partial = out / "runs.partial.jsonl"

@@ -43,7 +43,9 @@ from sim.physics.kernel.primitive import advance_one, begin_one
 from sim.physics.kernel.state import Geometry, Params, Scratch, Status
 
 ACT, MOVE, START, TEST, FINISHED = 0, 1, 2, 3, 4  # where a run stands between calls
-BUDGET = 2048  # primitives a run drives per call at most: bounds a call to ~10-50 ms a run
+CALL_PRIMITIVES = 16384  # primitives a call drives at most, shared among its runs: a call
+#                          then takes ~15-50 ms (1-3 us a primitive; haql cut off in a noisy
+#                          world ~15 us), the bound on answering Ctrl-C and progress
 
 
 @njit(cache=True)
@@ -178,7 +180,8 @@ class FusedRuns:
                       batch._nend[sl], batch._nblock[sl], noise_h, batch._traj[sl],
                       batch._booked_rows[sl], batch._booked[sl], *batch._args,
                       batch._bias[sl], rules, self.mine, self.stage]
-        self._tail = (self.callp, self.logs_i, self.logs_f, n_episodes, test_every, BUDGET)
+        budget = max(16, CALL_PRIMITIVES // max(len(rows), 1))  # per run
+        self._tail = (self.callp, self.logs_i, self.logs_f, n_episodes, test_every, budget)
 
     @property
     def live(self) -> bool:

@@ -10,7 +10,12 @@ import pytest
 
 from learning.geometry import ACTION_DELTAS
 from learning.methods.haql import rederive, rederive_after_wall
-from learning.parts.least_bumped import BUMP_COST_CAP, edge_changed, least_bumped_costs, step_cost
+from learning.methods.haql.least_bumped import (
+    BUMP_COST_CAP,
+    edge_changed,
+    least_bumped_costs,
+    step_cost,
+)
 
 
 def grid_neighbours(nx: int, ny: int) -> np.ndarray:
@@ -162,9 +167,9 @@ def test_least_bumped_costs_are_dijkstra_s_over_every_move(seed):
 
 @pytest.mark.parametrize("seed", range(6))
 def test_kept_costs_equal_a_full_dijkstra_after_every_count(seed):
-    """learning.parts.least_bumped.edge_changed after each +1 or -1 on one move's count (weights
-    that rise on least routes, with and without another tight move, and that fall) equals
-    least_bumped_costs from scratch."""
+    """learning.methods.haql.least_bumped.edge_changed after each +1 or -1 on one move's count
+    (weights that rise on least routes, with and without another tight move, and that fall)
+    equals least_bumped_costs from scratch."""
     rng = np.random.default_rng(seed)
     nb = grid_neighbours(10, 9)
     n = nb.shape[0]

@@ -32,6 +32,7 @@ from numba import njit
 
 from learning.config import MethodConfig, params_tuple
 from learning.geometry import Geometry
+from learning.methods.haql.least_bumped import edge_changed, least_bumped_costs, step_cost
 from learning.parts.free_space import (
     FreeSpace,
     bfs_distances,
@@ -40,7 +41,6 @@ from learning.parts.free_space import (
     new_free_space,
     repair_distances,
 )
-from learning.parts.least_bumped import edge_changed, least_bumped_costs, step_cost
 from learning.parts.move_reading import MoveReading, new_move_reading, read_move
 from learning.parts.tabular import argmax_first, argmax_tied, q_learning, row_max
 from learning.parts.tally import Tally, begin_tally, new_tally
@@ -90,7 +90,7 @@ class State(NamedTuple):
     balance: np.ndarray  # int32[nS, nA]; bumps minus arrivals seen (blocked when > 0)
     free: FreeSpace  # the free-space model pi_H is derived from
     reading: MoveReading  # the rewards of a stay and of a clean arrival (bumps from rewards)
-    cost: np.ndarray  # int64[nS]; least-bumped route costs (learning.parts.least_bumped) ...
+    cost: np.ndarray  # int64[nS]; least-bumped route costs (learning.methods.haql.least_bumped) ...
     cost_ok: np.ndarray  # bool[1]; ... kept up to date once first needed (False: not yet)
 
 
@@ -270,7 +270,8 @@ def observe(bal, pi_h, nb, blocked, dist, queue, goal, s, a, s2, terminated, cle
     (the move's most likely outcome changed), re-derive pi_H; and where s has no route of
     unblocked moves, whenever pi_H's own move bumps (:func:`rederive`). (A move that
     drifted into another cell without a bump tells nothing about this one.) The least-bumped
-    costs, once needed, follow every count (:func:`learning.parts.least_bumped.edge_changed`)."""
+    costs, once needed, follow every count
+    (:func:`learning.methods.haql.least_bumped.edge_changed`)."""
     w_old = step_cost(bal, s, a, pi_h.shape[0])
     if s2 == nb[s, a] and clean:
         if bal[s, a] > -COUNT_CAP:  # int32: a long run must not wrap round

@@ -132,3 +132,22 @@ def test_compiled_drives_are_the_stepped_drives(fidelity):
                 np.testing.assert_array_equal(getattr(a, f), getattr(b, f), err_msg=f)
             assert a.routes == b.routes
         assert any(r.reached.any() for r in fast)
+
+
+def test_the_fused_cache_goes_when_a_learner_or_the_kernel_changes(tmp_path, monkeypatch):
+    """The fused call inlines learning's hooks and sim.physics' kernel: its numba cache is
+    stamped with both packages' sources (a learner's module that moved left a cached call
+    importing a module that was gone)."""
+    from scenarios.runs import physics_fused
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    module = tmp_path / "physics_fused.py"
+    module.write_text("# a stand-in\n")
+    cached = tmp_path / "__pycache__" / "physics_fused.drive_runs-1.py311.nbi"
+    cached.parent.mkdir()
+    cached.write_text("")
+    assert physics_fused.drop_stale_cache(module) and not cached.exists()
+    cached.write_text("")
+    assert not physics_fused.drop_stale_cache(module) and cached.exists()  # nothing changed
+    monkeypatch.setattr(physics_fused, "learning_digest", lambda: "an edited learner")
+    assert physics_fused.drop_stale_cache(module) and not cached.exists()

@@ -29,7 +29,10 @@ shared a step's time among the robots it advanced).
 
 from __future__ import annotations
 
+import hashlib
+import os
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -38,10 +41,48 @@ from numba import njit
 from learning.compiled import hooks
 from learning.compiled.generator_handle import HANDLE_SIZE, generator_from, handle
 from learning.compiled.named_state import row
+from learning.jitcache import sources_digest as learning_digest
 from sim.physics.drive_profiles import Profiles
+from sim.physics.jitcache import sources_digest as physics_digest
 from sim.physics.kernel.primitive import advance_one, begin_one
 from sim.physics.kernel.state import Geometry, Params, Scratch, Status
 
+STAMP = "physics-fused-sources.sha256"
+
+
+def drop_stale_cache(module: Path | None = None) -> bool:
+    """Delete this module's numba cache when its sources changed: :func:`drive_runs` inlines
+    every method's hooks (``learning``) and the kernel's stepping (``sim.physics``), and numba
+    keys a cached function on its own file only, so after an upgrade that moved a learner's
+    module the cached call would import a module that is gone (seen) or run old rules. The
+    stamp is a hash of both packages' sources and this file. True if it dropped the cache;
+    with ``NUMBA_CACHE_DIR`` set the cache is left alone (as the packages' own guards do).
+    ``module``: this file (another, for tests)."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return False
+    here = (module or Path(__file__)).resolve()
+    cache = here.parent / "__pycache__"
+    digest = hashlib.sha256((learning_digest() + physics_digest()).encode()
+                            + here.read_bytes()).hexdigest()
+    stamp = cache / STAMP
+    try:
+        if stamp.read_text() == digest:
+            return False
+    except OSError:
+        pass
+    try:
+        cache.mkdir(exist_ok=True)
+        for f in [*cache.glob(f"{here.stem}.*.nbi"), *cache.glob(f"{here.stem}.*.nbc")]:
+            f.unlink(missing_ok=True)
+        tmp = cache / f".{STAMP}.{os.getpid()}"
+        tmp.write_text(digest)
+        os.replace(tmp, stamp)
+    except OSError:  # read-only install: numba falls back to its own cache locations
+        return False
+    return True
+
+
+drop_stale_cache()
 ACT, MOVE, START, TEST, FINISHED = 0, 1, 2, 3, 4  # where a run stands between calls
 CALL_PRIMITIVES = 16384  # primitives a call drives at most, shared among its runs: a call
 #                          then takes ~15-50 ms (1-3 us a primitive; haql cut off in a noisy

@@ -16,6 +16,7 @@ import threading
 import time
 from collections.abc import Sequence
 from importlib.metadata import PackageNotFoundError, version
+from typing import Any
 
 from learning.drivers.checkpoint import CheckpointError
 from learning.methods.registry import comparison_methods
@@ -323,6 +324,15 @@ def _terminate(sig: int, _frame: object) -> None:
     raise HungUp if sig == signal.SIGHUP else Terminated
 
 
+def _quiet_unraisable(unraisable: Any) -> None:
+    """A SIGTERM/SIGHUP raised where Python swallows exceptions (a weakref callback, a
+    ``__del__``) is in ``_received`` and acted on when the command returns: no traceback
+    for it (seen while a recording was merged); anything else as Python reports it."""
+    if isinstance(unraisable.exc_value, Terminated):
+        return
+    sys.__unraisablehook__(unraisable)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -331,6 +341,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for sig in (signal.SIGTERM, signal.SIGHUP):
             if signal.getsignal(sig) is signal.SIG_DFL:  # SIG_IGN (nohup) stays ignored
                 signal.signal(sig, _terminate)
+        sys.unraisablehook = _quiet_unraisable
     beat = _Heartbeat(enabled=args.command not in NO_HEARTBEAT)
     try:
         check_empty_paths(args)

@@ -71,8 +71,8 @@ def test_the_physics_cache_is_the_same_mechanism_function_for_function():
     import learning.jitcache as learning_cache
     import sim.physics.jitcache as physics_cache
 
-    for name in ("sources_digest", "drop_stale_cache", "kernel_cache_dirs", "_writable",
-                 "kernels_cached"):
+    for name in ("sources_digest", "drop_stale_cache", "restamp", "kernel_cache_dirs",
+                 "_writable", "kernels_cached"):
         assert inspect.getsource(getattr(physics_cache, name)) == \
             inspect.getsource(getattr(learning_cache, name)), name
 

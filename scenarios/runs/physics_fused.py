@@ -41,6 +41,7 @@ from numba import njit
 from learning.compiled import hooks
 from learning.compiled.generator_handle import HANDLE_SIZE, generator_from, handle
 from learning.compiled.named_state import row
+from learning.jitcache import restamp
 from learning.jitcache import sources_digest as learning_digest
 from sim.physics.drive_profiles import Profiles
 from sim.physics.jitcache import sources_digest as physics_digest
@@ -64,22 +65,8 @@ def drop_stale_cache(module: Path | None = None) -> bool:
     cache = here.parent / "__pycache__"
     digest = hashlib.sha256((learning_digest() + physics_digest()).encode()
                             + here.read_bytes()).hexdigest()
-    stamp = cache / STAMP
-    try:
-        if stamp.read_text() == digest:
-            return False
-    except OSError:
-        pass
-    try:
-        cache.mkdir(exist_ok=True)
-        for f in [*cache.glob(f"{here.stem}.*.nbi"), *cache.glob(f"{here.stem}.*.nbc")]:
-            f.unlink(missing_ok=True)
-        tmp = cache / f".{STAMP}.{os.getpid()}"
-        tmp.write_text(digest)
-        os.replace(tmp, stamp)
-    except OSError:  # read-only install: numba falls back to its own cache locations
-        return False
-    return True
+    return restamp(cache, STAMP, digest, lambda: [*cache.glob(f"{here.stem}.*.nbi"),
+                                                  *cache.glob(f"{here.stem}.*.nbc")])
 
 
 drop_stale_cache()

@@ -36,9 +36,16 @@ def drop_stale_cache(package: Path = PACKAGE) -> bool:
     changed; True if it did."""
     if os.environ.get("NUMBA_CACHE_DIR"):
         return False
-    cache = package / "__pycache__"
-    digest = sources_digest(package)
-    stamp = cache / STAMP
+    return restamp(package / "__pycache__", STAMP, sources_digest(package),
+                   lambda: [*package.rglob("__pycache__/*.nbi"),
+                            *package.rglob("__pycache__/*.nbc")])
+
+
+def restamp(cache: Path, stamp_name: str, digest: str, cached) -> bool:
+    """If ``cache/stamp_name`` does not hold ``digest``: delete the files ``cached()`` lists
+    (numba recompiles on demand) and write the stamp atomically; True if it did. A
+    read-only install keeps what it has (numba falls back to its own cache locations)."""
+    stamp = cache / stamp_name
     try:
         if stamp.read_text() == digest:
             return False
@@ -46,12 +53,12 @@ def drop_stale_cache(package: Path = PACKAGE) -> bool:
         pass
     try:
         cache.mkdir(exist_ok=True)
-        for f in [*package.rglob("__pycache__/*.nbi"), *package.rglob("__pycache__/*.nbc")]:
+        for f in cached():
             f.unlink(missing_ok=True)
-        tmp = cache / f".{STAMP}.{os.getpid()}"
+        tmp = cache / f".{stamp_name}.{os.getpid()}"
         tmp.write_text(digest)
         os.replace(tmp, stamp)
-    except OSError:  # read-only install: numba falls back to its own cache locations
+    except OSError:
         return False
     return True
 

@@ -210,3 +210,20 @@ def test_every_registered_method_declares_config_state_and_hooks():
         for attr in HOOKS:
             assert hasattr(module, attr), f"{module.__name__} has no {attr}"
         assert tuple(module.State._fields[:2]) == ("par", "tally"), module.__name__
+
+
+def test_the_physics_copy_of_the_generator_handle_equals_learnings():
+    """``sim`` and ``learning`` import nothing of each other, so each has the generator
+    handle (a Generator passed to compiled code as integers); the two stay one definition."""
+    import inspect
+
+    import learning.compiled.generator_handle as learning_copy
+    import sim.physics.generator_handle as physics_copy
+
+    for name in ("handle", "handles", "generator_from", "HANDLE_SIZE"):
+        a, b = getattr(physics_copy, name), getattr(learning_copy, name)
+        if isinstance(a, int):
+            assert a == b, name
+        else:
+            code = getattr(a, "_defn", a)  # the intrinsic's Python function
+            assert inspect.getsource(code) == inspect.getsource(getattr(b, "_defn", b)), name

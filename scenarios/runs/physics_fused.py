@@ -18,10 +18,9 @@ its row of the stacked state with its own learner stream
 (:func:`learning.compiled.hooks.draw_start`), its robot is placed and driven by the
 kernel's own functions (:func:`sim.physics.kernel.primitive.begin_one`,
 :func:`~sim.physics.kernel.primitive.advance_one`), its wheel noise refilled from its noise
-stream in the same blocks as :meth:`sim.physics.kernel.batch.RouteBatch._refill` (numba's
-normals are numpy's, bit for bit), and the reward is the env's rule
-(:meth:`sim.scenario.Rewards.of_moves`). Tested: per-run logs, tests and learned tables equal
-to the batched loop's at ``exact`` and above it.
+stream in its block layout (:func:`sim.physics.kernel.noise.refill`), and the reward is the
+env's rule (:meth:`sim.scenario.Rewards.of_moves`). Tested: per-run logs, tests and learned
+tables equal to the batched loop's at ``exact`` and above it.
 
 Wall time: a call's time is shared evenly among the primitives it drove (the batched loop
 shared a step's time among the robots it advanced).
@@ -39,12 +38,13 @@ import numpy as np
 from numba import njit
 
 from learning.compiled import hooks
-from learning.compiled.generator_handle import HANDLE_SIZE, generator_from, handle
+from learning.compiled.generator_handle import generator_from
 from learning.compiled.named_state import row
 from learning.jitcache import restamp
 from learning.jitcache import sources_digest as learning_digest
 from sim.physics.drive_profiles import Profiles
 from sim.physics.jitcache import sources_digest as physics_digest
+from sim.physics.kernel.noise import refill_one
 from sim.physics.kernel.primitive import advance_one, begin_one
 from sim.physics.kernel.state import Geometry, Params, Scratch, Status
 
@@ -74,24 +74,6 @@ ACT, MOVE, START, TEST, FINISHED = 0, 1, 2, 3, 4  # where a run stands between c
 CALL_PRIMITIVES = 16384  # primitives a call drives at most, shared among its runs: a call
 #                          then takes ~15-50 ms (1-3 us a primitive; haql cut off in a noisy
 #                          world ~15 us), the bound on answering Ctrl-C and progress
-
-
-@njit(cache=True)
-def _refill(i, noise, npos, nend, nblock, rng):
-    """Robot ``i``'s next normals, as :meth:`RouteBatch._refill` draws them: the block goes
-    on (doubling chunks) or a new block starts."""
-    width, end = noise.shape[1], nend[i]
-    if end < width:
-        k = min(nblock[i], width - end)
-        for j in range(end, end + k):
-            noise[i, j] = rng.standard_normal()
-        nend[i] = end + k
-    else:
-        k = min(nblock[i], width)
-        for j in range(k):
-            noise[i, j] = rng.standard_normal()
-        npos[i], nend[i] = 0, k
-    nblock[i] = 2 * k
 
 
 @njit(cache=True)
@@ -140,7 +122,7 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                 advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g,
                             sc)
                 if rb.status == Status.NOISE:
-                    _refill(i, noise, npos, nend, nblock, generator_from(noise_h[i]))
+                    refill_one(i, noise, npos, nend, nblock, noise_h)
                     continue
                 if rb.status != Status.DONE:  # CHECK: Chipmunk decides, then call again
                     checks += 1
@@ -195,17 +177,12 @@ class FusedRuns:
         self.mine[rows] = True
         self.stage = np.where(self.mine, ACT, FINISHED).astype(np.int64)
         self.loop = {k: v[sl] for k, v in loop.items()}
-        rngs = batch._noise_rngs[sl]
-        noise_h = np.zeros((n, HANDLE_SIZE), np.uint64)
-        for k, r in enumerate(rngs):
-            if r is not None:
-                noise_h[k] = handle(r)
         self.logs_i = np.zeros((3, n, n_episodes), np.int64)
         self.logs_f = np.zeros((6, n, n_episodes))
         self.callp = np.zeros(n, np.int64)
         self._args = [agent._box, agent._handles, start_h, starts, batch.robots[sl],
                       np.zeros(1, batch.robots.dtype), batch._noise[sl], batch._npos[sl],
-                      batch._nend[sl], batch._nblock[sl], noise_h, batch._traj[sl],
+                      batch._nend[sl], batch._nblock[sl], batch._noise_h[sl], batch._traj[sl],
                       batch._booked_rows[sl], batch._booked[sl], *batch._args,
                       batch._bias[sl], rules, self.mine, self.stage]
         budget = max(16, CALL_PRIMITIVES // max(len(rows), 1))  # per run

@@ -113,13 +113,15 @@ class Grader:
         """:meth:`test` above ``exact`` of several greedy policies (``int[nS]`` each, the
         policy when its test fell due) at once: one env, one compiled call per primitive
         for all their drives (:func:`sim.physics.models.rollouts.drive_policies`), each test's
-        drives the same as alone."""
+        drives the same as alone. A test reads its median and rollout 0 only, so a drive
+        that can no longer change the median is cut short (``median_only``: a policy that
+        cannot reach G costs half its drives)."""
         opt = max(self.exact.optimal_route_length, 0)
         budget = min(self.scenario.steps_per_episode,
                      TEST_BUDGET_FACTOR * opt + TEST_BUDGET_SLACK)
         env = self._env(len(tables) * TEST_ROLLOUTS, False)
         rs = drive_policies(self.scenario, tables, self.fidelity, TEST_ROLLOUTS, seeds,
-                            episodes, budget, keep_routes=True, env=env)
+                            episodes, budget, keep_routes=True, env=env, median_only=True)
         return [(median_length(r), r.routes[0]) for r in rs]
 
     def final(self, st, seed: int) -> FinalGrade:

@@ -38,8 +38,10 @@ from sim.grid.discretiser import Discretiser
 from sim.physics import sigint
 from sim.physics.drive_profiles import DriveLimits, profiles
 from sim.physics.fidelity import Fidelity
+from sim.physics.generator_handle import HANDLE_SIZE, handle
 from sim.physics.kernel import primitive as K
 from sim.physics.kernel.narrow_phase import contact_buffer
+from sim.physics.kernel.noise import refill_one
 from sim.physics.kernel.readouts import outcome, path_lengths
 from sim.physics.kernel.state import ROBOT, Geometry, Scratch, Status, by_name, params_of
 from sim.physics.kernel.sweep import static_geometry
@@ -153,6 +155,7 @@ class RouteBatch:
         self._nend = self._npos.copy()  # end of the normals drawn so far in the block
         self._nblock = np.full(n_robots, FIRST_NOISE_BLOCK, dtype=np.int64)
         self._noise_rngs: list[np.random.Generator | None] = [None] * n_robots
+        self._noise_h = np.zeros((n_robots, HANDLE_SIZE), np.uint64)  # their handles
         sigint.install(RouteBatch._check)
 
     def _add_robot(self, x: float, y: float) -> None:
@@ -321,7 +324,8 @@ class RouteBatch:
         """Robot ``i``'s wheel noise comes from ``rng`` from now on (its buffer is emptied): a
         new run. With a per-run bias (:attr:`Fidelity.biased`) the robot's E_d and E_b are
         drawn first, two normals of ``rng``: a new robot."""
-        self._noise_rngs[i] = rng
+        self._noise_rngs[i] = rng  # (kept alive: its handle does not own it)
+        self._noise_h[i] = handle(rng)
         self._npos[i] = self._nend[i] = self._noise.shape[1]
         self._nblock[i] = FIRST_NOISE_BLOCK
         fid = self.fidelity
@@ -334,26 +338,12 @@ class RouteBatch:
             r.gain_l[i], r.gain_r[i], r.base_k[i] = self._bias[i]
 
     def _refill(self, i: int) -> None:
-        rng = self._noise_rngs[i]
-        if rng is None:
+        """Robot ``i``'s next normals, in its stream's block layout
+        (:mod:`sim.physics.kernel.noise`)."""
+        if self._noise_rngs[i] is None:
             raise RuntimeError(f"robot {i} has wheel noise but no generator: call "
                                "set_noise_rng(i, rng) first")
-        # The stream is read in blocks of NOISE_BLOCK normals, and a primitive that needs more
-        # normals than its block has left starts the next block (the rest is never used):
-        # which normals a run uses depends on that layout, so it stays as it always was.
-        # Within a block, normals are drawn as they are needed, FIRST_NOISE_BLOCK first, then
-        # doubling (a graded drive often ends within a few hundred, and a Generator's normals
-        # are the same drawn in any chunks): the block's next chunk joins its drawn part.
-        width, end = self._noise.shape[1], int(self._nend[i])
-        if end < width:  # the block goes on
-            k = int(min(self._nblock[i], width - end))
-            rng.standard_normal(out=self._noise[i, end:end + k])
-            self._nend[i] = end + k
-        else:  # a new block
-            k = int(min(self._nblock[i], width))
-            rng.standard_normal(out=self._noise[i, :k])
-            self._npos[i], self._nend[i] = 0, k
-        self._nblock[i] = 2 * k
+        refill_one(i, self._noise, self._npos, self._nend, self._nblock, self._noise_h)
 
     def _book(self) -> None:
         """The contacts the kernel's narrow phase found, into each robot's records."""

@@ -224,7 +224,7 @@ def advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g
                 if noisy:  # one step above exact, in line (as a call: 15 % slower)
                     held = rb.resting
                     vx, vy = rb.vx, rb.vy
-                    ln = math.hypot(vx, vy) * p.dt
+                    ln = 0.0  # the step's length [m], where a sweep or check needs it
                     hit = False
                     clear = False  # the step stays in the robot's clear ball
                     if not held:
@@ -233,16 +233,17 @@ def advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g
                         if not clear:
                             new_clear_ball(rb, p, g, s)
                             clear = in_clear_ball(rb, x1, y1)
-                    if clear:  # nothing within CLEAR_MARGIN_M of the step: no sweep
-                        pass  # can hit, no check can find a touch (see new_clear_ball)
-                    elif ln > 1e-12:  # its own guard, as PhysicsWorld.before_step
-                        alpha = sweep_step(p, g, s, rb.x, rb.y, rb.x + vx * p.dt,
-                                       rb.y + vy * p.dt)
-                        hit = alpha < math.inf
-                        if hit and alpha * ln + p.depth_m < ln:
-                            scale = (alpha * ln + p.depth_m) / ln
-                            vx, vy = vx * scale, vy * scale
-                            rb.vx, rb.vy = vx, vy
+                    if not clear:  # (in the ball nothing is within CLEAR_MARGIN_M of the
+                        ln = math.hypot(vx, vy) * p.dt  # step: no sweep can hit, no check
+                        if ln > 1e-12:  # can find a touch: see new_clear_ball)
+                            # its own guard, as PhysicsWorld.before_step
+                            alpha = sweep_step(p, g, s, rb.x, rb.y, rb.x + vx * p.dt,
+                                               rb.y + vy * p.dt)
+                            hit = alpha < math.inf
+                            if hit and alpha * ln + p.depth_m < ln:
+                                scale = (alpha * ln + p.depth_m) / ln
+                                vx, vy = vx * scale, vy * scale
+                                rb.vx, rb.vy = vx, vy
                     depth0 = depth_at(p, g, s, rb.x, rb.y) if held else 0.0
                     integrate(rb, vx, vy, p)
                     check = hit  # the sweep met a surface: ask Chipmunk

@@ -146,14 +146,18 @@ def drive_policy(sc: Scenario, policy: np.ndarray | Callable[[np.ndarray], np.nd
 def drive_policies(sc: Scenario, tables: list[np.ndarray], fidelity: Fidelity, n: int,
                    seeds: list[int], tags: list[int], max_steps: int | None = None, *,
                    measure_metres: bool = False, keep_routes: bool = False,
-                   keep_path: bool = False, env: PhysicsRouteVectorEnv | None = None
-                   ) -> list[Rollouts]:
+                   keep_path: bool = False, env: PhysicsRouteVectorEnv | None = None,
+                   median_only: bool = False) -> list[Rollouts]:
     """:func:`drive_policy` of several policies (``tables[j]``, ``int[nS]``) at once, in one
     env of ``len(tables) x n`` robots: policy j's rollouts are robots ``j*n ..``, each with
     the noise stream :func:`drive_policy` would give it (``seeds[j]``, ``tags[j]``), so each
     policy's Rollouts equal its own drive's (robots in one Space do not meet; ``keep_path``:
     each policy's rollout 0). The periodic greedy tests and the final gradings of many runs
-    share one compiled call per primitive this way, instead of one per run."""
+    share one compiled call per primitive this way, instead of one per run. ``median_only``
+    (a periodic test): only each policy's :meth:`Rollouts.median_primitives` and its rollout
+    0 are wanted, and a drive that cannot change the median is cut short and counted as a
+    miss (:func:`sim.physics.kernel.rollout.drive_batch`): the median and rollout 0 are the
+    whole drives' own, the other rollouts' figures are not."""
     m, n = len(tables), int(n)
     if m < 1 or n < 1:
         raise ValueError(f"need at least one policy and n >= 1, got {m} and {n}")
@@ -171,7 +175,8 @@ def drive_policies(sc: Scenario, tables: list[np.ndarray], fidelity: Fidelity, n
     rngs = [r for j in range(m) for r in rollout_rngs(seeds[j], tags[j], n)]
     shown = [j * n for j in range(m)] if keep_path else []
     r, paths, poses = _drive(env, act, rngs, int(max_steps or sc.steps_per_episode),
-                             measure_metres, keep_routes, shown, (stacked, owner))
+                             measure_metres, keep_routes, shown, (stacked, owner),
+                             n if median_only else 0)
     empty = np.zeros((0, 3))
     return [Rollouts(r.reached[j * n:(j + 1) * n], r.primitives[j * n:(j + 1) * n],
                      r.contacts[j * n:(j + 1) * n], r.bumps[j * n:(j + 1) * n],
@@ -182,13 +187,13 @@ def drive_policies(sc: Scenario, tables: list[np.ndarray], fidelity: Fidelity, n
 
 def _drive_tables(env: PhysicsRouteVectorEnv, tables: tuple[np.ndarray, np.ndarray],
                   s: np.ndarray, info: dict, limit: int, measure_metres: bool,
-                  keep_routes: bool, shown: list[int]
+                  keep_routes: bool, shown: list[int], median_of: int
                   ) -> tuple[Rollouts, dict[int, np.ndarray], dict[int, np.ndarray]]:
     """:func:`_drive` of table policies, every drive in compiled code."""
     n = env.num_envs
     tallies, visited, metres, paths, poses = drive_batch(
         env.batch, tables[0], tables[1], s.copy(), env.model.goal, limit, keep_routes,
-        measure_metres, shown)
+        measure_metres, shown, median_of)
     env.park(np.ones(n, bool))  # driven behind the env's back: they sit out until reset
     prims = tallies[0]
     routes = [visited[i, :prims[i] + 1].tolist() for i in range(n)] if keep_routes else []
@@ -204,21 +209,23 @@ def _drive_tables(env: PhysicsRouteVectorEnv, tables: tuple[np.ndarray, np.ndarr
 def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
            rngs: list[np.random.Generator], limit: int, measure_metres: bool,
            keep_routes: bool, shown: list[int],
-           tables: tuple[np.ndarray, np.ndarray] | None = None
+           tables: tuple[np.ndarray, np.ndarray] | None = None, median_of: int = 0
            ) -> tuple[Rollouts, dict[int, np.ndarray], dict[int, np.ndarray]]:
     """Every sub-env of ``env`` driven from S with its noise stream ``rngs[k]``, actions
     ``act(states)``, for at most ``limit`` primitives; with the path and the poses after
     each primitive of the robots ``shown`` (the Rollouts' own ``path`` and ``poses`` are
     left empty). ``tables``: (policies ``int[m, nS]``, each robot's policy ``int[N]``), the
     same actions as ``act``: then every drive runs whole in compiled code
-    (:mod:`sim.physics.kernel.rollout`; the same drives, paths and poses included)."""
+    (:mod:`sim.physics.kernel.rollout`; the same drives, paths and poses included; with
+    ``median_of`` = n, drives that cannot change their policy's median cut short)."""
     n = env.num_envs
     env.max_episode_steps = limit
     for k, rng in enumerate(rngs):
         env.set_noise_rng(k, rng)
     s, info = env.reset(options={"start": "S"})
     if tables is not None:
-        return _drive_tables(env, tables, s, info, limit, measure_metres, keep_routes, shown)
+        return _drive_tables(env, tables, s, info, limit, measure_metres, keep_routes, shown,
+                             median_of)
     path = {k: [info["pose"][k:k + 1].copy()] for k in shown}
     poses = {k: [info["pose"][k].copy()] for k in shown}
     running = np.ones(n, bool)

@@ -48,8 +48,8 @@ from sim.physics.kernel.exact import cast_guard, guard_leg, integrate, step_exac
 from sim.physics.kernel.narrow_phase import contacts_began
 from sim.physics.kernel.queries import (
     depth_at,
-    in_clear_ball,
-    new_clear_ball,
+    in_clear_region,
+    new_clear_region,
     new_touch,
     odometry,
     sweep_step,
@@ -226,16 +226,16 @@ def advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g
                     vx, vy = rb.vx, rb.vy
                     ln = 0.0  # the step's length [m], where a sweep or check needs it
                     hit = False
-                    clear = False  # the step stays in the robot's clear ball
+                    clear = False  # the step stays in the robot's clear ball or box
                     if not held:
                         x1, y1 = rb.x + vx * p.dt, rb.y + vy * p.dt
-                        clear = in_clear_ball(rb, x1, y1)
+                        clear = in_clear_region(rb, x1, y1)
                         if not clear:
-                            new_clear_ball(rb, p, g, s)
-                            clear = in_clear_ball(rb, x1, y1)
+                            new_clear_region(rb, p, g, s)
+                            clear = in_clear_region(rb, x1, y1)
                     if not clear:  # (in the ball nothing is within CLEAR_MARGIN_M of the
                         ln = math.hypot(vx, vy) * p.dt  # step: no sweep can hit, no check
-                        if ln > 1e-12:  # can find a touch: see new_clear_ball)
+                        if ln > 1e-12:  # can find a touch: see new_clear_region)
                             # its own guard, as PhysicsWorld.before_step
                             alpha = sweep_step(p, g, s, rb.x, rb.y, rb.x + vx * p.dt,
                                                rb.y + vy * p.dt)

@@ -1,8 +1,8 @@
 """What the physics kernel (:mod:`sim.physics.kernel.primitive`) asks of the static geometry and of
 the robot's own sensors, one robot at a time: the swept-disc fraction of a step, the
 disc's overlap depth, whether a step comes within ``CHECK_MARGIN_M`` of a shape it was
-clear of (for the steps whose sweep cannot tell), the clear ball inside which steps need
-neither (above ``exact``), and dead reckoning (``localisation``).
+clear of (for the steps whose sweep cannot tell), the clear ball and box inside which
+steps need neither (above ``exact``), and dead reckoning (``localisation``).
 
 Kept apart from the kernel's stepping so each file has one job: the kernel decides what
 a robot does in a step; these answer where the shapes are.
@@ -16,7 +16,6 @@ from numba import njit
 
 from sim.physics.kernel.sweep import (
     _box_distance,
-    _fold_shapes,
     _segment_distance,
     overlap_depth,
     sweep_fraction,
@@ -24,7 +23,7 @@ from sim.physics.kernel.sweep import (
 from sim.physics.reference.controller import cell_of
 
 CHECK_MARGIN_M = 1e-6  # steps ending this close to a surface ask Chipmunk [m]
-CLEAR_MARGIN_M = 1e-3  # a step this far from every surface needs no sweep (new_clear_ball) [m]
+CLEAR_MARGIN_M = 1e-3  # a step this far from every surface needs no sweep (new_clear_region) [m]
 
 
 @njit(cache=True)
@@ -53,50 +52,101 @@ def odometry(rb, p):
 
 
 @njit(cache=True, inline="always")
-def in_clear_ball(rb, x1, y1):
-    """Whether the step from the pose to (x1, y1) lies in the robot's clear ball."""
+def in_clear_region(rb, x1, y1):
+    """Whether the step from the pose to (x1, y1) lies in the robot's clear ball or its
+    clear box (:func:`new_clear_region`)."""
     # squared distances (no hypot): the ball keeps CLEAR_MARGIN_M from every shape, so a
     # rounding-level difference at its rim only decides whether a sweep that finds nothing
     # is run
     r2 = rb.clear_r * rb.clear_r
     dx0, dy0, dx1, dy1 = rb.x - rb.clear_x, rb.y - rb.clear_y, x1 - rb.clear_x, y1 - rb.clear_y
-    return rb.clear_r > 0.0 and dx0 * dx0 + dy0 * dy0 < r2 and dx1 * dx1 + dy1 * dy1 < r2
+    if rb.clear_r > 0.0 and dx0 * dx0 + dy0 * dy0 < r2 and dx1 * dx1 + dy1 * dy1 < r2:
+        return True
+    return (rb.box_x0 < rb.x < rb.box_x1 and rb.box_x0 < x1 < rb.box_x1
+            and rb.box_y0 < rb.y < rb.box_y1 and rb.box_y0 < y1 < rb.box_y1)
 
 
 @njit(cache=True)
-def new_clear_ball(rb, p, g, s):
-    """The robot's clear ball from its pose: every centre within ``clear_r`` of it leaves the
-    disc at least CLEAR_MARGIN_M from every static shape (its clearance there, up to one
-    cell, less the margin). A step whose start and end lie in it sweeps a segment in it
-    (a ball is convex): the sweep finds no surface (alpha = inf) and no touch check can
-    fire (they look within 1e-6 m), so skipping both changes nothing; above ``exact``
-    most steps run in free space, and one point query per ball replaces a sweep per step.
+def new_clear_region(rb, p, g, s):
+    """The robot's clear ball and clear box from its pose: every centre in either leaves the
+    disc at least CLEAR_MARGIN_M from every static shape. A step whose start and end lie in
+    one of them sweeps a segment in it (both are convex): the sweep finds no surface
+    (alpha = inf) and no touch check can fire (they look within 1e-6 m), so skipping both
+    changes nothing; above ``exact`` most steps run in free space, and one query per
+    region replaces a sweep per step.
+
+    The ball: centres within the pose's clearance (up to one cell) less the margin. The
+    box: the square of centres within a cell of the pose, cut by each shape's bounding box
+    until every shape is at least ``R`` = radius + margin from it along x or along y (then
+    it is at least that far in the plane: a bound, never an overlap), each cut on the side
+    that keeps the pose and the larger part. In a corridor the ball's radius is the
+    clearance to its walls, a few steps of travel; the box runs along the corridor.
     """
     s.counters[0] += 1
-    reach = p.radius_m + p.cell_m  # the query looks this far: shapes beyond it are beyond
-    c = _fold_shapes(_clear_wall, _clear_item, reach, g.circles, g.walls, g.boxes, p.cell_m,
-                     p.nx, p.ny, g.grid_start, g.grid_items, s.seen, s.counters[0],
-                     reach, rb.x, rb.y, rb.x, rb.y)
-    rb.clear_x, rb.clear_y = rb.x, rb.y
-    rb.clear_r = c - p.radius_m - CLEAR_MARGIN_M
+    stamp = s.counters[0]
+    x, y, r = rb.x, rb.y, p.radius_m
+    reach = r + p.cell_m  # the ball looks this far: shapes beyond it are beyond
+    big = r + CLEAR_MARGIN_M
+    nearest = reach
+    b = (x - p.cell_m, y - p.cell_m, x + p.cell_m, y + p.cell_m)
+    w = g.walls
+    for k in range(w.shape[0]):
+        d = _segment_distance(x, y, w[k, 0], w[k, 1], w[k, 2], w[k, 3]) - w[k, 4]
+        nearest = min(nearest, d)
+        b = _cut(b, min(w[k, 0], w[k, 2]) - w[k, 4], min(w[k, 1], w[k, 3]) - w[k, 4],
+                 max(w[k, 0], w[k, 2]) + w[k, 4], max(w[k, 1], w[k, 3]) + w[k, 4], x, y, big)
+    look = p.cell_m + big  # shapes that can come within `big` of the box's square
+    ix0, iy0 = cell_of(x - look, y - look, p.cell_m, p.nx, p.ny)
+    ix1, iy1 = cell_of(x + look, y + look, p.cell_m, p.nx, p.ny)
+    n_circles = g.circles.shape[0]
+    for gy in range(iy0, iy1 + 1):
+        for gx in range(ix0, ix1 + 1):
+            cell = gy * p.nx + gx
+            for q in range(g.grid_start[cell], g.grid_start[cell + 1]):
+                k = g.grid_items[q]
+                if s.seen[k] == stamp:
+                    continue
+                s.seen[k] = stamp
+                if k < n_circles:
+                    c = g.circles[k]
+                    nearest = min(nearest, math.hypot(x - c[0], y - c[1]) - c[2])
+                    b = _cut(b, c[0] - c[2], c[1] - c[2], c[0] + c[2], c[1] + c[2], x, y, big)
+                else:
+                    e = g.boxes[k - n_circles]
+                    nearest = min(nearest, _box_distance(x, y, e[0], e[1], e[2], e[3]))
+                    b = _cut(b, e[0], e[1], e[2], e[3], x, y, big)
+    rb.clear_x, rb.clear_y = x, y
+    rb.clear_r = nearest - r - CLEAR_MARGIN_M
+    rb.box_x0, rb.box_y0, rb.box_x1, rb.box_y1 = b
 
 
 @njit(cache=True, inline="always")
-def _clear_wall(walls, k, _radius, x, y, _bx, _by, nearest):
-    """The nearest surface [m] from the centre (x, y), folding in wall ``k``."""
-    d = _segment_distance(x, y, walls[k, 0], walls[k, 1], walls[k, 2], walls[k, 3]) - walls[k, 4]
-    return d if d < nearest else nearest
-
-
-@njit(cache=True, inline="always")
-def _clear_item(circles, boxes, k, _radius, x, y, _bx, _by, nearest):
-    n_circles = circles.shape[0]
-    if k < n_circles:
-        d = math.hypot(x - circles[k, 0], y - circles[k, 1]) - circles[k, 2]
-    else:
-        m = k - n_circles
-        d = _box_distance(x, y, boxes[m, 0], boxes[m, 1], boxes[m, 2], boxes[m, 3])
-    return d if d < nearest else nearest
+def _cut(b, sx0, sy0, sx1, sy1, x, y, big):
+    """Box ``b`` (x0, y0, x1, y1) cut so that the shape inside the bounding box ``s`` is at
+    least ``big`` from it along x or y, keeping (x, y) inside; empty when it cannot."""
+    x0, y0, x1, y1 = b
+    if x1 <= x0:
+        return b
+    if max(sx0 - x1, x0 - sx1) >= big or max(sy0 - y1, y0 - sy1) >= big:
+        return b  # far enough already
+    best, out = -1.0, (x, y, x, y)  # no cut keeps the pose: empty
+    if sx0 - big > x:  # the shape lies to the right of the pose: cut x1
+        area = (sx0 - big - x0) * (y1 - y0)
+        if area > best:
+            best, out = area, (x0, y0, sx0 - big, y1)
+    if sx1 + big < x:  # ... to the left
+        area = (x1 - sx1 - big) * (y1 - y0)
+        if area > best:
+            best, out = area, (sx1 + big, y0, x1, y1)
+    if sy0 - big > y:  # ... above
+        area = (x1 - x0) * (sy0 - big - y0)
+        if area > best:
+            best, out = area, (x0, y0, x1, sy0 - big)
+    if sy1 + big < y:  # ... below
+        area = (x1 - x0) * (y1 - sy1 - big)
+        if area > best:
+            best, out = area, (x0, sy1 + big, x1, y1)
+    return out
 
 
 @njit(cache=True, inline="always")

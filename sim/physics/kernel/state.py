@@ -81,9 +81,12 @@ ROBOT = np.dtype([
     ("o1", _F), ("o2", _F), ("o3", _F), ("f1", _F), ("f2", _F), ("f3", _F),
     ("nfix", _I), ("tstate", _I), ("fresh", _B),
     # a ball the disc's centre may roam without coming near any static shape (above exact:
-    # steps inside it need no sweep; sim.physics.kernel.queries.new_clear_ball) [m];
+    # steps inside it need no sweep; sim.physics.kernel.queries.new_clear_region) [m];
     # radius <= 0: none
     ("clear_x", _F), ("clear_y", _F), ("clear_r", _F),
+    # ... and an axis-aligned box of the same kind (x0, y0, x1, y1; empty: x1 <= x0), which
+    # reaches along a corridor where the ball stops at its walls [m]
+    ("box_x0", _F), ("box_y0", _F), ("box_x1", _F), ("box_y1", _F),
     # latency and slip (sim.physics.fidelity): each wheel's lagged speed [m/s]; the wheel
     # commands sent, a ring of the last SENT_RING (left, right) [m/s], and how many were
     # sent since the motors last stopped; each wheel's slip time left [s]

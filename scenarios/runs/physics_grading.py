@@ -36,7 +36,13 @@ import numpy as np
 from learning.compiled.readout import greedy_actions
 from learning.drivers.train import epsilon_route_lengths, greedy_test, shortest_fraction
 from sim.physics.fidelity import Fidelity
-from sim.physics.models.rollouts import Rollouts, drive_policies, drive_policy, rollout_env
+from sim.physics.models.rollouts import (
+    Rollouts,
+    drive_epsilon_greedy,
+    drive_policies,
+    drive_policy,
+    rollout_env,
+)
 from sim.physics.models.transition import physics_model
 from sim.scenario import Scenario
 
@@ -162,14 +168,8 @@ class Grader:
         """The paper's epsilon-greedy test from S: route lengths (-1: G missed)."""
         if not self.in_rollouts:
             return epsilon_route_lengths(st, self.exact, eps, rng)
-        table = greedy_actions(st)
-
-        def policy(s: np.ndarray) -> np.ndarray:
-            explore = rng.random(s.size) < eps
-            return np.where(explore, rng.integers(0, 4, s.size), table[s])
-
-        r = drive_policy(self.scenario, policy, self.fidelity, EPSILON_ROLLOUTS,
-                         int(rng.integers(1 << 31)), EPSILON_TAG)
+        r = drive_epsilon_greedy(self.scenario, greedy_actions(st), eps, rng, self.fidelity,
+                                 EPSILON_ROLLOUTS, int(rng.integers(1 << 31)), EPSILON_TAG)
         return np.where(r.reached, r.primitives, -1)
 
 

@@ -30,13 +30,15 @@ from sim.physics.kernel.state import Geometry, Params, Scratch, Status
 @njit(cache=True)
 def drive_tables(robots, noise, npos, nend, nblock, noise_h, traj, contacts, booked, pt,
                  prof_t, geo_t, st, tables, owner, state, running, rules, tallies, routes,
-                 metres, start_xy, shown, path, npath, poses, best, misses):
+                 metres, start_xy, shown, path, npath, poses, best, misses, override):
     """Drive every ``running`` robot until G, its limit, or the caller is needed.
 
     ``rules``: int64[3] = goal state, primitives per drive at most, and ``n`` > 0 when only
     each policy's median and its rollout 0 are wanted (:func:`_median_decided`; robots
     ``j*n .. j*n + n - 1`` are policy ``j``'s rollouts, ``best`` int64[m, n // 2 + 1] and
-    ``misses`` int64[m] its bookkeeping, ``best`` filled with ``limit + 1``). ``state[k]``:
+    ``misses`` int64[m] its bookkeeping, ``best`` filled with ``limit + 1``). ``override``
+    int64[limit, N] or ``[0, 0]``: robot k's primitive j takes ``override[j, k]`` where
+    that is >= 0 instead of its policy's action (an epsilon-greedy drive). ``state[k]``:
     robot k's state (observed), updated per primitive; ``tallies`` int64[5, N]: primitives,
     contacts, bumps, reached (0/1), physics steps at the drive's end; ``routes[k, j]`` the
     state after primitive j (``routes[k, 0]`` is the caller's), when ``routes`` has columns;
@@ -65,8 +67,10 @@ def drive_tables(robots, noise, npos, nend, nblock, noise_h, traj, contacts, boo
                     running[k] = False
                     break
                 start_xy[k, 0], start_xy[k, 1], start_xy[k, 2] = rb.x, rb.y, rb.th
-                begin_one(rb, tables[owner[k], state[k]], p.cell_m, p.nx, p.ny,
-                          p.localisation)
+                a = tables[owner[k], state[k]]
+                if override.shape[0] and override[tallies[0, k], k] >= 0:
+                    a = override[tallies[0, k], k]
+                begin_one(rb, a, p.cell_m, p.nx, p.ny, p.localisation)
             advance_one(k, robots, noise, npos, nend, traj, contacts, booked, p, prof, g, sc)
             if rb.status == Status.NOISE:
                 refill_one(k, noise, npos, nend, nblock, noise_h)
@@ -138,17 +142,22 @@ def _book_drive(best, misses, j, length, reached):
     best[q] = length
 
 
+_NO_OVERRIDE = np.zeros((0, 0), np.int64)
+
+
 def drive_batch(batch, tables: np.ndarray, owner: np.ndarray, state: np.ndarray, goal: int,
                 limit: int, keep_routes: bool, measure_metres: bool, shown: list[int],
-                median_of: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                             list[np.ndarray], list[np.ndarray]]:
+                median_of: int = 0, override: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray],
+                           list[np.ndarray]]:
     """Every robot of ``batch`` (placed, each with a noise stream of its own that nothing
     else reads) drives ``tables[owner[k]]`` from ``state[k]``: (tallies int64[5, N] as
     :func:`drive_tables` fills them, routes int64[N, limit + 1] or ``[N, 0]``, metres
     float64[N] or ``[0]``, then per robot of ``shown`` its trajectories concatenated and
     its poses after each primitive). ``median_of`` = n > 0: robots ``j*n ..`` are policy
     ``j``'s n rollouts, and only each policy's median and rollout 0 are wanted: a drive
-    that cannot change the median is cut, not reached (:func:`_median_decided`)."""
+    that cannot change the median is cut, not reached (:func:`_median_decided`).
+    ``override``: actions that replace the policy's (:func:`drive_tables`)."""
     running = np.ones(batch.n, np.bool_)
     n = batch.n
     tallies = np.zeros((5, n), np.int64)
@@ -170,7 +179,8 @@ def drive_batch(batch, tables: np.ndarray, owner: np.ndarray, state: np.ndarray,
     npath = np.zeros(len(shown), np.int64)
     poses = np.zeros((len(shown), limit + 1, 3))
     while drive_tables(*args, tables, owner, state, running, rules, tallies, routes, metres,
-                       start_xy, row, path, npath, poses, best, misses):
+                       start_xy, row, path, npath, poses, best, misses,
+                       _NO_OVERRIDE if override is None else override):
         for k in np.flatnonzero(running & (status == int(Status.CHECK))):
             batch._check(int(k))
         sigint.raise_if_deferred()

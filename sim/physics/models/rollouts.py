@@ -143,6 +143,37 @@ def drive_policy(sc: Scenario, policy: np.ndarray | Callable[[np.ndarray], np.nd
     return replace(r, path=path.get(0, empty), poses=poses.get(0, empty))
 
 
+def drive_epsilon_greedy(sc: Scenario, table: np.ndarray, eps: float,
+                         rng: np.random.Generator, fidelity: Fidelity, n: int, seed: int = 0,
+                         tag: int = 0, max_steps: int | None = None) -> Rollouts:
+    """:func:`drive_policy` of the epsilon-greedy policy of ``table`` (``int[nS]``), every
+    drive in compiled code: each round of primitives draws ``rng.random(n) < eps`` and then
+    ``rng.integers(0, 4, n)`` for all ``n`` rollouts (finished ones too), a drawn action
+    replacing the table's where the first says so, exactly as :func:`drive_policy` with
+    ``f(s) = where(rng.random(n) < eps, rng.integers(0, 4, n), table[s])`` draws them; and
+    ``rng`` is left where that drive leaves it (the rounds' draws are made ahead for the
+    most rounds a drive can take, then the generator is rewound and advanced by the rounds
+    the longest drive took)."""
+    n, limit = int(n), int(max_steps or sc.steps_per_episode)
+    if n < 1:
+        raise ValueError(f"n must be >= 1, got {n}")
+    start = rng.bit_generator.state
+    override = np.full((limit, n), -1, np.int64)
+    for j in range(limit):
+        explore = rng.random(n) < eps
+        drawn = rng.integers(0, 4, n)
+        override[j, explore] = drawn[explore]
+    table = np.asarray(table, dtype=np.int64)
+    r, _, _ = _drive(rollout_env(sc, n, fidelity), lambda s: table[s],
+                     rollout_rngs(seed, tag, n), limit, False, False, [],
+                     (table[None], np.zeros(n, np.int64)), override=override)
+    rng.bit_generator.state = start
+    for _ in range(int(r.primitives.max())):  # the rounds the drive took
+        rng.random(n)
+        rng.integers(0, 4, n)
+    return r
+
+
 def drive_policies(sc: Scenario, tables: list[np.ndarray], fidelity: Fidelity, n: int,
                    seeds: list[int], tags: list[int], max_steps: int | None = None, *,
                    measure_metres: bool = False, keep_routes: bool = False,
@@ -187,13 +218,14 @@ def drive_policies(sc: Scenario, tables: list[np.ndarray], fidelity: Fidelity, n
 
 def _drive_tables(env: PhysicsRouteVectorEnv, tables: tuple[np.ndarray, np.ndarray],
                   s: np.ndarray, info: dict, limit: int, measure_metres: bool,
-                  keep_routes: bool, shown: list[int], median_of: int
+                  keep_routes: bool, shown: list[int], median_of: int,
+                  override: np.ndarray | None
                   ) -> tuple[Rollouts, dict[int, np.ndarray], dict[int, np.ndarray]]:
     """:func:`_drive` of table policies, every drive in compiled code."""
     n = env.num_envs
     tallies, visited, metres, paths, poses = drive_batch(
         env.batch, tables[0], tables[1], s.copy(), env.model.goal, limit, keep_routes,
-        measure_metres, shown, median_of)
+        measure_metres, shown, median_of, override)
     env.park(np.ones(n, bool))  # driven behind the env's back: they sit out until reset
     prims = tallies[0]
     routes = [visited[i, :prims[i] + 1].tolist() for i in range(n)] if keep_routes else []
@@ -209,7 +241,8 @@ def _drive_tables(env: PhysicsRouteVectorEnv, tables: tuple[np.ndarray, np.ndarr
 def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
            rngs: list[np.random.Generator], limit: int, measure_metres: bool,
            keep_routes: bool, shown: list[int],
-           tables: tuple[np.ndarray, np.ndarray] | None = None, median_of: int = 0
+           tables: tuple[np.ndarray, np.ndarray] | None = None, median_of: int = 0,
+           override: np.ndarray | None = None
            ) -> tuple[Rollouts, dict[int, np.ndarray], dict[int, np.ndarray]]:
     """Every sub-env of ``env`` driven from S with its noise stream ``rngs[k]``, actions
     ``act(states)``, for at most ``limit`` primitives; with the path and the poses after
@@ -217,7 +250,8 @@ def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
     left empty). ``tables``: (policies ``int[m, nS]``, each robot's policy ``int[N]``), the
     same actions as ``act``: then every drive runs whole in compiled code
     (:mod:`sim.physics.kernel.rollout`; the same drives, paths and poses included; with
-    ``median_of`` = n, drives that cannot change their policy's median cut short)."""
+    ``median_of`` = n, drives that cannot change their policy's median cut short; with
+    ``override`` (int64[limit, N]), where >= 0, the actions that replace the tables')."""
     n = env.num_envs
     env.max_episode_steps = limit
     for k, rng in enumerate(rngs):
@@ -225,7 +259,7 @@ def _drive(env: PhysicsRouteVectorEnv, act: Callable[[np.ndarray], np.ndarray],
     s, info = env.reset(options={"start": "S"})
     if tables is not None:
         return _drive_tables(env, tables, s, info, limit, measure_metres, keep_routes, shown,
-                             median_of)
+                             median_of, override)
     path = {k: [info["pose"][k:k + 1].copy()] for k in shown}
     poses = {k: [info["pose"][k].copy()] for k in shown}
     running = np.ones(n, bool)

@@ -17,6 +17,7 @@ from numba import njit
 from sim.physics.kernel.sweep import (
     _box_distance,
     _segment_distance,
+    _wall_beyond,
     overlap_depth,
     sweep_fraction,
 )
@@ -90,12 +91,14 @@ def new_clear_region(rb, p, g, s):
     nearest = reach
     b = (x - p.cell_m, y - p.cell_m, x + p.cell_m, y + p.cell_m)
     w = g.walls
+    look = p.cell_m + big  # shapes that can come within `big` of the box's square
     for k in range(w.shape[0]):
+        if _wall_beyond(w, k, x - look, y - look, x + look, y + look):
+            continue  # beyond both the ball's reach and the box's cuts
         d = _segment_distance(x, y, w[k, 0], w[k, 1], w[k, 2], w[k, 3]) - w[k, 4]
         nearest = min(nearest, d)
         b = _cut(b, min(w[k, 0], w[k, 2]) - w[k, 4], min(w[k, 1], w[k, 3]) - w[k, 4],
                  max(w[k, 0], w[k, 2]) + w[k, 4], max(w[k, 1], w[k, 3]) + w[k, 4], x, y, big)
-    look = p.cell_m + big  # shapes that can come within `big` of the box's square
     ix0, iy0 = cell_of(x - look, y - look, p.cell_m, p.nx, p.ny)
     ix1, iy1 = cell_of(x + look, y + look, p.cell_m, p.nx, p.ny)
     n_circles = g.circles.shape[0]
@@ -155,6 +158,8 @@ def new_touch(p, g, s, x0, y0, x1, y1, boxes_only):
     not overlap at (x0, y0) (point-query distances), for steps whose sweep cannot tell."""
     r, m = p.radius_m, CHECK_MARGIN_M
     for k in range(0 if boxes_only else g.walls.shape[0]):
+        if _wall_beyond(g.walls, k, x1 - r - m, y1 - r - m, x1 + r + m, y1 + r + m):
+            continue  # (the test below asks for a touch at (x1, y1))
         w = g.walls[k]
         if (_segment_distance(x1, y1, w[0], w[1], w[2], w[3]) - w[4] - r < m
                 and _segment_distance(x0, y0, w[0], w[1], w[2], w[3]) - w[4] - r > -m):

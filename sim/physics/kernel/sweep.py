@@ -229,6 +229,21 @@ def _overlap_item(circles, boxes, k, radius, x, y, _bx, _by, deepest):
     return d if d > deepest else deepest
 
 
+WALL_SKIP_M = 1e-9  # a wall's box this much beyond a query's is beyond its reach [m]
+
+
+@njit(cache=True, inline="always")
+def _wall_beyond(walls, k, x0, y0, x1, y1):
+    """Whether thick wall ``k`` lies wholly outside the box (x0, y0)-(x1, y1) (a query's
+    reach), by more than WALL_SKIP_M: then no disc in that box touches or sweeps into it,
+    and folding it in changes no answer (4 comparisons instead of a segment distance: a
+    robot away from the arena's edge asks about 4 walls at every query)."""
+    t = walls[k, 4] + WALL_SKIP_M
+    return (max(walls[k, 0], walls[k, 2]) + t < x0 or min(walls[k, 0], walls[k, 2]) - t > x1
+            or max(walls[k, 1], walls[k, 3]) + t < y0
+            or min(walls[k, 1], walls[k, 3]) - t > y1)
+
+
 @njit(cache=True, inline="always")
 def _fold_shapes(wall, item, out, circles, walls, boxes, cell_m, nx, ny, start, items, seen,
                  stamp, radius, ax, ay, bx, by):
@@ -237,6 +252,9 @@ def _fold_shapes(wall, item, out, circles, walls, boxes, cell_m, nx, ny, start, 
     ``wall`` and ``item`` are compiled functions: numba compiles one loop per pair, as
     fast as the loop written out for each query."""
     for k in range(walls.shape[0]):
+        if _wall_beyond(walls, k, min(ax, bx) - radius, min(ay, by) - radius,
+                        max(ax, bx) + radius, max(ay, by) + radius):
+            continue
         out = wall(walls, k, radius, ax, ay, bx, by, out)
     gx0 = min(max(int(math.floor((min(ax, bx) - radius) / cell_m)), 0), nx - 1)  # noqa: RUF046 (numba)
     gy0 = min(max(int(math.floor((min(ay, by) - radius) / cell_m)), 0), ny - 1)  # noqa: RUF046 (numba)

@@ -51,11 +51,16 @@ def arena_512() -> Scenario:
         return resolve_scenario(str(arena_toml(512, Path(d))))
 
 
-def primitives_per_s(sc: Scenario, n_robots: int, seconds: float, seed: int = 0) -> dict:
-    """Random primitives per second through :meth:`RouteBatch.step` with ``n_robots``."""
+def primitives_per_s(sc: Scenario, n_robots: int, seconds: float, seed: int = 0,
+                     fidelity: str | None = None) -> dict:
+    """Random primitives per second through :meth:`RouteBatch.step` with ``n_robots`` (at
+    ``fidelity``: each robot its own noise stream), with the kernel's own time and its
+    geometry queries per primitive."""
     model = build_model(sc)
     rng = np.random.default_rng(seed)
-    batch = RouteBatch(sc, n_robots)
+    batch = RouteBatch(sc, n_robots, fidelity=parse_fidelity(fidelity))
+    for i in range(n_robots):
+        batch.set_noise_rng(i, np.random.default_rng([seed, i]))
 
     def restart() -> None:
         for i, s0 in enumerate(rng.choice(model.start_states, n_robots)):
@@ -66,7 +71,7 @@ def primitives_per_s(sc: Scenario, n_robots: int, seconds: float, seed: int = 0)
     for _ in range(max(20, 2000 // n_robots)):  # warm the guard cache and the JIT
         batch.step(rng.integers(0, 4, n_robots))
     casts0, checks0 = batch.casts, batch.checks
-    k0, c0 = batch.kernel_s, batch.chipmunk_s
+    k0, c0, q0 = batch.kernel_s, batch.chipmunk_s, int(batch.scratch.counters[0])
     n = steps = 0
     t = time.perf_counter()
     while time.perf_counter() - t < seconds:
@@ -80,6 +85,8 @@ def primitives_per_s(sc: Scenario, n_robots: int, seconds: float, seed: int = 0)
             "physics_steps_per_primitive": steps / n,
             "casts_per_primitive": (batch.casts - casts0) / n,
             "checks_per_primitive": (batch.checks - checks0) / n,
+            "kernel_us_per_primitive": 1e6 * (batch.kernel_s - k0) / n,
+            "geometry_queries_per_primitive": (int(batch.scratch.counters[0]) - q0) / n,
             "kernel_fraction": (batch.kernel_s - k0) / el,
             "chipmunk_fraction": (batch.chipmunk_s - c0) / el}
 

@@ -198,3 +198,31 @@ def test_the_noise_buffer_s_chunking_never_changes_a_run(fid, monkeypatch):
     short = run()
     monkeypatch.setattr(batch_module, "FIRST_NOISE_BLOCK", batch_module.NOISE_BLOCK)
     assert run() == short
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_a_copied_noisy_batch_draws_from_its_own_generators(how):
+    """Compiled refills read each robot's generator through a handle (its state's address):
+    a copy must get handles to its own generators. With the original's, the copy drew
+    the original's normals (diverging from it within a few refills) and advanced them."""
+    import copy
+    import pickle
+
+    sc = resolve_scenario("paper-40")
+    batch = RouteBatch(sc, 2, fidelity=parse_fidelity("noisy"))
+    for i in range(2):
+        batch.set_noise_rng(i, np.random.default_rng(i))
+        x, y = batch.disc.state_centre(int(build_model(sc).start_states[10 * i]))
+        batch.place(i, x, y, 0.0)
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        batch.step(rng.integers(0, 4, 2))
+    twin = pickle.loads(pickle.dumps(batch)) if how == "pickle" else copy.deepcopy(batch)
+    before = [r.bit_generator.state for r in batch._noise_rngs]
+    acts = rng.integers(0, 4, (200, 2))
+    for a in acts:  # the copy alone first: the original's generators must not move
+        twin.step(a)
+    assert [r.bit_generator.state for r in batch._noise_rngs] == before
+    for a in acts:
+        batch.step(a)
+    np.testing.assert_array_equal(batch.poses(), twin.poses())

@@ -167,13 +167,20 @@ class RouteBatch:
     # ------------------------------------------------------------------ pickling
     # ``r`` holds views into ``robots``; pickle (and copy.deepcopy) would turn them into
     # arrays of their own, and the kernel's writes to ``robots`` would no longer show in
-    # ``r`` (a copied env would diverge from its original). The copy rebuilds them.
+    # ``r`` (a copied env would diverge from its original). The copy rebuilds them, and
+    # its generator handles.
     def __getstate__(self) -> dict:
         return {k: v for k, v in self.__dict__.items() if k != "r"}
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
         self.r = by_name(self.robots)
+        # a generator handle is the address of its generator's state: the copy's handles
+        # must name the copy's generators, not the original's (they would draw from those)
+        self._noise_h = np.zeros_like(self._noise_h)
+        for i, rng in enumerate(self._noise_rngs):
+            if rng is not None:
+                self._noise_h[i] = handle(rng)
 
     # ------------------------------------------------------------------ episodes
     def place(self, i: int, x_m: float, y_m: float, heading_rad: float = 0.0, *,

@@ -33,10 +33,12 @@ def drive_tables(robots, noise, npos, nend, nblock, noise_h, traj, contacts, boo
                  metres, start_xy, shown, path, npath, poses, best, misses, override):
     """Drive every ``running`` robot until G, its limit, or the caller is needed.
 
-    ``rules``: int64[3] = goal state, primitives per drive at most, and ``n`` > 0 when only
+    ``rules``: int64[4] = goal state, primitives per drive at most, ``n`` > 0 when only
     each policy's median and its rollout 0 are wanted (:func:`_median_decided`; robots
     ``j*n .. j*n + n - 1`` are policy ``j``'s rollouts, ``best`` int64[m, n // 2 + 1] and
-    ``misses`` int64[m] its bookkeeping, ``best`` filled with ``limit + 1``). ``override``
+    ``misses`` int64[m] its bookkeeping, ``best`` filled with ``limit + 1``), and the
+    primitives this call drives at most (0: no bound): a call that returns for that leaves
+    its robot between two primitives, and the next call goes on from there. ``override``
     int64[limit, N] or ``[0, 0]``: robot k's primitive j takes ``override[j, k]`` where
     that is >= 0 instead of its policy's action (an epsilon-greedy drive). ``state[k]``:
     robot k's state (observed), updated per primitive; ``tallies`` int64[5, N]: primitives,
@@ -50,17 +52,20 @@ def drive_tables(robots, noise, npos, nend, nblock, noise_h, traj, contacts, boo
     ``trajectory``) and its pose after the primitive to ``poses[j, n]`` (heading wrapped as
     the env's ``info["pose"]``). Wheel noise is refilled here, from each robot's generator
     handle ``noise_h[k]`` (:mod:`sim.physics.kernel.noise`). Returns how many running
-    robots wait for the caller (a ``CHECK`` for Chipmunk).
+    robots wait for the caller (a ``CHECK`` for Chipmunk), plus one when the call's budget
+    ran out.
     """
     p, prof, g, sc = Params(*pt), Profiles(*prof_t), Geometry(*geo_t), Scratch(*st)
-    goal, limit, median_n = rules[0], rules[1], rules[2]
-    waiting = 0
+    goal, limit, median_n, budget = rules[0], rules[1], rules[2], rules[3]
+    waiting = driven = 0
     for k in range(robots.shape[0]):
         if not running[k]:
             continue
         rb = robots[k]
         while True:
             if rb.status == Status.DONE or rb.status == Status.IDLE:
+                if budget and driven >= budget:  # the call's share is driven: back to
+                    return waiting + 1  # Python (Ctrl-C); the next call goes on from here
                 if median_n and k % median_n and _median_decided(
                         best[owner[k]], misses[owner[k]], median_n, tallies[0, k]):
                     tallies[4, k] = rb.steps  # cut: counted as a miss, as it cannot matter
@@ -79,6 +84,7 @@ def drive_tables(robots, noise, npos, nend, nblock, noise_h, traj, contacts, boo
                 waiting += 1
                 break
             booked[k] = 0
+            driven += 1
             n = tallies[0, k] + 1
             tallies[0, k] = n
             tallies[1, k] += rb.ncontact
@@ -143,6 +149,7 @@ def _book_drive(best, misses, j, length, reached):
 
 
 _NO_OVERRIDE = np.zeros((0, 0), np.int64)
+CALL_PRIMITIVES = 16384  # primitives a call drives at most: ~0.1 s, the bound on Ctrl-C
 
 
 def drive_batch(batch, tables: np.ndarray, owner: np.ndarray, state: np.ndarray, goal: int,
@@ -165,7 +172,7 @@ def drive_batch(batch, tables: np.ndarray, owner: np.ndarray, state: np.ndarray,
     if keep_routes:
         routes[:, 0] = state
     metres = np.zeros(n if measure_metres else 0)
-    rules = np.array([goal, limit, median_of], np.int64)
+    rules = np.array([goal, limit, median_of, CALL_PRIMITIVES], np.int64)
     policies = int(owner.max()) + 1 if n else 0
     best = np.full((policies if median_of else 0, median_of // 2 + 1), limit + 1, np.int64)
     misses = np.zeros(policies, np.int64)

@@ -16,6 +16,7 @@ from numba import njit
 
 from sim.physics.kernel.sweep import (
     _box_distance,
+    _fold_shapes,
     _segment_distance,
     _wall_beyond,
     overlap_depth,
@@ -84,43 +85,49 @@ def new_clear_region(rb, p, g, s):
     clearance to its walls, a few steps of travel; the box runs along the corridor.
     """
     s.counters[0] += 1
-    stamp = s.counters[0]
     x, y, r = rb.x, rb.y, p.radius_m
-    reach = r + p.cell_m  # the ball looks this far: shapes beyond it are beyond
     big = r + CLEAR_MARGIN_M
-    nearest = reach
-    b = (x - p.cell_m, y - p.cell_m, x + p.cell_m, y + p.cell_m)
-    w = g.walls
-    look = p.cell_m + big  # shapes that can come within `big` of the box's square
-    for k in range(w.shape[0]):
-        if _wall_beyond(w, k, x - look, y - look, x + look, y + look):
-            continue  # beyond both the ball's reach and the box's cuts
-        d = _segment_distance(x, y, w[k, 0], w[k, 1], w[k, 2], w[k, 3]) - w[k, 4]
-        nearest = min(nearest, d)
-        b = _cut(b, min(w[k, 0], w[k, 2]) - w[k, 4], min(w[k, 1], w[k, 3]) - w[k, 4],
-                 max(w[k, 0], w[k, 2]) + w[k, 4], max(w[k, 1], w[k, 3]) + w[k, 4], x, y, big)
-    ix0, iy0 = cell_of(x - look, y - look, p.cell_m, p.nx, p.ny)
-    ix1, iy1 = cell_of(x + look, y + look, p.cell_m, p.nx, p.ny)
-    n_circles = g.circles.shape[0]
-    for gy in range(iy0, iy1 + 1):
-        for gx in range(ix0, ix1 + 1):
-            cell = gy * p.nx + gx
-            for q in range(g.grid_start[cell], g.grid_start[cell + 1]):
-                k = g.grid_items[q]
-                if s.seen[k] == stamp:
-                    continue
-                s.seen[k] = stamp
-                if k < n_circles:
-                    c = g.circles[k]
-                    nearest = min(nearest, math.hypot(x - c[0], y - c[1]) - c[2])
-                    b = _cut(b, c[0] - c[2], c[1] - c[2], c[0] + c[2], c[1] + c[2], x, y, big)
-                else:
-                    e = g.boxes[k - n_circles]
-                    nearest = min(nearest, _box_distance(x, y, e[0], e[1], e[2], e[3]))
-                    b = _cut(b, e[0], e[1], e[2], e[3], x, y, big)
+    look = p.cell_m + big  # shapes that can come within `big` of the box's square (the
+    #                        ball's reach, r + cell, is shorter)
+    # the fold's state: nearest surface (from r + cell: beyond it is beyond), the box, and
+    # `big` carried along for the cuts
+    out = (r + p.cell_m, x - p.cell_m, y - p.cell_m, x + p.cell_m, y + p.cell_m, big)
+    nearest, x0, y0, x1, y1, _ = _fold_shapes(_region_wall, _region_item, out, g.circles,
+                                              g.walls, g.boxes, p.cell_m, p.nx, p.ny,
+                                              g.grid_start, g.grid_items, s.seen,
+                                              s.counters[0], look, x, y, x, y)
     rb.clear_x, rb.clear_y = x, y
     rb.clear_r = nearest - r - CLEAR_MARGIN_M
-    rb.box_x0, rb.box_y0, rb.box_x1, rb.box_y1 = b
+    rb.box_x0, rb.box_y0, rb.box_x1, rb.box_y1 = x0, y0, x1, y1
+
+
+@njit(cache=True, inline="always")
+def _region_wall(walls, k, _radius, x, y, _bx, _by, out):
+    """:func:`new_clear_region`'s fold over wall ``k``: its distance, its bounding box's cut."""
+    w = walls
+    nearest, x0, y0, x1, y1, big = out
+    d = _segment_distance(x, y, w[k, 0], w[k, 1], w[k, 2], w[k, 3]) - w[k, 4]
+    x0, y0, x1, y1 = _cut((x0, y0, x1, y1), min(w[k, 0], w[k, 2]) - w[k, 4],
+                          min(w[k, 1], w[k, 3]) - w[k, 4], max(w[k, 0], w[k, 2]) + w[k, 4],
+                          max(w[k, 1], w[k, 3]) + w[k, 4], x, y, big)
+    return min(nearest, d), x0, y0, x1, y1, big
+
+
+@njit(cache=True, inline="always")
+def _region_item(circles, boxes, k, _radius, x, y, _bx, _by, out):
+    """... over grid item ``k`` (a circle, or a box after the circles)."""
+    nearest, x0, y0, x1, y1, big = out
+    n_circles = circles.shape[0]
+    if k < n_circles:
+        c = circles[k]
+        d = math.hypot(x - c[0], y - c[1]) - c[2]
+        x0, y0, x1, y1 = _cut((x0, y0, x1, y1), c[0] - c[2], c[1] - c[2], c[0] + c[2],
+                              c[1] + c[2], x, y, big)
+    else:
+        e = boxes[k - n_circles]
+        d = _box_distance(x, y, e[0], e[1], e[2], e[3])
+        x0, y0, x1, y1 = _cut((x0, y0, x1, y1), e[0], e[1], e[2], e[3], x, y, big)
+    return min(nearest, d), x0, y0, x1, y1, big
 
 
 @njit(cache=True, inline="always")

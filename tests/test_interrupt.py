@@ -249,3 +249,58 @@ def test_ctrl_c_after_the_summary_still_leaves_a_whole_recording(tmp_path):
         assert "Traceback" not in err
         assert rec.exists() and verify_recording(rec)[0]
         assert rec.stat().st_size > 100_000  # the runs are in it, not only a header
+
+
+_SIGNAL_INSIDE_LLVM = """
+import signal, sys
+import numpy as np
+from numba.core import codegen
+{guard}
+raw = codegen.CPUCodeLibrary._object_getbuffer_hook
+def getbuffer(cls, module):  # LLVM's callback into Python (ctypes) as a kernel is finalised
+    signal.raise_signal({sig})
+    x = [i for i in range(100)]  # bytecode: a pending handler runs here, in the callback
+    return raw(module)
+codegen.CPUCodeLibrary._object_getbuffer_hook = classmethod(getbuffer)
+import numba
+if {terminate}:
+    def stop(sig, frame):
+        raise SystemExit(143)
+    signal.signal(signal.SIGTERM, stop)
+@numba.njit
+def kernel(a):
+    return a.sum() * 2.0
+try:
+    print(kernel(np.ones(3)))
+except KeyboardInterrupt:
+    print("interrupted after the compile", file=sys.stderr)
+    sys.exit(130)
+print("ran on", file=sys.stderr)
+sys.exit(0)
+"""
+
+
+def _signal_inside_llvm(sig: int, guarded: bool) -> subprocess.CompletedProcess:
+    guard = ("from scenarios.signals import hold_stop_signals_while_compiling\n"
+             "hold_stop_signals_while_compiling()" if guarded else "")
+    code = _SIGNAL_INSIDE_LLVM.format(guard=guard, sig=int(sig),
+                                      terminate=sig == signal.SIGTERM)
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, preexec_fn=lambda: signal.signal(signal.SIGINT,
+                                                                        signal.SIG_DFL),
+                          env={**os.environ, "PYTHONPATH": str(Path(__file__).parent.parent)})
+
+
+def test_a_signal_inside_llvms_callback_is_dropped_without_the_guard():
+    """The failure the guard is for (CI: a Ctrl-C during a cold sweep's compile ended in a
+    segmentation fault): the KeyboardInterrupt raised in LLVM's callback is printed and
+    dropped, and the compile goes on without it (or crashes)."""
+    done = _signal_inside_llvm(signal.SIGINT, guarded=False)
+    assert done.returncode != 130 and "Exception ignored" in done.stderr, done.stderr
+
+
+def test_a_signal_during_a_compile_is_acted_on_as_the_compile_ends():
+    for sig, code in ((signal.SIGINT, 130), (signal.SIGTERM, 143)):
+        done = _signal_inside_llvm(sig, guarded=True)
+        assert done.returncode == code, done.stderr
+        assert "Exception ignored" not in done.stderr and "ran on" not in done.stderr

@@ -301,6 +301,18 @@ def _finished(partial: Path) -> int:
     return partial.read_text().count("\n") if partial.exists() else 0
 
 
+_SLOW_MERGE = """
+import runpy, time
+import scenarios.recording.comparison as comparison
+log_header = comparison._log_header
+def slow_header(*args):  # the merge holds after its header: the signal lands in the merge
+    log_header(*args)
+    time.sleep(60)
+comparison._log_header = slow_header
+runpy.run_module("scenarios.cli", run_name="__main__", alter_sys=True)
+"""
+
+
 def _signalled_sweep(tmp_path: Path, sig: int, moment: str, delay: float = 0.0,
                      sweep: list[str] = SWEEP) -> tuple[Path, Path, str, int]:
     """Start a recorded two-worker sweep, send ``sig`` at ``moment`` (+ ``delay`` s), and see
@@ -313,7 +325,10 @@ def _signalled_sweep(tmp_path: Path, sig: int, moment: str, delay: float = 0.0,
 
     out, rec = tmp_path / "out", tmp_path / "c.rrd"
     parts, partial = Path(str(rec) + ".parts"), out / "runs.partial.jsonl"
-    proc = subprocess.Popen([sys.executable, "-m", "scenarios.cli", *sweep, "--out", str(out),
+    # "merging": the merge held at its end (else a quick merge may finish between the poll
+    # that saw it start and the signal: CI once sent it just after, and nothing was left)
+    cli = ["-c", _SLOW_MERGE] if moment == "merging" else ["-m", "scenarios.cli"]
+    proc = subprocess.Popen([sys.executable, *cli, *sweep, "--out", str(out),
                              "--record", str(rec)], cwd=tmp_path, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True,
                             preexec_fn=_terminal_signals,

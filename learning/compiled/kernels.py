@@ -1,10 +1,11 @@
 """Fused numba loops over a tabular model: training episodes, greedy tests, policy checks.
 
-Each loop is one source function that numba compiles once per method: the hooks
-it calls (:mod:`learning.compiled.hooks`) resolve to the method whose state is passed,
-so a compiled loop holds only that method's rules and a run compiles only the
-methods it uses. numba cannot read a clock, so wall time is measured from
-Python around calls of :func:`run_episodes` (see :mod:`learning.drivers.train`).
+Each loop is one source function that numba compiles once per method, holding only
+that method's rules, so a run compiles only the methods it uses. The training loop
+takes the method's hooks as its own globals (:func:`_episodes_of`); the read-outs call
+them through :mod:`learning.compiled.hooks`, which resolves them from the state's type.
+numba cannot read a clock, so wall time is measured from Python around calls of
+:func:`run_episodes` (see :mod:`learning.drivers.train`).
 
 numba's cache sees only the defining file of each function, and these loops
 inline code from other modules: :mod:`learning.jitcache` drops the package's
@@ -13,17 +14,20 @@ cache whenever any ``learning/*.py`` changed.
 
 from __future__ import annotations
 
+from types import FunctionType
+
 import numpy as np
 from numba import njit
 
 from learning.compiled.hooks import act, begin, draw_start, end, exploit_call, update
+from learning.methods.registry import family_of_state
 
 
-@njit(cache=True, nogil=True)
 def _episodes(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
-    """The training loop; compiled once per method (the state's type picks the hooks).
-    nogil: it touches no Python objects, so another thread (the Rerun recorder encoding
-    recorded episodes) can run on a second core while it trains."""
+    """The training loop, a template: :func:`_episodes_of` compiles it once per method with
+    that method's ``act``, ``update`` and ``begin`` (here the names of the dispatching
+    hooks). nogil: it touches no Python objects, so another thread (the Rerun recorder
+    encoding recorded episodes) can run on a second core while it trains."""
     tracing = trace.shape[0] > 0
     next_state, reward, terminal, start_states = mdp
     out_steps, out_return, out_success, out_fmean, out_fstd = out
@@ -60,6 +64,30 @@ def _episodes(st, mdp, max_steps, n_episodes, rng, start_rng, out, trace):
 
 
 NO_TRACE = np.zeros((0, 0), dtype=np.int32)
+_EPISODES_OF: dict[type, object] = {}  # a state's class -> its compiled training loop
+
+
+def _episodes_of(st):
+    """:func:`_episodes` compiled for ``st``'s method, its hooks (``act``, ``update``,
+    ``begin``: njit functions with ``inline="always"``) in its globals, so numba inlines
+    them in its untyped passes. Through the typed overloads of
+    :mod:`learning.compiled.hooks` numba also compiles each inlined hook on its own first
+    ("make sure it can be compiled") and types the loop's inlined code twice: the
+    same machine code for a third more compiling (``rnh-ql+`` cold: 23.5 -> 15.5 s of CPU;
+    the README's main command cold: 71 -> 53 s; see BENCHMARKS.md). One dispatcher per
+    method, all cached under ``_episodes``' name in this file's cache: the state's class in
+    each signature tells them apart."""
+    kind = type(st)
+    kernel = _EPISODES_OF.get(kind)
+    if kernel is None:
+        family = family_of_state(st)
+        names = dict(_episodes.__globals__, act=family.act, update=family.update,
+                     begin=family.begin)
+        fn = FunctionType(_episodes.__code__, names, _episodes.__name__)
+        fn.__qualname__, fn.__module__ = _episodes.__qualname__, _episodes.__module__
+        fn.__doc__ = _episodes.__doc__
+        kernel = _EPISODES_OF[kind] = njit(cache=True, nogil=True)(fn)
+    return kernel
 
 
 def run_episodes(st, model, n_episodes: int, rng: np.random.Generator,
@@ -83,7 +111,7 @@ def run_episodes(st, model, n_episodes: int, rng: np.random.Generator,
     store per step and draws nothing, so a traced run equals an untraced one.
     """
     mdp = (model.next_state, model.reward, model.terminal, model.start_states)
-    return int(_episodes(st, mdp, int(model.max_steps), int(n_episodes), rng,
+    return int(_episodes_of(st)(st, mdp, int(model.max_steps), int(n_episodes), rng,
                     rng if start_rng is None else start_rng, out, trace))
 
 

@@ -3,10 +3,15 @@
 
 Each is a numba ``overload`` that, while compiling, looks up the module whose
 ``State`` the argument is (:data:`learning.methods.registry.FAMILY_OF_STATE`) and inlines
-that module's hook. So one source loop (the kernels, the step and batch agents,
-the greedy tests) compiles once per method with only that method's rules in it,
+that module's hook. So one source loop (the step and batch agents, the fused physics
+loop) compiles once per method with only that method's rules in it,
 and numba's on-disk cache (which cannot key on functions passed as arguments)
-keys on the state's type instead.
+keys on the state's type instead. The training loop and the read-outs of
+:mod:`learning.compiled.kernels` take the hooks as their own globals instead
+(:func:`~learning.compiled.kernels.compiled_for`): numba compiles an inlined overload's
+implementation on its own as well, a third more compiling on a cold cache; the step
+agent calls ``begin`` and ``exploit`` through their non-inlined doors
+(:func:`begin_row`, :func:`exploit_call`) for the same reason.
 
 Every random number either driver uses is drawn inside the hooks (or
 :func:`draw_start`) from the one injected generator, so equal seeds give equal

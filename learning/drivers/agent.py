@@ -40,7 +40,7 @@ def _update(box, s, a, r, s2, terminated, h):
 
 @njit(cache=True)
 def _begin(box, s0):
-    hooks.begin(box.state, s0)
+    hooks.begin_row(box.state, s0)
 
 
 @njit(cache=True)
@@ -50,7 +50,7 @@ def _end(box):
 
 @njit(cache=True)
 def _exploit(box, s):
-    return hooks.exploit(box.state, s)
+    return hooks.exploit_call(box.state, s)
 
 
 class StepAgent:

@@ -65,7 +65,6 @@ def stop_signals_held() -> Iterator[None]:
         held[sig](sig, frame)
 
 
-
 class _HeldWhileCompiling:
     """What numba's compiler-lock listener does: :func:`stop_signals_held` from the moment
     the main thread asks for the lock until it gives the outermost one back. While numba

@@ -22,6 +22,7 @@ keywords are kept stable.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import tempfile
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -47,9 +48,11 @@ from scenarios.api_args import (
     cell_arg,
     err,
     fidelity_arg,
+    init_arg,
     method_arg,
     methods_arg,
     policy_table,
+    pretrain_arg,
     problem_of,
     record_arg,
     rewards_arg,
@@ -81,6 +84,7 @@ from scenarios.sweep.run import (
 )
 from scenarios.values import Comparison, Grade, Optimum, Run
 from sim.errors import InputError
+from sim.files import check_output
 from sim.physics.fidelity import PRESETS, Fidelity
 from sim.physics.models.optimum import continuous_optimum_m
 from sim.physics.models.transition import physics_model
@@ -98,7 +102,8 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
           settings: Mapping[str, float] | None = None, s_starts: float | None = None,
           start: Cell | None = None, goal: Cell | None = None,
           save: str | Path | None = None, resume: str | Path | None = None,
-          record_every: int = 10, record_values_every: int = 300) -> Run:
+          record_every: int = 10, record_values_every: int = 300,
+          init: Run | str | Path | None = None, pretrain: Any = None) -> Run:
     """One method on one scenario, one seed: the run ``rnhql train`` makes.
 
     ``world``: ``"grid"`` or ``"physics"`` (``fidelity``: a rung such as ``"noisy"``, a
@@ -107,6 +112,14 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
     own), text or a ``Rewards``; ``settings``: the method's config fields, e.g.
     ``{"eps": 0.2}``; ``record``: ``True`` or a ``.rrd`` path; ``save``/``resume``: an
     ``AGENT.npz`` checkpoint of a compiled method's grid run.
+
+    Learn on the grid, finish on the robot: ``init`` (a physics run) starts from a learner
+    trained in another world, a :class:`Run` this function returned (any method, plain
+    learners too) or a saved agent; its learner and start streams continue, so
+    ``train(..., seed=s)`` in the grid then ``train(..., world="physics", init=that,
+    seed=s)`` is the run ``compare(..., pretrain=("grid", n))`` makes for seed ``s``.
+    ``pretrain=("grid", n)`` does both phases in one call. The record's ``pretrain`` entry
+    counts the first phase in its own currency and grades its policy at this run's rung.
     """
     fn = "train"
     scenario = scenario_arg(fn, scenario)
@@ -124,13 +137,23 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
     record_values_every = whole(fn, "record_values_every", record_values_every, 1,
                                  MAX_EPISODES, 300)
     sc, model = problem_of(fn, scenario, start, goal, rewards_text, s_starts, [world])
+    n_pre = pretrain_arg(fn, pretrain, [world])
+    carried = init_arg(fn, init, name, world, sc, layout_digest(scenario, start, goal),
+                       int(model.n_states), geometry_of(model), resume)
+    if carried is not None and n_pre:
+        raise err(fn, "pretrain", "and init both say where the learner starts",
+                  "pass one of them")
+    if save is not None:  # checked now: not after training, with the run lost
+        check_output(Path(save), "save")
 
     rec_path = record_arg(fn, record, sc.name, f"{name.replace(':', '.')}-{world}-s{seed}")
     spec = RunSpec(scenario, name, seed, episodes, world, overrides, start=start, goal=goal,
-                   rewards=rewards_text, fidelity=fid, s_starts=s_starts)
-    rec = train_single(spec, sc, model, save=save, resume=resume, record=rec_path,
-                       record_every=record_every, record_values_every=record_values_every)
-    return Run.from_record(rec, None if rec_path is None else Path(rec_path))
+                   rewards=rewards_text, fidelity=fid, s_starts=s_starts, pretrain=n_pre)
+    rec, out = train_single(spec, sc, model, save=save, resume=resume, record=rec_path,
+                            record_every=record_every,
+                            record_values_every=record_values_every, init=carried)
+    return dataclasses.replace(Run.from_record(rec, None if rec_path is None
+                                               else Path(rec_path)), carried=out)
 
 
 # ---------------------------------------------------------------- compare
@@ -145,7 +168,7 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
             s_starts: float | None = None, start: Cell | None = None,
             goal: Cell | None = None, record_every: int = 100, record_values_every: int = 300,
             record_seeds: int = 1, figures: bool = True, progress: bool = False,
-            start_method: str | None = None) -> Comparison:
+            start_method: str | None = None, pretrain: Any = None) -> Comparison:
     """Methods x seeds (x worlds) on one scenario: the sweep ``rnhql compare`` runs.
 
     ``methods``: names, ``"module:Class"`` or classes (default: the comparison's list);
@@ -155,7 +178,10 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
     finished in ``out``; ``settings``: config fields for every method that has them;
     ``backend``: ``"local"`` or ``"ray"`` (``address``); ``progress``: a progress line on
     stderr; ``start_method``: the worker pool's (``"fork"``, ``"spawn"``,
-    ``"forkserver"``; default Python's). The rest as :func:`train`.
+    ``"forkserver"``; default Python's); ``pretrain``: ``("grid", n)``: every physics run
+    first trains ``n`` episodes in the grid on its own streams, then ``episodes`` at the
+    rung (common random numbers: the same grid phase as a grid run of that seed). The rest
+    as :func:`train`.
     """
     fn = "compare"
     scenario = scenario_arg(fn, scenario)
@@ -175,11 +201,15 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
         raise err(fn, "resume", "needs out: the folder whose finished runs to keep",
                    "pass out='DIR' as well, or drop resume")
     sc, _ = problem_of(fn, scenario, start, goal, rewards_text, s_starts, worlds)
+    n_pre = pretrain_arg(fn, pretrain, worlds)
     per_method = settings_per_method(names, overrides)
 
     specs = make_specs(scenario, names, list(range(seed_base, seed_base + n_seeds)), episodes,
                        worlds, per_method, start=start, goal=goal, rewards=rewards_text,
                        fidelity=fid, s_starts=s_starts)
+    if n_pre:
+        specs = [dataclasses.replace(sp, pretrain=n_pre) if sp.world == "physics" else sp
+                 for sp in specs]
     execute, kwargs = _backend(fn, backend, address, jobs, start_method)
     rec_path = record_arg(fn, record, scenario_name(scenario).rsplit("/", 1)[-1]
                        .removesuffix(".toml"), "compare")

@@ -189,6 +189,65 @@ def record_arg(fn: str, record: Any, name: str, rest: str) -> str | None:
     return str(path)
 
 
+def init_arg(fn: str, init: Any, method: str, world: str, sc: Scenario, layout: str,
+             n_states: int, geometry: Any, resume: Any) -> Any:
+    """``init``: a :class:`~scenarios.values.Run` returned by :func:`scenarios.api.train`, or
+    a saved agent (``.npz``), as the warm start of a physics run
+    (:class:`scenarios.runs.warm.Carried`), checked against this run before any work."""
+    if init is None:
+        return None
+    if world != "physics":
+        raise err(fn, "init", "warm-starts a physics run (the grid's learner continued at a "
+                  "rung)", "pass world='physics' (to continue a grid run: resume=AGENT.npz)")
+    if resume is not None:
+        raise err(fn, "init", "and resume both say where the learner starts",
+                  "pass one of them")
+    from scenarios.runs.warm import Carried, carried_of_checkpoint  # (values import api_args)
+    from scenarios.values import Run
+
+    if isinstance(init, Run):
+        carried = init.carried
+        if carried is None:
+            raise err(fn, "init", "this Run carries no learner (it was read from a "
+                      "results.json)", "pass a Run returned by api.train, or a saved agent "
+                      "(train(..., save='agent.npz'))")
+    elif isinstance(init, str | Path) and str(init).strip():
+        carried = carried_of_checkpoint(Path(init), n_states, geometry)
+    else:
+        raise err(fn, "init", f"is {type(init).__name__}", "pass a Run returned by api.train, "
+                  "or the path of a saved agent (.npz)")
+    if not isinstance(carried, Carried):
+        raise err(fn, "init", "carries no learner", "pass a Run returned by api.train")
+    carried.check(method, layout, n_states, "init", f"scenarios.api.{fn}")
+    return carried
+
+
+def pretrain_arg(fn: str, pretrain: Any, worlds: Sequence[str]) -> int:
+    """``pretrain``: ``("grid", episodes)`` (or ``"grid:300"``): every physics run of the sweep
+    first trains that many episodes in the grid; 0 when None."""
+    if pretrain is None:
+        return 0
+    if isinstance(pretrain, str):
+        world, sep, n = pretrain.partition(":")
+        if not sep:
+            raise err(fn, "pretrain", f"is {pretrain!r}", "pass e.g. pretrain=('grid', 300)")
+        try:
+            pretrain = (world.strip(), int(n))
+        except ValueError:
+            raise err(fn, "pretrain", f"has episodes {n!r}, not a whole number",
+                      "pass e.g. pretrain=('grid', 300)") from None
+    if not (isinstance(pretrain, tuple | list) and len(pretrain) == 2):
+        raise err(fn, "pretrain", f"is {pretrain!r}", "pass e.g. pretrain=('grid', 300)")
+    world, episodes = pretrain
+    if world != "grid":
+        raise err(fn, "pretrain", f"names the world {world!r}", "pretrain in 'grid' (to start "
+                  "from a lower rung, train there and pass the Run as api.train's init)")
+    if "physics" not in worlds:
+        raise err(fn, "pretrain", "applies to physics runs", "add 'physics' to worlds, or "
+                  "drop pretrain")
+    return whole(fn, "pretrain", episodes, 1, MAX_EPISODES, 300)
+
+
 def problem_of(fn: str, scenario: str | Scenario, start: Cell | None, goal: Cell | None,
              rewards: str | None, s_starts: float | None, worlds: Sequence[str]):
     if s_starts is not None and not (isinstance(s_starts, int | float) and

@@ -79,6 +79,25 @@ class Run:
     wall_time_s: float  # [s]
     record: Mapping[str, Any] = field(repr=False)  # the results.json entry
     recording: Path | None = None  # the .rrd it was recorded to, if it was
+    carried: Any = field(default=None, repr=False)  # the trained learner, for ``init=`` of a
+    #   next run (scenarios.runs.warm.Carried; None for a run read from results.json)
+
+    @property
+    def pretrain(self) -> Mapping[str, Any] | None:
+        """The first phase of a warm-started run (its world, episodes, moves or robot
+        primitives and seconds, and its policy graded here before this phase), or None."""
+        return self.record.get("pretrain")
+
+    @property
+    def robot_primitives(self) -> int | None:
+        """Primitives the robot drove in this run's physics phase (None: a grid run)."""
+        return int(self.record["env_steps"]) if self.world == "physics" else None
+
+    @property
+    def robot_seconds(self) -> float | None:
+        """Simulated seconds the robot drove in this run's physics phase (None: grid)."""
+        v = self.record.get("robot_seconds")
+        return None if v is None else float(v)
 
     @property
     def final_route_optimal(self) -> bool:

@@ -22,7 +22,7 @@ from learning.compiled.named_state import copy_state, row, row_view, stack
 from learning.compiled.state_box import box_of
 from learning.config import MethodConfig
 from learning.drivers.agent import StepAgent
-from learning.drivers.state import init_state
+from learning.drivers.state import carried_state, init_state
 from learning.geometry import Geometry
 
 
@@ -73,15 +73,20 @@ class BatchAgent:
     """N agents of one method and geometry, each with its own generator.
 
     ``rngs[i]`` is agent ``i``'s learner stream (RN-QL draws its initial weights from
-    it here, as :func:`learning.drivers.agent.make_agent` does). Every event takes an ``active``
-    mask: agents whose runs have finished sit out.
+    it here, as :func:`learning.drivers.agent.make_agent` does). ``init[i]``, if given and
+    not None, is the state agent ``i`` starts from (a warm start: a learner trained in
+    another world, :func:`learning.drivers.state.carried_state`); nothing is drawn for it.
+    Every event takes an ``active`` mask: agents whose runs have finished sit out.
     """
 
     def __init__(self, cfg: MethodConfig, geometry: Geometry,
-                 rngs: list[np.random.Generator]) -> None:
+                 rngs: list[np.random.Generator], init: list | None = None) -> None:
         self.cfg, self.geometry, self.rngs = cfg, geometry, list(rngs)
         self.n = len(self.rngs)
-        self.states = stack([init_state(cfg, geometry, r) for r in self.rngs])
+        init = list(init) if init is not None else [None] * self.n
+        self.states = stack([init_state(cfg, geometry, r) if st is None
+                             else carried_state(cfg, st)
+                             for r, st in zip(self.rngs, init, strict=True)])
         self._box = box_of(self.states)  # the same arrays, one reference for compiled calls
         self._handles = handles(self.rngs)
         self._out = np.zeros(self.n, dtype=np.int64)

@@ -218,10 +218,13 @@ class PlainBatchAgent:
     stream, in the order the compiled agents draw them."""
 
     def __init__(self, cfg: PlainConfig, geometry: Geometry, rngs: list[np.random.Generator],
-                 start_rngs: list[np.random.Generator]) -> None:
+                 start_rngs: list[np.random.Generator], learners: list | None = None) -> None:
         self.cfg, self.geometry = cfg, geometry
         self.n_states, self.n_actions = int(geometry.n_states), int(geometry.n_actions)
-        self.learners = [new_learner(cfg, geometry, r) for r in rngs]
+        # a warm start continues the learner object itself (its state is its own)
+        given = list(learners) if learners is not None else [None] * len(rngs)
+        self.learners = [new_learner(cfg, geometry, r) if x is None else x
+                         for r, x in zip(rngs, given, strict=True)]
         self.start_rngs = list(start_rngs)
         self.n = len(self.learners)
         self._out = np.zeros(self.n, dtype=np.int64)

@@ -62,6 +62,8 @@ class RunGroup:
     noise_rngs: Sequence[np.random.Generator] | None = None  # the physics streams (noise)
     grading_seeds: Sequence[int] | None = None  # each run's rollout seed (common across
     #                                             methods: the run's seed)
+    init: Sequence[Any] | None = None  # each run's warm start (scenarios.runs.warm.Carried),
+    #                                    or None: a fresh learner
 
 
 @dataclass(frozen=True)
@@ -158,7 +160,8 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     agents, bounds = [], []
     lo = 0
     for g in groups:
-        agents.append(batch_agent(g.cfg, geom, list(g.learner_rngs), list(g.start_rngs)))
+        agents.append(batch_agent(g.cfg, geom, list(g.learner_rngs), list(g.start_rngs),
+                                  g.init))
         bounds.append((lo, lo + len(g.learner_rngs)))
         lo += len(g.learner_rngs)
     n = lo
@@ -173,6 +176,8 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     grading_seeds = [s for g in groups
                      for s in (g.grading_seeds or [0] * len(g.learner_rngs))]
     grader = Grader(sc, world.fidelity)
+    carried = [c for g in groups for c in (g.init or [None] * len(g.learner_rngs))]
+    init_grades = _grade_carried(grader, carried, grading_seeds, geom.n_actions)
     env = EpisodeTaps(world, sorted(recorded)) if recorded else world
     views = {i: ChunkLogger(r.recorder, r.plan) for i, r in recorded.items()}
     logs = _Logs(n, n_episodes)
@@ -325,7 +330,8 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
                                 [grading_seeds[i] for _, i in runs]))
     results: list[list[PhysicsTrainResult]] = []
     for b0, b1 in bounds:
-        results.append([_result(agent, next(finals), i, logs, grader, model)
+        results.append([_result(agent, next(finals), i, logs, grader, model,
+                                carried[i], init_grades.get(i))
                         for agent, i in runs[b0:b1]])
     if split is not None:
         b = world.batch
@@ -358,22 +364,45 @@ def _rules(sc: Scenario, model: TabularModel, world: PhysicsRouteVectorEnv) -> n
 
 
 def batch_agent(cfg: Any, geom: Any, learner_rngs: list[np.random.Generator],
-                start_rngs: list[np.random.Generator]) -> Any:
+                start_rngs: list[np.random.Generator], init: Sequence[Any] | None = None
+                ) -> Any:
     """The learners of one group: compiled rows (:class:`BatchAgent`), or plain-Python
-    learners (:class:`learning.plain.learner.PlainBatchAgent`) with the same calls."""
+    learners (:class:`learning.plain.learner.PlainBatchAgent`) with the same calls; ``init``:
+    each run's warm start (:class:`scenarios.runs.warm.Carried`) or None."""
+    starting = None if init is None else [None if c is None else c.starting_learner()
+                                          for c in init]
     if is_plain(cfg):
-        return PlainBatchAgent(cfg, geom, learner_rngs, start_rngs)
-    return BatchAgent(cfg, geom, learner_rngs)
+        return PlainBatchAgent(cfg, geom, learner_rngs, start_rngs, starting)
+    return BatchAgent(cfg, geom, learner_rngs, starting)
+
+
+def _grade_carried(grader: Grader, carried: list[Any], seeds: list[int], n_actions: int
+                   ) -> dict[int, FinalGrade]:
+    """The policies warm-started runs begin with, graded at the rung as a final policy is
+    (the same drives): what the lower world's policy is worth here before any robot time."""
+    which = [i for i, c in enumerate(carried) if c is not None]
+    if not which:
+        return {}
+    grades = grader.finals([carried[i].policy_state(n_actions) for i in which],
+                           [seeds[i] for i in which])
+    return dict(zip(which, grades, strict=True))
 
 
 def _result(agent: StepAgent, final: FinalGrade, i: int, logs: _Logs, grader: Grader,
-            model: TabularModel) -> PhysicsTrainResult:
+            model: TabularModel, carried: Any = None, init_grade: FinalGrade | None = None
+            ) -> PhysicsTrainResult:
+    warm = {}
+    if carried is not None and init_grade is not None:
+        warm = {"pretrain": {**carried.phase,
+                             "policy_route_length": int(init_grade.length),
+                             "policy": init_grade.extras["final_policy"]}}
     extras = {"grid_optimal_route_length": model.optimal_route_length,
               "physics_optimal_route_length": grader.exact.optimal_route_length,
               "continuous_optimal_route_m": continuous_optimum_rounded(grader.scenario),
               "contacts_per_episode": logs.contacts[i].tolist(),
               "sim_time_per_episode_s": np.round(logs.sim_time[i], 4).tolist(),
-              **final.extras}
+              "robot_seconds": round(float(logs.sim_time[i].sum()), 4),
+              **final.extras, **warm}
     steps = logs.steps[i]
     return PhysicsTrainResult(
         config=agent.cfg, state=agent.state, episodes=len(steps), env_steps=int(steps.sum()),
@@ -392,15 +421,17 @@ def train_physics(cfg: Any, sc: Scenario, model: TabularModel, n_episodes: int,
                   recorder: Any = None, plan: Any = None,
                   start_rng: np.random.Generator | None = None, fidelity: Any = None,
                   noise_rng: np.random.Generator | None = None,
-                  grading_seed: int = 0) -> PhysicsTrainResult:
+                  grading_seed: int = 0, init: Any = None) -> PhysicsTrainResult:
     """One physics run: :func:`train_physics_runs` with one sub-env.
 
     ``rng`` is the learner's stream, ``start_rng`` the start cells' (default ``rng``):
     with :func:`learning.streams.streams` a grid run and a physics run of one seed
-    start their episodes in the same cells.
+    start their episodes in the same cells. ``init``: a warm start
+    (:class:`scenarios.runs.warm.Carried`).
     """
     group = RunGroup(cfg, [rng], [rng if start_rng is None else start_rng],
-                     None if noise_rng is None else [noise_rng], [grading_seed])
+                     None if noise_rng is None else [noise_rng], [grading_seed],
+                     None if init is None else [init])
     recorded = {0: RecordedRun(recorder, plan)} if recorder is not None else None
     return train_physics_runs(sc, model, [group], n_episodes, test_every, fidelity,
                               recorded)[0][0]

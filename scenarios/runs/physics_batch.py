@@ -15,6 +15,7 @@ from learning.plain.learner import PlainConfig
 from learning.streams import streams
 from scenarios.runs.physics import RecordedRun, RunGroup, log_final, train_physics_runs
 from scenarios.runs.spec import RunOutcome, load, make_config, method_class, run_record
+from scenarios.runs.warm import pretrain_in_grid
 
 # ------------------------------------------------------------------ sweeps
 
@@ -79,8 +80,13 @@ def run_physics_batch(specs: Sequence[Any]) -> list[dict[str, Any]]:
         rs = [streams(specs[i].seed) for i in idx]
         for i, r in zip(idx, rs, strict=True):
             evaluation[i] = r.evaluation
+        # a pretrained run's grid phase first, on its own streams (which then continue)
+        init = [pretrain_in_grid(method, cfg, model, specs[i].pretrain, specs[i].test_every,
+                                 r.learner, r.starts) if specs[i].pretrain else None
+                for i, r in zip(idx, rs, strict=True)]
         groups.append(RunGroup(cfg, [r.learner for r in rs], [r.starts for r in rs],
-                               [r.physics for r in rs], [specs[i].seed for i in idx]))
+                               [r.physics for r in rs], [specs[i].seed for i in idx],
+                               init if any(c is not None for c in init) else None))
         members.append(idx)
         cfgs.append(cfg)
     order = [i for idx in members for i in idx]  # run number in the loop -> spec index

@@ -18,6 +18,7 @@ from learning.geometry import geometry_of
 from learning.plain.learner import is_plain
 from learning.streams import streams
 from scenarios.runs.physics import log_final, train_physics
+from scenarios.runs.warm import Carried, carried_of, pretrain_in_grid
 from scenarios.runs.spec import (
     ExperimentError,
     RunOutcome,
@@ -35,8 +36,14 @@ from sim.scenario import Scenario
 def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
                  save: str | Path | None = None, resume: str | Path | None = None,
                  record: str | None = None, record_every: int = 10,
-                 record_values_every: int = 300) -> dict[str, Any]:
-    """Train ``spec`` (its scenario already loaded as ``sc``, ``model``); its record."""
+                 record_values_every: int = 300, init: Carried | None = None
+                 ) -> tuple[dict[str, Any], Carried]:
+    """Train ``spec`` (its scenario already loaded as ``sc``, ``model``): its record, and what
+    the trained learner carries into another world (``init`` of a next run).
+
+    ``init``: a warm start for a physics run (:class:`scenarios.runs.warm.Carried`, checked
+    by the caller): its learner and start streams continue; ``spec.pretrain`` > 0 trains
+    that grid phase here first, as a sweep does."""
     cfg = make_config(spec.method, spec.overrides)
     plain = is_plain(cfg)
     if plain and (save or resume):
@@ -48,9 +55,17 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
         raise ExperimentError("command line", "--resume", "is only supported for grid runs",
                               "drop --resume or use --world grid")
     problem = {"scenario": scenario_digest(*spec.problem), "rewards": sc.rewards.label(),
-               "layout": layout_digest(spec.scenario, spec.start, spec.goal)}
+               "layout": layout_digest(spec.scenario, spec.start, spec.goal),
+               "world": spec.world}  # (a warm start says which world it learned in)
+    if spec.world == "physics":
+        problem["fidelity"] = spec.fidelity_spec.label
     rs = streams(spec.seed)  # the same streams as a run of `rnhql compare`
-    rng = rs.learner
+    rng, start_rng = rs.learner, rs.starts
+    if spec.pretrain and spec.world == "physics":
+        init = pretrain_in_grid(spec.method, cfg, model, spec.pretrain, spec.test_every,
+                                rng, start_rng)
+    elif init is not None:
+        rng, start_rng = init.generators(rng, start_rng)
     checkpoint = None
     if resume:
         checkpoint = load_checkpoint(resume, spec.method, model.n_states, geometry_of(model))
@@ -71,22 +86,22 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
         if spec.world == "grid":
             if plain:
                 result = train_plain(cfg, model, spec.episodes, rng, spec.test_every,
-                                     observer=observer, start_rng=rs.starts)
+                                     observer=observer, start_rng=start_rng)
             else:
                 result = train_tabular(cfg, model, spec.episodes, rng, spec.test_every,
                                        resume=checkpoint, observer=observer,
-                                       start_rng=rs.starts)
+                                       start_rng=start_rng)
             if save:
-                ck = Checkpoint.of_result(result, rng, rs.starts)
+                ck = Checkpoint.of_result(result, rng, start_rng)
                 ck.problem = problem
                 atomic_write_bytes(save, checkpoint_bytes(ck))
         else:
             result = train_physics(cfg, sc, model, spec.episodes, rng, spec.test_every,
-                                   recorder=recorder, plan=plan, start_rng=rs.starts,
+                                   recorder=recorder, plan=plan, start_rng=start_rng,
                                    fidelity=spec.fidelity_spec, noise_rng=rs.physics,
-                                   grading_seed=spec.seed)
+                                   grading_seed=spec.seed, init=init)
             if save:
-                ck = Checkpoint.of_agent(result.agent)
+                ck = Checkpoint.of_result(result, rng, start_rng)
                 ck.problem = problem
                 atomic_write_bytes(save, checkpoint_bytes(ck))
             if recorder is not None:
@@ -101,4 +116,7 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
         eps_routes = epsilon_route_lengths(result.state, model, cfg.eps, rs.evaluation)
     else:
         eps_routes = result.grader.epsilon_routes(result.agent.state, cfg.eps, rs.evaluation)
-    return run_record(spec, cfg, RunOutcome.of(result, eps_routes))
+    carried = carried_of(spec.method, result, rng, start_rng, spec.world,
+                         spec.fidelity_spec.label if spec.world == "physics" else None,
+                         problem["layout"], int(model.n_states), "init (a Run)")
+    return run_record(spec, cfg, RunOutcome.of(result, eps_routes)), carried

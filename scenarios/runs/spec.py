@@ -81,6 +81,8 @@ class RunSpec:
     s_starts: float | None = None  # --s-starts: share of episodes starting at S (None: the
     #                                scenario's own s_start_share)
     recording: RecordOptions | None = None  # None: not recorded (never part of the key)
+    pretrain: int = 0  # physics runs: episodes in the grid first, on the run's own learner
+    #                    and start streams, then ``episodes`` at the rung (0: from scratch)
 
     def __post_init__(self) -> None:
         if isinstance(self.fidelity, str):  # a study's "noisy": the one parse of the text
@@ -112,7 +114,8 @@ class RunSpec:
         fid = "" if self.fidelity_spec.is_exact else f"|fid={self.fidelity_spec.label}"
         return (f"{self.scenario_name}#{scenario_digest(*self.problem)}"
                 f"{cells}|{self.world}{fid}|{self.method}{extra}|t{self.test_every}"
-                f"|s{self.seed}|e{self.episodes}")
+                f"|s{self.seed}|e{self.episodes}"
+                + (f"|pre-grid{self.pretrain}" if self.pretrain else ""))
 
     @functools.cached_property
     def fidelity_spec(self) -> Fidelity:

@@ -243,8 +243,8 @@ def pretrain_arg(fn: str, pretrain: Any, worlds: Sequence[str]) -> int:
         raise err(fn, "pretrain", f"names the world {world!r}", "pretrain in 'grid' (to start "
                   "from a lower rung, train there and pass the Run as api.train's init)")
     if "physics" not in worlds:
-        raise err(fn, "pretrain", "applies to physics runs", "add 'physics' to worlds, or "
-                  "drop pretrain")
+        raise err(fn, "pretrain", "applies to physics runs", "pass world='physics', or drop "
+                  "pretrain")
     return whole(fn, "pretrain", episodes, 1, MAX_EPISODES, 300)
 
 

@@ -109,6 +109,12 @@ def build_parser() -> argparse.ArgumentParser:
     add_training_args(p, "grid (default) or physics")
     p.add_argument("--save", metavar="AGENT.npz", help="save the trained agent")
     p.add_argument("--resume", metavar="AGENT.npz", help="continue a saved grid run")
+    p.add_argument("--init", metavar="AGENT.npz",
+                   help="warm start: a physics run starts from this saved agent (trained in "
+                        "the grid or at a lower rung; its whole state carries over)")
+    p.add_argument("--pretrain", metavar="grid:N",
+                   help="a physics run first trains N episodes in the grid, then --episodes "
+                        "at the rung (e.g. grid:300)")
     p.add_argument("--json", metavar="FILE", help="also write the run's record as JSON")
     add_record_args(p)
     p.set_defaults(func=train.cmd_train)
@@ -141,6 +147,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder: results.json, summary.md, figures")
     p.add_argument("--resume", action="store_true", help="skip runs already finished in DIR")
+    p.add_argument("--pretrain", metavar="grid:N",
+                   help="every physics run first trains N episodes in the grid (common random "
+                        "numbers), then --episodes at the rung: how much robot time the grid "
+                        "saves (e.g. grid:300)")
     add_record_args(p)
     p.add_argument("--record-seeds", type=int, default=1, metavar="N",
                    help="record the first N seeds of each method in full, the others as "

@@ -14,6 +14,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from learning.jitcache import kernels_cached
+
+# the library's limits and defaults, the one definition of each (train, route and compare
+# use DEFAULT_REWARDS without --rewards)
+from scenarios.api_args import (  # noqa: F401  (re-exported)
+    DEFAULT_REWARDS,
+    MAX_EPISODES,
+    MAX_SEED,
+    MAX_SEEDS,
+)
 from scenarios.runs.spec import (  # noqa: F401  (physics_budget: re-exported)
     MAX_PHYSICS_STEPS_PER_EPISODE,
     WORLDS,
@@ -46,7 +55,6 @@ def parse_cell(text: str, flag: str) -> tuple[int, int]:
     return x, y
 
 
-DEFAULT_REWARDS = "goal-only"  # what train, route and compare use without --rewards
 
 
 def add_scenario_args(p: argparse.ArgumentParser, positional: bool = True,
@@ -164,8 +172,8 @@ def fidelity_arg(args: argparse.Namespace) -> Fidelity | None:
         raise CliError("command line", "--fidelity", f"{text!r} applies to the physics world "
                        f"only, and this run is in {worlds!r}",
                        "add --world physics (or grid,physics), or drop --fidelity")
-    fid = parse_fidelity(text)
-    return None if fid.is_exact and fid.name == "exact" else fid
+    # an explicit --fidelity wins over the scenario's [physics] table, exact included
+    return parse_fidelity(text)
 
 
 def add_record_args(p: argparse.ArgumentParser) -> None:
@@ -255,11 +263,6 @@ def check_world(world: str) -> str:
     return world
 
 
-# Limits on counts from the command line: far beyond any study, far below what would
-# exhaust memory before the first run (episode arrays are allocated up front).
-MAX_EPISODES = 10_000_000
-MAX_SEEDS = 10_000
-MAX_SEED = 2**63 - 1
 
 
 def positive(value: int, flag: str, limit: int | None = None) -> int:

@@ -24,6 +24,7 @@ from scenarios.cli.args import (
     starts_note,
     unique,
 )
+from scenarios.cli.flags import in_flag_words
 from scenarios.runs.spec import make_config
 from scenarios.sweep.brief import TERMINAL_COLUMNS
 from scenarios.sweep.outdir import record_path
@@ -59,16 +60,18 @@ def cmd_compare(args: argparse.Namespace) -> int:
          f"{sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
     compile_notice(len(methods), physics="physics" in worlds)
     out = Path(args.out)
-    cmp = api.compare(name, methods, worlds=worlds, fidelity=pb.fidelity, seeds=n_seeds,
-                      seed_base=seed_base, episodes=episodes,
-                      rewards="scenario" if pb.rewards is None else pb.rewards,
-                      settings=dict(overrides), jobs=args.jobs or os.cpu_count() or 1,
-                      backend=args.backend, address=args.address, out=out,
-                      resume=args.resume, record=record,
-                      record_every=100 if args.record_every is None else args.record_every,
-                      record_values_every=args.record_values_every,
-                      record_seeds=args.record_seeds, s_starts=pb.s_starts, start=pb.start,
-                      goal=pb.goal, progress=True)
+    with in_flag_words():  # the library checks (--pretrain's only check is there)
+        cmp = api.compare(pb.scenario, methods, worlds=worlds, fidelity=pb.fidelity,
+                          seeds=n_seeds,
+                          seed_base=seed_base, episodes=episodes,
+                          rewards="scenario" if pb.rewards is None else pb.rewards,
+                          settings=dict(overrides), jobs=args.jobs or os.cpu_count() or 1,
+                          backend=args.backend, address=args.address, out=out,
+                          resume=args.resume, record=record,
+                          record_every=100 if args.record_every is None else args.record_every,
+                          record_values_every=args.record_values_every,
+                          record_seeds=args.record_seeds, s_starts=pb.s_starts, start=pb.start,
+                          goal=pb.goal, progress=True, pretrain=args.pretrain)
     print(cmp.brief())
     _say(f"full tables and the pairwise verdicts: {out / 'summary.md'}; also results.json "
          f"and figures in {out}")

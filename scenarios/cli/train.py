@@ -24,6 +24,7 @@ from scenarios.cli.args import (
     seed_value,
     starts_note,
 )
+from scenarios.cli.flags import in_flag_words
 from scenarios.runs.spec import ExperimentError, make_config
 from scenarios.sweep.outdir import check_output_file, record_path
 from sim.files import atomic_write_text
@@ -60,18 +61,39 @@ def cmd_train(args: argparse.Namespace) -> int:
         ck = load_checkpoint(args.resume, args.method, model.n_states, geometry_of(model))
         print(f"resuming {args.resume}: {ck.episodes} of {args.episodes} episodes done, "
               f"training the other {max(args.episodes - ck.episodes, 0)}")
+    if args.init:
+        print(f"warm start from {args.init}")
     compile_notice(1, physics=args.world == "physics")
-    run = api.train(pb.scenario, args.method, world=args.world, fidelity=pb.fidelity,
-                    episodes=args.episodes, seed=args.seed,
-                    rewards="scenario" if pb.rewards is None else pb.rewards,
-                    record=record, settings=dict(overrides), s_starts=pb.s_starts,
-                    start=pb.start, goal=pb.goal, save=args.save, resume=args.resume,
-                    record_every=every, record_values_every=values_every)
+    with in_flag_words():  # the library checks --init and --pretrain (and says so in flags)
+        run = api.train(pb.scenario, args.method, world=args.world, fidelity=pb.fidelity,
+                        episodes=args.episodes, seed=args.seed,
+                        rewards="scenario" if pb.rewards is None else pb.rewards,
+                        record=record, settings=dict(overrides), s_starts=pb.s_starts,
+                        start=pb.start, goal=pb.goal, save=args.save, resume=args.resume,
+                        record_every=every, record_values_every=values_every,
+                        init=args.init, pretrain=args.pretrain)
     if record is not None:
         print(f"  recording             {record}  (open: rnhql view {record})")
     print_run(dict(run.record), model.optimal_route_length)
+    print_pretrain(run)
     if args.save:
         print(f"  saved agent           {args.save}")
     if args.json:
         atomic_write_text(args.json, json.dumps(dict(run.record), indent=1))  # OSError: exit 1
     return 0
+
+
+def print_pretrain(run) -> None:
+    """What a warm-started run's first phase cost and what its policy was worth at the rung."""
+    pre = run.pretrain
+    if not pre:
+        return
+    cost = (f"{pre['episodes']} grid episodes ({pre['env_steps']:,} moves)"
+            if pre["world"] == "grid" else
+            f"{pre['episodes']} episodes at {pre['fidelity']} "
+            f"({pre.get('robot_primitives', pre['env_steps']):,} primitives)")
+    pol = pre["policy"]
+    print(f"  first phase           {cost}; its policy here: P(G) {pol['p_goal']:.2f} over "
+          f"{pol['rollouts']} drives")
+    print(f"  robot time            {run.robot_primitives:,} primitives, "
+          f"{run.robot_seconds:,.1f} s simulated")

@@ -18,7 +18,6 @@ from learning.geometry import geometry_of
 from learning.plain.learner import is_plain
 from learning.streams import streams
 from scenarios.runs.physics import log_final, train_physics
-from scenarios.runs.warm import Carried, carried_of, pretrain_in_grid
 from scenarios.runs.spec import (
     ExperimentError,
     RunOutcome,
@@ -28,6 +27,7 @@ from scenarios.runs.spec import (
     run_record,
     scenario_digest,
 )
+from scenarios.runs.warm import Carried, carried_of, pretrain_in_grid
 from sim.files import atomic_write_bytes
 from sim.grid import TabularModel
 from sim.scenario import Scenario

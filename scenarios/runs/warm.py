@@ -23,9 +23,10 @@ from typing import Any
 
 import numpy as np
 
-from learning.drivers.checkpoint import load_checkpoint
+from learning.drivers.checkpoint import CheckpointError, load_checkpoint
 from learning.drivers.plain_train import train_plain
 from learning.drivers.train import train_tabular
+from learning.methods.registry import n_states_of
 from learning.plain.learner import is_plain, snapshot
 from sim.errors import InputError
 
@@ -93,7 +94,12 @@ def _continued(state: dict | None, fallback: np.random.Generator) -> np.random.G
 def carried_of_checkpoint(path: Path, n_states: int, geometry: Any) -> Carried:
     """A saved agent (``train(..., save=...)``, ``rnhql train --save``) as a warm start; a
     file of another format or size raises :class:`CheckpointError` naming it."""
-    ck = load_checkpoint(path, None, n_states, geometry)
+    ck = load_checkpoint(path)  # its format; its size and arrays are checked below
+    got = n_states_of(ck.state)
+    if got != n_states:
+        raise CheckpointError(f"{path}: was trained on a map of {got:,} cells, this scenario "
+                              f"has {n_states:,}; use an agent trained on this scenario")
+    ck.check_state(geometry)
     problem = ck.problem or {}
     world = problem.get("world", "grid")
     steps = np.asarray(ck.metrics.get("steps", ()))

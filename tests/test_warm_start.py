@@ -136,10 +136,12 @@ def test_an_init_that_cannot_start_this_run_is_refused_before_any_work(kwargs, w
 
 
 def test_an_init_from_another_layout_of_the_same_size_is_refused():
-    """Same map size, other S: the layout digest tells them apart."""
-    grid = api.train("paper-40", "haql", episodes=5, seed=0)
+    """Same map size, another S: the layout digest tells them apart."""
+    a = rnhql.Scenario(name="a", width_m=10.0, height_m=10.0, start=(1, 1), goal=(8, 8))
+    b = rnhql.Scenario(name="b", width_m=10.0, height_m=10.0, start=(2, 1), goal=(8, 8))
+    grid = api.train(a, "haql", episodes=5, seed=0)
     with pytest.raises(InputError, match="another scenario"):
-        api.train("paper-40", "haql", world="physics", episodes=1, init=grid, start=(2, 2))
+        api.train(b, "haql", world="physics", episodes=1, init=grid)
 
 
 def test_a_checkpoint_of_another_format_or_a_run_without_a_learner_is_refused(tmp_path):

@@ -281,3 +281,61 @@ def crosscheck_rows(ds: list[dict[str, Any]]) -> str:
                      f"{f(a['bump_agree'])} | {f(a['bump_gap'])} | {f(a['class_agree'])} | "
                      f"{f(a['tv'])} | {f(blocked['class_agree'])} | {pol} | {prim} |")
     return "\n".join(lines) + "\n"
+
+
+# ---------------------------------------------------------------- learn on the grid, finish
+#                                                                  at the rung (warm_start)
+
+
+def _ratio(warm: list[float | None], scratch: list[float | None]) -> str:
+    """Warm's median robot primitives to reach (a)'s P(G) as a share of scratch's."""
+    w, s = warm[0], scratch[0]
+    if w is None:
+        return "warm never"
+    if s is None:
+        return "scratch never"
+    return "—" if s == 0 else f"{w / s:.0%}"
+
+
+@renderer("warm-start")
+def warm_start_table(d: dict[str, Any]) -> str:
+    """Per rung, map and method: (a) the grid's policy driven at the rung, (b) trained at the
+    rung from scratch, (c) pretrained in the grid then trained at the rung (P(G) at the
+    largest budget, median [q25, q75] over seeds); c minus the better of a and b, paired by
+    seed, with its 95 % bootstrap interval; robot primitives to stably reach (a)'s P(G)."""
+    top = d["budgets"][-1]
+    lines = [f"P(G) of the final policy driven 50 times at the rung, median [q25, q75] over "
+             f"seeds; (a) after {d['grid_episodes']} grid episodes, (b) and (c) after {top} "
+             f"episodes at the rung ((c) after the same grid phase as (a)). c − better: the "
+             f"median over seeds of (c) minus the better arm of (a) and (b), with its 95 % "
+             f"bootstrap interval. Reach: robot primitives from which P(G) stays within "
+             f"{d['reach_slack']:.2f} of (a)'s, at every later budget "
+             f"({', '.join(map(str, d['budgets']))} episodes), median [q25, q75] over seeds "
+             "(seeds that got there).", "",
+             "| rung | map | method | (a) grid's policy | (b) rung only | (c) grid, then rung | "
+             "c − better [95 % CI] | reach (a): grid, then rung | reach (a): rung only | "
+             "share |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in d["rows"]:
+        diff = r["c_minus_better"]
+        rw, rs = r["reach_warm"], r["reach_scratch"]
+        lines.append(
+            f"| `{r['rung']}` | {r['map']} | {r['name']} | {_q(r['a_p_goal'], 2)} | "
+            f"{_q(r['b_p_goal'], 2)} | {_q(r['c_p_goal'], 2)} | "
+            f"{diff[0]:+.2f} [{diff[1]:+.2f}, {diff[2]:+.2f}] vs ({r['better_of_ab']}) | "
+            f"{_q(rw['q'])} ({rw['reached']}/{rw['seeds']}) | "
+            f"{_q(rs['q'])} ({rs['reached']}/{rs['seeds']}) | {_ratio(rw['q'], rs['q'])} |")
+    return "\n".join(lines) + "\n"
+
+
+def warm_start_verdicts(d: dict[str, Any]) -> str:
+    """The study's findings in figures: per rung, how many map x method cells continued
+    learning lowered, raised or left (c) against the better of (a) and (b)."""
+    out = []
+    for rung in dict.fromkeys(r["rung"] for r in d["rows"]):
+        rows = [r for r in d["rows"] if r["rung"] == rung]
+        n = {v: sum(r["verdict"] == v for r in rows)
+             for v in ("higher", "lower", "no evidence of a difference")}
+        out.append(f"at `{rung}` (c) is higher than the better of (a) and (b) in "
+                   f"{n['higher']} of {len(rows)} map × method cells, lower in {n['lower']}, "
+                   f"no evidence of a difference in {n['no evidence of a difference']}")
+    return "; ".join(out)

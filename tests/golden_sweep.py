@@ -34,7 +34,8 @@ WALL_KEYS = ("wall_time_s", "wall_time_per_episode_s")
 # read-outs added to the record after these digests were measured: the final greedy policy
 # (every cell's action) is read from the same trained state the other fields describe, so
 # it is left out, and the digests (and the behaviour digests of the docs' tables) stand
-READOUT_KEYS = ("greedy_policy",)
+# robot_seconds (a physics run's sim_time_per_episode_s summed) likewise
+READOUT_KEYS = ("greedy_policy", "robot_seconds")
 
 
 def sweep_specs() -> list[Any]:

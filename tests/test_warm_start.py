@@ -22,7 +22,7 @@ UNTIMED = ("wall_time_s", "wall_time_per_episode_s", "key")
 
 def differing(a: dict, b: dict) -> list[str]:
     """Fields of two records that differ, wall-clock fields aside (the phase's own too)."""
-    out = [k for k in a if k not in UNTIMED + ("pretrain",) and a[k] != b.get(k)]
+    out = [k for k in a if k not in (*UNTIMED, "pretrain") and a[k] != b.get(k)]
     pa, pb = a.get("pretrain"), b.get("pretrain")
     if (pa is None) != (pb is None):
         return [*out, "pretrain"]

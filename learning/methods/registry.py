@@ -47,10 +47,11 @@ from learning.methods.haql import HAQL
 from learning.methods.pfh_rl import PFHRL
 from learning.methods.q_lambda import QLambda
 from learning.methods.q_learning import STQL, QOpt
-from learning.methods.references import fsa_replan, lrta_star, r_max
+from learning.methods.references import fsa_replan, lrta_star, mf_r_max, r_max
 from learning.methods.references.abstraction_ql import AbstractionQL
 from learning.methods.references.fsa_replan import FSAReplan
 from learning.methods.references.lrta_star import LRTAStar
+from learning.methods.references.mf_r_max import MFRMax
 from learning.methods.references.r_max import RMax
 from learning.methods.rn_ql import RNQL
 from learning.methods.rnh_ql import RNHQL
@@ -85,6 +86,9 @@ _TABLE: tuple[tuple[type[MethodConfig], ModuleType, bool], ...] = (
     # method told the map (coarsely) before its first step, so not in the default list of
     # methods that learn an unknown map; its row says what such a prior is worth
     (AbstractionQL, pfh_rl, False),  # PFH-RL's rules, its own static Φ
+    # R-max over levels of fidelity (the grid, then a physics rung), run on request: the
+    # learn-on-the-grid study's reference (docs/ladder.md)
+    (MFRMax, mf_r_max, False),
 )
 HOOKS = ("State", "init_state", "act", "update", "begin", "exploit")
 # each compiled hook's parameters, as learning.compiled.hooks calls it

@@ -7,6 +7,8 @@ the classic ways of learning a route in a map that is not known.
   Lite, Koenig & Likhachev 2002), replanned after every move;
 * :mod:`.r_max`: model-based RL with optimism (Brafman & Tennenholtz 2002), an untried
   move valued by the free-space distance (Asmuth, Littman & Zinkov 2008);
+* :mod:`.mf_r_max`: R-max over levels of fidelity (Cutler, Walsh & How 2015), the grid's
+  values and known moves carried to a physics rung, trusted until contradicted;
 * :mod:`.abstraction_shaping`: Q-learning shaped by the value of a coarser abstraction of
   the map (after Cipollone et al. 2023), the modern form of SARSA-RS's coarse-grid Φ.
 

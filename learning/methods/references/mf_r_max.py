@@ -1,0 +1,153 @@
+"""Multi-fidelity R-max (``mf-r-max``; Cutler, Walsh & How, "Real-World Reinforcement
+Learning via Multifidelity Simulators", IEEE T-RO 2015), over the grid and a physics rung.
+
+Cutler et al. learn in a chain of simulators of rising fidelity with an R-max learner at
+each level. Three rules tie the levels, and this module keeps two of them:
+
+1. **Values passed up as optimistic priors.** A move the rung has not learned is valued by
+   the level below's value of where it leads, not by R-max's R_max/(1-γ) (here: not by the
+   free-space distance Φ of :mod:`.r_max`): at the switch, Φ of every cell becomes its
+   cost to G under the grid's learned model, where the grid knows one (it is never below
+   the free-space distance, and the rung is no cheaper than the grid: still admissible).
+2. **Known moves trusted until the rung contradicts them.** A move the grid knew keeps its
+   model at the rung (no robot time spent re-learning it) until the rung shows an outcome
+   the model says cannot happen (a bump on a move known free, a clean arrival on one known
+   to bump). Then the move is unknown again and is learned at the rung from ``m_rung``
+   tries (its model then the rung's bump rate, not the grid's 0 or 1). This is R-max's
+   "update only on evidence": nothing the rung has not contradicted is changed.
+3. **The switching rule** (up when the level below has converged, down when the rung
+   meets moves unknown below) is where this departs: the switch up is the caller's budget
+   (``pretrain=("grid", n)`` or ``init=``), and the learner never goes back down. With the
+   grid as the only level below, going down could teach the grid nothing: it is
+   deterministic and its model is fixed by the map; a move unknown below is explored at the
+   rung with the optimism of rule 1.
+
+Before the switch (the grid, or a run with no level below) this is :mod:`.r_max` with
+``m`` tries, run for run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar, NamedTuple
+
+import numpy as np
+from numba import njit
+
+from learning.config import MethodConfig, params_tuple
+from learning.geometry import Geometry
+from learning.methods.references import r_max
+from learning.methods.references.r_max import Plan, Search
+from learning.parts.move_reading import MoveReading, read_move
+from learning.parts.tabular import begin_plain, least_seen_to_work
+from learning.parts.tally import Tally
+
+HOOK = dict(cache=True, inline="always")
+
+Params = params_tuple("Params", __name__, m=int, m_rung=int)
+
+
+@dataclass(frozen=True)
+class MFRMax(MethodConfig):
+    """R-max at each level; the grid's values as the rung's optimistic prior, the grid's
+    known moves trusted at the rung until contradicted."""
+
+    name: ClassVar[str] = "MF-R-max"
+    cli: ClassVar[str] = "mf-r-max"
+    eps: float = 0.0  # probability of a uniformly random move (0: R-max's own)
+    m: int = 1  # tries after which a move is known in the grid (and at a first level) [tries]
+    m_rung: int = 5  # tries at the rung of a move the rung contradicted [tries]
+    IGNORED: ClassVar[tuple[str, ...]] = ("alpha", "gamma")  # a model is learned, not Q
+
+    params_type: ClassVar[type] = Params
+
+
+class State(NamedTuple):
+    par: Params
+    tally: Tally
+    neighbour: np.ndarray  # int32[nS, nA]; the arena cell each move heads for (-1: off)
+    phi: np.ndarray  # float64[nS]; the prior cost to G of a cell [moves]: the free-space
+    #                  distance, at a rung the grid's cost where it knew one
+    tries: np.ndarray  # int32[nS, nA]; tries of each move, up to the level's m
+    clean: np.ndarray  # int32[nS, nA]; clean arrivals among those tries
+    version: np.ndarray  # int64[1]; the model's version (moves that became known or reopened)
+    plan: Plan
+    reading: MoveReading
+    cost: np.ndarray  # float64[nS]; scratch, as R-max's
+    cost_version: np.ndarray  # int64[1]
+    search: Search
+    keys: np.ndarray  # float64[nA]
+    below: np.ndarray  # int8[nS, nA]; 1: known from the level below, trusted until contradicted
+    level: np.ndarray  # int64[1]; levels climbed (0: the first world it learned in)
+
+
+DERIVED = r_max.DERIVED
+
+
+def init_state(cfg: MFRMax, geom: Geometry, rng: np.random.Generator) -> State:
+    base = r_max.init_state(cfg, geom, rng)
+    n_s, n_a = geom.n_states, geom.n_actions
+    return State(cfg.params(), *base[1:], np.zeros((n_s, n_a), np.int8),
+                 np.zeros(1, np.int64))
+
+
+def carry(st: State) -> State:
+    """The switch up a level (a warm start's first act): every known move's model scaled to
+    ``m_rung`` tries and marked as known below; Φ the grid's costs where it knew one."""
+    r_max.refresh_costs(st)
+    m, m_rung = int(st.par.m), int(st.par.m_rung)
+    known = st.tries >= m
+    bumps = known & (st.clean == 0)
+    st.below[...] = known.astype(np.int8)
+    st.tries[...] = np.where(known, m_rung, 0)
+    st.clean[...] = np.where(known & ~bumps, m_rung, 0)
+    prior = np.where(np.isfinite(st.cost), np.maximum(st.cost, st.phi), st.phi)
+    st.phi[...] = prior
+    st.version[0] += 1
+    st.plan.at[0] = -1
+    st.level[0] += 1
+    return st._replace(par=st.par._replace(m=m_rung))
+
+
+@njit(**HOOK)
+def act(st, s, rng):
+    return r_max.act(st, s, rng)
+
+
+@njit(**HOOK)
+def update(st, s, a, r, s2, terminated, rng):
+    """R-max's count; a move known below that the rung contradicts is unknown again, to be
+    learned from the rung's own tries."""
+    clean = read_move(st.reading.r_stay, st.reading.r_clean, s, r, s2, terminated)
+    if st.below[s, a] == 1:
+        free = st.clean[s, a] > 0
+        if clean == free:
+            return  # as the level below said: trusted, nothing to learn
+        st.below[s, a] = 0
+        st.tries[s, a] = 0
+        st.clean[s, a] = 0
+        st.version[0] += 1  # the route through it is replanned
+    if st.tries[s, a] < st.par.m:
+        st.tries[s, a] += 1
+        if clean:
+            st.clean[s, a] += 1
+        if st.tries[s, a] == st.par.m:
+            st.version[0] += 1
+
+
+begin = begin_plain
+
+
+@njit(**HOOK)
+def exploit(st, s):
+    r_max.refresh_costs(st)
+    r_max.move_costs(st, s, st.keys)
+    return least_seen_to_work(st.keys, st.clean[s], 1)
+
+
+def q_table(st: State) -> np.ndarray:
+    return r_max.q_table(st)
+
+
+def n_states(st: State) -> int:
+    return int(st.phi.shape[0])

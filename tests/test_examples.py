@@ -14,7 +14,7 @@ import pytest
 REPO = Path(__file__).resolve().parent.parent
 EXAMPLES = REPO / "examples"
 SB3_EXAMPLES = ["sb3_dqn_route.py", "sb3_ppo_diffdrive.py", "sb3_vec_env.py", "sb3_graded.py"]
-SCRIPTS = ["script_circles.py", "script_own_learner.py"]
+SCRIPTS = ["script_circles.py", "script_own_learner.py", "script_grid_then_robot.py"]
 
 
 def run_example(name: str, tmp_path: Path, scale: str = "0.01") -> str:
@@ -93,3 +93,12 @@ def test_python_api_compare(tmp_path):
     cmp = api.compare("rooms-102", ["q-opt"], seeds=2, episodes=20, jobs=1,
                       out=tmp_path / "cmp")
     assert len(cmp.runs) == 2 and (tmp_path / "cmp" / "summary.md").exists()
+
+
+def test_script_grid_then_robot(tmp_path):
+    """A plain learner pretrained in the grid, finished at slip, against the rung alone."""
+    out = run_example("script_grid_then_robot.py", tmp_path)
+    for line in ("grid: COUNT-Q (grid, seed 0)", "the grid's policy at slip, before any robot "
+                 "time: P(G) ", "grid, then robot: P(G) ", "robot only: P(G) ",
+                 "robot time saved by the grid: "):
+        assert line in out, out

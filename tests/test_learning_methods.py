@@ -15,9 +15,9 @@ from learning.methods.registry import FAMILY_OF_CONFIG, comparison_methods
 def test_registry_names():
     assert list(METHODS) == ["rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql",
                              "q-opt", "q-lambda", "dyna-q", "lrta-star", "fsa-replan", "r-max",
-                             "rnh-ql+ablation", "rnh-ql+explore", "abstraction-ql"]
-    # all but the ablation's method and rnh-ql+'s named variant
-    assert comparison_methods() == tuple(METHODS)[:-3]
+                             "rnh-ql+ablation", "rnh-ql+explore", "abstraction-ql", "mf-r-max"]
+    # all but the ablation's method, rnh-ql+'s named variant and the run-on-request references
+    assert comparison_methods() == tuple(METHODS)[:-4]
     assert METHODS["rnh-ql"].name == "RNH-QL" and METHODS["st-ql"].name == "ST-QL"
     for cli, cls in METHODS.items():
         assert cls.cli == cli and cls in FAMILY_OF_CONFIG

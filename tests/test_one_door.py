@@ -10,7 +10,7 @@ import pytest
 
 import rnhql
 from scenarios.cli import main
-from scenarios.cli.flags import FLAG_OF, flag_words
+from scenarios.cli.args import FLAG_OF, flag_words
 from sim.errors import InputError
 
 UNTIMED = ("wall_time_s", "wall_time_per_episode_s")

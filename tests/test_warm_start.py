@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import rnhql
-from learning.methods.registry import comparison_methods
+from learning.methods.registry import METHODS, comparison_methods
 from scenarios import api
 from scenarios.cli import main
 from sim.errors import InputError
@@ -67,9 +67,10 @@ def test_a_warm_start_carries_the_learned_state():
 
 
 def test_every_registered_method_warm_starts_in_physics():
-    """Every comparison method (and the multi-fidelity reference) runs a pretrained physics
-    run: the sweep's target, every method can start from the grid."""
-    methods = list(dict.fromkeys([*comparison_methods(), "mf-r-max"]))
+    """Every registered method (the compared ones, the named variants and the references run
+    on request, mf-r-max among them) runs a pretrained physics run."""
+    methods = list(METHODS)
+    assert set(comparison_methods()) < set(methods) and "mf-r-max" in methods
     cmp = api.compare("paper-40", methods, worlds="physics", seeds=1, episodes=2,
                       pretrain=("grid", 5), jobs=1)
     assert len(cmp.runs) == len(methods)
@@ -158,3 +159,19 @@ def test_a_checkpoint_of_another_format_or_a_run_without_a_learner_is_refused(tm
         api.compare("paper-40", ["haql"], pretrain=("grid", 5))  # grid-only sweep
     with pytest.raises(InputError, match="pretrain"):
         api.compare("paper-40", ["haql"], worlds="physics", pretrain=("physics", 5))
+
+
+def test_a_pretrained_run_records_both_phases_in_one_recording(tmp_path):
+    """The grid phase under grid_phase/ (its curves, routes and map), the rung's at the top."""
+    pytest.importorskip("datafusion")
+    import rerun as rr
+
+    path = tmp_path / "two.rrd"
+    run = api.train("paper-40", "haql", world="physics", fidelity="noisy", episodes=5,
+                    pretrain=("grid", 20), record=path)
+    assert run.recording == path and path.exists()
+    with rr.server.Server(host="127.0.0.1", datasets={"d": [str(path)]}) as server:
+        cols = server.client().get_dataset("d").filter_contents(["/**"]).reader(
+            index="episode").to_arrow_table().column_names
+    assert "/grid_phase/metrics/return:Scalars:scalars" in cols
+    assert "/metrics/return:Scalars:scalars" in cols

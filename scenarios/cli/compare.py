@@ -14,6 +14,7 @@ from scenarios.cli.args import (
     MAX_SEEDS,
     check_world,
     compile_notice,
+    in_flag_words,
     parse_list,
     parse_overrides,
     physics_budget,
@@ -24,7 +25,6 @@ from scenarios.cli.args import (
     starts_note,
     unique,
 )
-from scenarios.cli.flags import in_flag_words
 from scenarios.runs.spec import make_config
 from scenarios.sweep.brief import TERMINAL_COLUMNS
 from scenarios.sweep.outdir import record_path

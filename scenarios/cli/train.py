@@ -15,6 +15,7 @@ from scenarios.cli.args import (
     MAX_EPISODES,
     check_world,
     compile_notice,
+    in_flag_words,
     parse_overrides,
     physics_budget,
     positive,
@@ -24,7 +25,6 @@ from scenarios.cli.args import (
     seed_value,
     starts_note,
 )
-from scenarios.cli.flags import in_flag_words
 from scenarios.runs.spec import ExperimentError, make_config
 from scenarios.sweep.outdir import check_output_file, record_path
 from sim.files import atomic_write_text

@@ -61,10 +61,7 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
         problem["fidelity"] = spec.fidelity_spec.label
     rs = streams(spec.seed)  # the same streams as a run of `rnhql compare`
     rng, start_rng = rs.learner, rs.starts
-    if spec.pretrain and spec.world == "physics":
-        init = pretrain_in_grid(spec.method, cfg, model, spec.pretrain, spec.test_every,
-                                rng, start_rng)
-    elif init is not None:
+    if init is not None:
         rng, start_rng = init.generators(rng, start_rng)
     checkpoint = None
     if resume:
@@ -83,6 +80,11 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
                                              if spec.world == "physics" else None))
         observer = GridRecorder(recorder, plan)
     try:
+        if spec.pretrain and spec.world == "physics":  # the grid phase first, recorded too
+            init = pretrain_in_grid(spec.method, cfg, model, spec.pretrain, spec.test_every,
+                                    rng, start_rng, _phase_recorder(recorder, spec, sc, model,
+                                                                    cfg, record_every,
+                                                                    record_values_every))
         if spec.world == "grid":
             if plain:
                 result = train_plain(cfg, model, spec.episodes, rng, spec.test_every,
@@ -120,3 +122,20 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
                          spec.fidelity_spec.label if spec.world == "physics" else None,
                          problem["layout"], int(model.n_states), "init (a Run)")
     return run_record(spec, cfg, RunOutcome.of(result, eps_routes)), carried
+
+
+def _phase_recorder(recorder: Any, spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any,
+                    every: int, values_every: int) -> Any:
+    """The grid phase of a pretrained run, recorded into the run's own recording under
+    ``grid_phase/`` (its map, curves, routes and heat maps; the rung's phase is the
+    recording's top level): both phases in one file."""
+    if recorder is None:
+        return None
+    from scenarios.recording.hooks import GridRecorder, RecordPlan
+    from scenarios.recording.recorder import Recorder
+
+    phase = Recorder.create(None, sc, model, method=spec.method, config=cfg, seed=spec.seed,
+                            world="grid", prefix="grid_phase", file=recorder.file,
+                            blueprint=False)
+    return GridRecorder(phase, RecordPlan(spec.pretrain, every=every,
+                                          values_every=values_every))

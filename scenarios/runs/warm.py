@@ -144,12 +144,14 @@ def carried_of(method: str, result: Any, learner_rng: np.random.Generator | None
 
 
 def pretrain_in_grid(method: str, cfg: Any, model: Any, episodes: int, test_every: int,
-                     learner_rng: np.random.Generator, start_rng: np.random.Generator
-                     ) -> Carried:
+                     learner_rng: np.random.Generator, start_rng: np.random.Generator,
+                     observer: Any = None) -> Carried:
     """The grid phase of a pretrained run: ``episodes`` in the grid on the run's own learner
-    and start streams (which continue into the rung's phase: common random numbers)."""
+    and start streams (which continue into the rung's phase: common random numbers);
+    ``observer``: a recording of the phase (it changes nothing about the run)."""
     train = train_plain if is_plain(cfg) else train_tabular
-    result = train(cfg, model, episodes, learner_rng, test_every, start_rng=start_rng)
+    result = train(cfg, model, episodes, learner_rng, test_every, observer=observer,
+                   start_rng=start_rng)
     c = carried_of(method, result, None, None, "grid", None, None, int(model.n_states),
                    "the grid phase")
     return c

@@ -359,6 +359,18 @@ def render_text(name: str, text: Any) -> None:
     cog_out(f"{head}{text(doc['data']).rstrip()}\n\n{parts[-1]}\n")
 
 
+def render_wall(name: str, what: str) -> None:
+    """For a Cog block: how long the study behind artifact ``name`` took (its ``wall_s``, the
+    machine's cores and load), in a sentence starting with ``what``."""
+    doc = load_artifact(name)
+    wall, m = doc.get("wall_s"), doc.get("machine") or {}
+    took = "an unknown time" if wall is None else (f"{wall:,.0f} s ({wall / 60:.1f} min)")
+    cores = m.get("cores")
+    cog_out(f"{what} took {took}" + (f" on {cores} cores" if cores else "")
+            + f" (`{doc['command']}`, {doc['date']}, at {doc['code_version']})."
+            + busy_note(doc) + "\n")
+
+
 def legacy_note(command: str, known: str = "") -> str:
     """The banner above a table typed by hand before tables were generated: its figures are
     unverified until the study is re-run with ``--artifact`` and the table replaced."""

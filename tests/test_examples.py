@@ -64,7 +64,7 @@ def test_script_circles(tmp_path):
 def test_script_own_learner(tmp_path):
     """A plain-Python learner defined in the script, against rnh-ql+ and st-ql."""
     out = run_example("script_own_learner.py", tmp_path)
-    for line in ("| __main__:CountBonusQ | grid | 2 |", "COUNT-Q: final route optimal in ",
+    for line in ("| COUNT-Q | grid | 2 |", "COUNT-Q: final route optimal in ",
                  "RNH-QL+: final route optimal in ", "ST-QL: final route optimal in "):
         assert line in out, out
 

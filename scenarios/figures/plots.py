@@ -15,6 +15,7 @@ from learning.metrics import windowed_reward_per_step
 from scenarios.figures.mpl import pyplot
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
+from scenarios.runs.results import shown_name
 from sim.grid import TabularModel
 from sim.grid.planning import bfs_route
 from sim.scenario import Scenario
@@ -62,7 +63,8 @@ def curve_figure(results: dict[str, Any], key: str, ylabel: str, path: Path,
         y = np.array([_series(r, key, window) for r in runs])
         x = np.arange(y.shape[1]) + (window // 2 if y.shape[1] < n_episodes else 0)
         q25, med, q75 = np.percentile(y, [25, 50, 75], axis=0)
-        label = method if len({w for _, w in _groups(results)}) == 1 else f"{method} ({world})"
+        name = shown_name(method)
+        label = name if len({w for _, w in _groups(results)}) == 1 else f"{name} ({world})"
         colour = method_colour_mpl(method)
         ax.plot(x, med, color=colour, lw=1.4, label=label,
                 ls="-" if world == "grid" else "--")
@@ -112,7 +114,7 @@ def greedy_test_figure(results: dict[str, Any], path: Path) -> None:
     several_worlds = len({w for _, w in groups}) > 1
     for (method, world), runs in groups.items():
         x, share = optimal_share(runs)
-        label = f"{method} ({world})" if several_worlds else method
+        label = f"{shown_name(method)} ({world})" if several_worlds else shown_name(method)
         ax.step(x, share, where="post", color=method_colour_mpl(method), lw=1.6, label=label,
                 ls="-" if world == "grid" else "--", alpha=0.85)
     ax.set_xlabel("episodes trained")

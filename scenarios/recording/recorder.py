@@ -56,6 +56,7 @@ from scenarios.recording import blueprint as layouts
 from scenarios.recording import scene
 from scenarios.recording.batch import EpisodeRecord, ValueFrame, send_episodes, send_values
 from scenarios.recording.file import RecordingFile, rerun_cli, verify_recording
+from scenarios.runs.results import shown_name
 from sim.grid import TabularModel
 from sim.grid.actions import ACTION_DELTAS
 from sim.scenario import Scenario
@@ -130,7 +131,8 @@ class Recorder:
             if path is None:
                 raise ValueError("give a path or a shared RecordingFile")
             shown = world if fidelity is None else f"{world} ({fidelity})"
-            name = recording_name or f"{scenario.name} · {method} · s{seed} · {shown}"
+            name = recording_name or (f"{scenario.name} · {shown_name(method)} · s{seed} · "
+                                      f"{shown}")
             file = RecordingFile(path, application_id=application_id,
                                  recording_id=recording_id, recording_name=name)
         rec = cls(file, prefix, scenario, model, world=world, owns_file=owns,
@@ -155,7 +157,7 @@ class Recorder:
         else:  # its per-seed curves stay in the file, every 10th episode (the comparison's
             rec.curve_stride = 10  # summary curves use every episode of every seed)
         if rec.prefix:  # one of several runs in a file: label and colour its curves
-            scene.log_series_styles(st, rec.prefix, label=f"{method} s{seed}",
+            scene.log_series_styles(st, rec.prefix, label=f"{shown_name(method)} s{seed}",
                                     colour=scene.method_colour(method))
         else:
             scene.log_series_styles(st, rec.prefix)

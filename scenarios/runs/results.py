@@ -63,6 +63,7 @@ from typing import Any
 
 import numpy as np
 
+from learning.methods.registry import config_class, is_located
 from scenarios.runs.statistics import (
     LEVEL,
     N_RESAMPLES,
@@ -235,7 +236,8 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
     for m in methods:
         for world, e in summ.get(m, {}).items():
             lines.append(
-                f"| {m} | {world} | {e['seeds']} | {e['optimal_route_fraction']:.0%} | "
+                f"| {shown_name(m)} | {world} | {e['seeds']} | "
+                f"{e['optimal_route_fraction']:.0%} | "
                 f"{_fmt(e['episodes_to_stable_optimal'])} | "
                 f"{_fmt_ci(e['episodes_to_stable_optimal'])} | "
                 f"{_fmt(e['episodes_to_optimal'])} | "
@@ -270,7 +272,7 @@ def _policy_table(summ: dict[str, Any], methods: list[str], fid: str | None,
            "|---|---|---|---|---|---|"]
     for m, e in rows:
         at_f = e.get("optimal_at_fidelity_fraction")
-        out.append(f"| {m} | {_fmt(e['final_policy_p_goal'], 2)} | "
+        out.append(f"| {shown_name(m)} | {_fmt(e['final_policy_p_goal'], 2)} | "
                    f"{e['final_policy_reliable_fraction']:.0%} | "
                    f"{'–' if at_f is None else f'{at_f:.0%}'} | "
                    f"{_fmt(e['final_policy_primitives_mean'], 1, missing='no G')} | "
@@ -293,8 +295,21 @@ OURS = ("rnh-ql", "rnh-ql+")  # the methods the verdict speaks for
 
 
 def _name(method: str) -> str:
-    """RNH-QL by its name (as the verdict always has); every other method by its key."""
-    return "RNH-QL" if method == "rnh-ql" else method
+    """RNH-QL by its name (as the verdict always has); every other method as tables show it
+    (:func:`shown_name`)."""
+    return "RNH-QL" if method == "rnh-ql" else shown_name(method)
+
+
+def shown_name(method: str) -> str:
+    """How tables, figures and verdicts name a method: its key (``rnh-ql+``), or, for a
+    learner of one's own (``module:Class``), the ``name`` it declares ("how tables name it");
+    its key where the class cannot be imported here (a results.json read elsewhere)."""
+    if not is_located(method):
+        return method
+    try:
+        return str(config_class(method).name)
+    except (ValueError, ImportError, AttributeError):
+        return method
 
 
 def ranked_figure(summ_world: dict[str, dict[str, Any]]) -> tuple[str, bool, str]:
@@ -339,6 +354,7 @@ def _qualifier(ours: str, ests: dict[str, Estimate]) -> str:
     better = [m for m, e in ests.items() if e.lo > 0.5]
     worse = [m for m, e in ests.items() if e.hi < 0.5]
     none = [m for m, e in ests.items() if e.contains(0.5)]
+    better, worse, none = ([_name(m) for m in ms] for ms in (better, worse, none))
     parts = ([f"{_name(ours)} is better than {', '.join(better)}"] if better else []) + \
             ([f"no evidence of a difference from {', '.join(none)}"] if none else []) + \
             ([f"{', '.join(worse)} {'is' if len(worse) == 1 else 'are'} better"]
@@ -356,7 +372,7 @@ def _comparison_lines(results: dict[str, Any], world: str,
     for (a, b), est in ests.items():
         n_a = sum(1 for r in results["runs"] if r.get("method") == a and r.get("world") == world)
         n_b = sum(1 for r in results["runs"] if r.get("method") == b and r.get("world") == world)
-        out.append(f"  - {_name(a)} vs {b}: P({_name(a)} better) = {est.value:.2f}, "
+        out.append(f"  - {_name(a)} vs {_name(b)}: P({_name(a)} better) = {est.value:.2f}, "
                    f"{LEVEL * 100:g} % CI [{est.lo:.2f}, {est.hi:.2f}] on {label}, "
                    f"{n_a} × {n_b} seeds: {_outcome(a, b, est)}.")
     return out
@@ -374,7 +390,7 @@ def verdict(results: dict[str, Any]) -> list[str]:
     for world in worlds:
         scored = {m: _score(e[world]) for m, e in summ.items() if world in e}
         best = min(scored.values())
-        leaders = sorted(m for m, sc in scored.items() if sc == best)
+        leaders = [shown_name(m) for m in sorted(m for m, sc in scored.items() if sc == best)]
         none_optimal = all(summ[m][world]["optimal_route_fraction"] == 0 for m in scored)
         ests: dict[tuple[str, str], Estimate] = {}
         for ours in (m for m in OURS if m in scored):
@@ -390,8 +406,8 @@ def verdict(results: dict[str, Any]) -> list[str]:
                          f"seed within {results['episodes']} episodes.")
         if none_optimal and "rnh-ql" in scored:  # a "win" here would only be on the rest
             pos = 1 + sum(sc < scored["rnh-ql"] for sc in scored.values())
-            tied = sorted(m for m, sc in scored.items()
-                          if m != "rnh-ql" and sc == scored["rnh-ql"])
+            tied = [shown_name(m) for m in sorted(m for m, sc in scored.items()
+                                                  if m != "rnh-ql" and sc == scored["rnh-ql"])]
             lines.append(f"- {world}: on the rest of the ranking ({RANKING}) RNH-QL ranks "
                          f"{pos} of {len(scored)}"
                          + (f", tied with {', '.join(tied)}" if tied else "")

@@ -7,7 +7,7 @@ from __future__ import annotations
 import textwrap
 from typing import Any
 
-from scenarios.runs.results import verdict
+from scenarios.runs.results import shown_name, verdict
 
 
 def _ci(stat: dict[str, Any]) -> str:
@@ -38,14 +38,15 @@ def summary_terminal(results: dict[str, Any], method_order: list[str] | None = N
             + f"; optimum {results['optimal_route_length']} moves (BFS)")
     any_physics = any("final_policy_p_goal" in e for m in methods
                       for e in summ.get(m, {}).values())
-    name_w = min(24, max(len("method"), *(len(m) for m in methods)))
+    names = {m: shown_name(m) for m in methods}
+    name_w = min(24, max(len("method"), *(len(n) for n in names.values())))
     cols = [("method", name_w), ("world", 7), ("optimal", 7),
             ("stable optimal after: median [95 % CI]", 38), ("success", 7)]
     if any_physics:
         cols.append(("P(G)", 4))
     rows = [" ".join(t.ljust(w) for t, w in cols).rstrip()]
     for m in methods:
-        shown = m if len(m) <= name_w else m[:name_w - 1] + "…"
+        shown = names[m] if len(names[m]) <= name_w else names[m][:name_w - 1] + "…"
         for world, e in summ.get(m, {}).items():
             stat = e["episodes_to_stable_optimal"]
             med = stat.get("median")

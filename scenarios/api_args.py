@@ -218,7 +218,7 @@ def init_arg(fn: str, init: Any, method: str, world: str, sc: Scenario, layout: 
                   "or the path of a saved agent (.npz)")
     if not isinstance(carried, Carried):
         raise err(fn, "init", "carries no learner", "pass a Run returned by api.train")
-    carried.check(method, layout, n_states, "init", f"scenarios.api.{fn}")
+    carried.check(method, layout, n_states, sc.rewards.label(), "init", f"scenarios.api.{fn}")
     return carried
 
 
@@ -244,8 +244,12 @@ def pretrain_arg(fn: str, pretrain: Any, worlds: Sequence[str]) -> int:
                   "from a lower rung, train there and pass the Run as api.train's init)")
     if "physics" not in worlds:
         raise err(fn, "pretrain", "applies to physics runs", "pass world='physics', or drop "
-                  "pretrain")
-    return whole(fn, "pretrain", episodes, 1, MAX_EPISODES, 300)
+                  "pretrain=...")
+    if isinstance(episodes, bool) or not isinstance(episodes, int | np.integer) or \
+            not 1 <= int(episodes) <= MAX_EPISODES:
+        raise err(fn, "pretrain", f"has {episodes!r} episodes, not a whole number in "
+                  f"1..{MAX_EPISODES:,}", "pass e.g. pretrain=('grid', 300)")
+    return int(episodes)
 
 
 def problem_of(fn: str, scenario: str | Scenario, start: Cell | None, goal: Cell | None,

@@ -302,40 +302,84 @@ def warm_start_table(d: dict[str, Any]) -> str:
     """Per rung, map and method: (a) the grid's policy driven at the rung, (b) trained at the
     rung from scratch, (c) pretrained in the grid then trained at the rung (P(G) at the
     largest budget, median [q25, q75] over seeds); c minus the better of a and b, paired by
-    seed, with its 95 % bootstrap interval; robot primitives to stably reach (a)'s P(G)."""
+    seed, with its 95 % bootstrap interval; robot primitives to stably reach (a)'s P(G) and
+    the best P(G) any arm reached in the seed."""
     top = d["budgets"][-1]
+    material = d.get("material", 0.05)
     lines = [f"P(G) of the final policy driven 50 times at the rung, median [q25, q75] over "
              f"seeds; (a) after {d['grid_episodes']} grid episodes, (b) and (c) after {top} "
-             f"episodes at the rung ((c) after the same grid phase as (a)). c − better: the "
-             f"median over seeds of (c) minus the better arm of (a) and (b), with its 95 % "
-             f"bootstrap interval. Reach: robot primitives from which P(G) stays within "
-             f"{d['reach_slack']:.2f} of (a)'s, at every later budget "
-             f"({', '.join(map(str, d['budgets']))} episodes), median [q25, q75] over seeds "
-             "(seeds that got there).", "",
+             f"episodes at the rung ((c) after the same grid phase as (a)). **c − better**: "
+             f"the median over seeds of (c) minus the arm of (a) and (b) with the higher median "
+             f"(named), with the 95 % bootstrap interval of that median; called higher or lower "
+             f"only when the interval excludes 0 and the difference is at least {material:.2f} "
+             f"(about one standard error of a 50-drive P(G) near 0.9). **Reach**: robot "
+             f"primitives from which P(G) stays within {d['reach_slack']:.2f} of a target at "
+             f"every later budget ({', '.join(map(str, d['budgets']))} episodes at the rung; "
+             "(c) starts at 0 with the grid's policy), median [q25, q75] over seeds with "
+             "`never` as infinitely many, and the seeds that got there; the target is (a)'s "
+             "P(G), or the best P(G) any arm reached in that seed (**best**). **Share**: (c)'s "
+             "median robot primitives to the best as a share of (b)'s.", "",
              "| rung | map | method | (a) grid's policy | (b) rung only | (c) grid, then rung | "
-             "c − better [95 % CI] | reach (a): grid, then rung | reach (a): rung only | "
-             "share |", "|---|---|---|---|---|---|---|---|---|---|"]
+             "c − better [95 % CI] | reach (a): (c) · (b) | best P(G) | reach best: (c) · (b) "
+             "| share |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in d["rows"]:
         diff = r["c_minus_better"]
-        rw, rs = r["reach_warm"], r["reach_scratch"]
+
+        def reach(key: str, r: dict[str, Any] = r) -> str:
+            x = r[key]
+            return f"{_q(x['q'])} ({x['reached']}/{x['seeds']})"
+
         lines.append(
             f"| `{r['rung']}` | {r['map']} | {r['name']} | {_q(r['a_p_goal'], 2)} | "
             f"{_q(r['b_p_goal'], 2)} | {_q(r['c_p_goal'], 2)} | "
-            f"{diff[0]:+.2f} [{diff[1]:+.2f}, {diff[2]:+.2f}] vs ({r['better_of_ab']}) | "
-            f"{_q(rw['q'])} ({rw['reached']}/{rw['seeds']}) | "
-            f"{_q(rs['q'])} ({rs['reached']}/{rs['seeds']}) | {_ratio(rw['q'], rs['q'])} |")
+            f"{diff[0]:+.2f} [{diff[1]:+.2f}, {diff[2]:+.2f}] vs ({r['better_of_ab']}): "
+            f"{r['verdict']} | {reach('reach_warm')} · {reach('reach_scratch')} | "
+            f"{_q(r['best_p_goal'], 2)} | {reach('reach_best_warm')} · "
+            f"{reach('reach_best_scratch')} | "
+            f"{_ratio(r['reach_best_warm']['q'], r['reach_best_scratch']['q'])} |")
     return "\n".join(lines) + "\n"
 
 
 def warm_start_verdicts(d: dict[str, Any]) -> str:
-    """The study's findings in figures: per rung, how many map x method cells continued
-    learning lowered, raised or left (c) against the better of (a) and (b)."""
+    """The study's findings in figures: per rung, the map x method cells where continued
+    learning at the rung ended (c) higher or lower than the better of (a) and (b)."""
     out = []
     for rung in dict.fromkeys(r["rung"] for r in d["rows"]):
         rows = [r for r in d["rows"] if r["rung"] == rung]
-        n = {v: sum(r["verdict"] == v for r in rows)
-             for v in ("higher", "lower", "no evidence of a difference")}
-        out.append(f"at `{rung}` (c) is higher than the better of (a) and (b) in "
-                   f"{n['higher']} of {len(rows)} map × method cells, lower in {n['lower']}, "
-                   f"no evidence of a difference in {n['no evidence of a difference']}")
-    return "; ".join(out)
+
+        def cells(v: str, rows: list[dict[str, Any]] = rows) -> str:
+            named = [f"{r['name']} on {r['map']}" for r in rows if r["verdict"] == v]
+            return f"{len(named)}" + (f" ({', '.join(named)})" if named else "")
+
+        same = sum(r["verdict"] in ("no evidence of a difference",
+                                    "within the grading's resolution") for r in rows)
+        out.append(f"- at `{rung}`, of {len(rows)} map × method cells, (c) ends higher than "
+                   f"the better of (a) and (b) in {cells('higher')}, lower in "
+                   f"{cells('lower')}, and the same within the seeds' interval or the "
+                   f"grading's resolution in {same}")
+    return "\n".join(out) + "\n"
+
+
+def warm_start_sentence(d: dict[str, Any]) -> str:
+    """The README's sentence: what the grid saves at the rungs where it holds, and whether
+    continued learning at a rung helps or hurts the grid's policy where it breaks."""
+    parts = []
+    for rung in dict.fromkeys(r["rung"] for r in d["rows"]):
+        rows = [r for r in d["rows"] if r["rung"] == rung]
+        kept = sum(r["reach_warm"]["q"][0] == 0 for r in rows)
+        scratch = [r["reach_scratch"]["q"][0] for r in rows
+                   if r["reach_scratch"]["q"][0] is not None]
+        never = len(rows) - len(scratch)
+        n = {v: sum(r["verdict"] == v for r in rows) for v in ("higher", "lower")}
+        cost = (f"from scratch a median of {statistics.median(scratch):,.0f} robot primitives "
+                f"where it gets there at all ({len(scratch)} cells; {never} never within "
+                f"{d['budgets'][-1]} episodes)" if scratch else
+                f"from scratch no cell reaches it within {d['budgets'][-1]} episodes")
+        parts.append(f"at `{rung}` the grid's policy is kept from the first primitive on "
+                     f"{kept} of {len(rows)} map × method cells ({cost}); continued learning "
+                     f"ends higher than the better of the grid's policy and the rung alone "
+                     f"on {n['higher']} cells and lower on {n['lower']}")
+    return ("**Learn on the grid, finish on the robot** ([docs/ladder.md](docs/ladder.md"
+            "#how-much-robot-time-does-the-grid-save)): pretrained "
+            f"{d['grid_episodes']} episodes in the grid, then trained at the rung, "
+            + "; ".join(parts) + ".\n")

@@ -54,7 +54,9 @@ def test_the_command_says_a_bad_pretrain_in_its_flags(capsys, tmp_path):
     assert main(["compare", "paper-40", "--methods", "haql", "--world", "physics",
                  "--pretrain", "grid:0", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("rnhql: error: command line: --pretrain: is 0, outside 1..")
+    assert err.startswith("rnhql: error: command line: --pretrain: has 0 episodes, not a whole "
+                          "number in 1..")
+    assert err.endswith("Fix: pass e.g. --pretrain grid:300")
     assert "scenarios.api" not in err and "pretrain=" not in err
 
 

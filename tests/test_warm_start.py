@@ -171,7 +171,35 @@ def test_a_pretrained_run_records_both_phases_in_one_recording(tmp_path):
                     pretrain=("grid", 20), record=path)
     assert run.recording == path and path.exists()
     with rr.server.Server(host="127.0.0.1", datasets={"d": [str(path)]}) as server:
-        cols = server.client().get_dataset("d").filter_contents(["/**"]).reader(
-            index="episode").to_arrow_table().column_names
+        ds = server.client().get_dataset("d")
+        cols = ds.filter_contents(["/**"]).reader(index="episode").to_arrow_table().column_names
     assert "/grid_phase/metrics/return:Scalars:scalars" in cols
     assert "/metrics/return:Scalars:scalars" in cols
+
+
+def test_a_rung_run_saved_starts_the_next_rung(tmp_path):
+    """Grid -> noisy (saved) -> slip from that file: a chain of levels, each a warm start; the
+    saved physics agent loads (its state counts the grid's episodes too) and says its world."""
+    grid = api.train("paper-40", "mf-r-max", episodes=20, seed=1)
+    noisy = api.train("paper-40", "mf-r-max", world="physics", fidelity="noisy", episodes=3,
+                      seed=1, init=grid, save=tmp_path / "noisy.npz")
+    slip = api.train("paper-40", "mf-r-max", world="physics", fidelity="slip", episodes=2,
+                     seed=1, init=tmp_path / "noisy.npz")
+    assert slip.pretrain["world"] == "physics" and slip.pretrain["fidelity"] == "noisy"
+    assert slip.pretrain["episodes"] == 23  # the learner's own count: grid and noisy
+    same = api.train("paper-40", "mf-r-max", world="physics", fidelity="slip", episodes=2,
+                     seed=1, init=noisy)  # the Run itself: the same learner, the same run
+    a, b = dict(same.record), dict(slip.record)
+    assert [k for k in a if k not in (*UNTIMED, "pretrain") and a[k] != b.get(k)] == []
+    assert a["pretrain"]["policy"] == b["pretrain"]["policy"]
+
+
+def test_an_init_under_other_rewards_is_refused():
+    grid = api.train("paper-40", "haql", episodes=5, seed=0)  # goal-only
+    with pytest.raises(InputError, match="learned under rewards"):
+        api.train("paper-40", "haql", world="physics", episodes=1, init=grid, rewards="paper")
+
+
+def test_mf_r_max_needs_m_rung_at_least_m():
+    with pytest.raises(InputError, match="m_rung"):
+        api.train("paper-40", "mf-r-max", episodes=1, settings={"m": 3, "m_rung": 2})

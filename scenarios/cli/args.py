@@ -429,14 +429,17 @@ def flag_words(err: InputError) -> InputError:
 
     def say(text: str) -> str:
         for arg, fl in FLAG_OF.items():
-            # arg=('grid', 300) -> --pretrain grid:300; arg='x' -> --flag x; arg=3 -> --flag 3
-            text = re.sub(rf"\b{arg}=\(([^)]*)\)", lambda m, fl=fl: f"{fl} " + ":".join(
-                v.strip(" '\"") for v in m[1].split(",")), text)
-            text = re.sub(rf"\b{arg}='([^']*)'", rf"{fl} \1", text)
-            text = re.sub(rf"\b{arg}=([^\s,;)']+)", rf"{fl} \1", text)
+            # arg=('grid', 300) -> --pretrain grid:300, arg=(3, 5) -> --start 3,5; arg='x' ->
+            # --flag x; arg=3 -> --flag 3; "drop arg=..." -> "drop --flag"; never in a path
+            join = ":" if arg == "pretrain" else ","
+            text = re.sub(rf"(?<![\w/.-]){arg}=\(([^)]*)\)", lambda m, fl=fl, j=join: f"{fl} "
+                          + j.join(v.strip(" '\"") for v in m[1].split(",")), text)
+            text = re.sub(rf"(?<![\w/.-]){arg}=\.\.\.", fl, text)
+            text = re.sub(rf"(?<![\w/.-]){arg}='([^']*)'", rf"{fl} \1", text)
+            text = re.sub(rf"(?<![\w/.-]){arg}=([^\s,;)'/]+)", rf"{fl} \1", text)
         return text
 
-    out = type(err)("command line", field, say(err.problem), say(err.fix))
+    out = type(err)("command line", field, err.problem, say(err.fix))
     return out
 
 

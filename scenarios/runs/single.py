@@ -102,8 +102,11 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
                                    recorder=recorder, plan=plan, start_rng=start_rng,
                                    fidelity=spec.fidelity_spec, noise_rng=rs.physics,
                                    grading_seed=spec.seed, init=init)
-            if save:
-                ck = Checkpoint.of_result(result, rng, start_rng)
+            if save:  # (no per-episode metrics: a physics agent's state may count a grid
+                #      phase's episodes too; its streams, for a next rung's warm start)
+                ck = Checkpoint(result.config, result.state, rng.bit_generator.state,
+                                int(result.env_steps),
+                                start_rng_state=start_rng.bit_generator.state)
                 ck.problem = problem
                 atomic_write_bytes(save, checkpoint_bytes(ck))
             if recorder is not None:
@@ -120,7 +123,8 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
         eps_routes = result.grader.epsilon_routes(result.agent.state, cfg.eps, rs.evaluation)
     carried = carried_of(spec.method, result, rng, start_rng, spec.world,
                          spec.fidelity_spec.label if spec.world == "physics" else None,
-                         problem["layout"], int(model.n_states), "init (a Run)")
+                         problem["layout"], int(model.n_states), "init (a Run)",
+                         sc.rewards.label())
     return run_record(spec, cfg, RunOutcome.of(result, eps_routes)), carried
 
 

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from learning.compiled.named_state import copy_state
 from learning.drivers.checkpoint import CheckpointError, load_checkpoint
 from learning.drivers.plain_train import train_plain
 from learning.drivers.train import train_tabular
@@ -45,6 +46,7 @@ class Carried:
     layout: str | None  # the layout digest of the scenario it was trained on
     n_states: int
     source: str  # what it came from, for messages: "init (a Run)", "agent.npz"
+    rewards: str | None = None  # the reward scheme it learned under (its label)
 
     @property
     def plain(self) -> bool:
@@ -62,13 +64,16 @@ class Carried:
         return (_continued(self.learner_rng, learner), _continued(self.start_rng, starts))
 
     def policy_state(self, n_actions: int) -> Any:
-        """The greedy policy it starts the next world with, as a gradable state."""
+        """The greedy policy it starts the next world with, as a gradable state (a copy:
+        reading a model learner's policy fills its scratch arrays)."""
         if not self.plain:
-            return self.state
+            return copy_state(self.state)
         return snapshot(self.learner, self.config, self.n_states, n_actions)
 
-    def check(self, method: str, layout: str, n_states: int, arg: str, where: str) -> None:
-        """An :class:`InputError` (before any work) if it cannot start this run."""
+    def check(self, method: str, layout: str, n_states: int, rewards: str, arg: str,
+              where: str) -> None:
+        """An :class:`InputError` (before any work) if it cannot start this run: another
+        method, map size, layout (S, G, obstacles) or reward scheme, or none recorded."""
         if self.method != method:
             raise InputError(where, arg, f"{self.source} is a {self.method} learner, this run's "
                              f"method is {method}", f"pass method={self.method!r}, or an init "
@@ -77,10 +82,19 @@ class Carried:
             raise InputError(where, arg, f"{self.source} was trained on a map of "
                              f"{self.n_states:,} cells, this scenario has {n_states:,}",
                              "use a learner trained on this scenario")
-        if self.layout is not None and self.layout != layout:
+        if self.layout is None or self.rewards is None:
+            raise InputError(where, arg, f"{self.source} does not record the scenario and "
+                             "rewards it was trained on", "train it again with save=... "
+                             "(rnhql train --save) and start from that")
+        if self.layout != layout:
             raise InputError(where, arg, f"{self.source} was trained on another scenario "
                              f"(layout {self.layout}, this one {layout})",
                              "use a learner trained on this scenario (same map, S and G)")
+        if self.rewards != rewards:
+            raise InputError(where, arg, f"{self.source} learned under rewards "
+                             f"{self.rewards!r}, this run has {rewards!r}",
+                             "pass the rewards it was trained with (its values are in their "
+                             "units)")
 
 
 def _continued(state: dict | None, fallback: np.random.Generator) -> np.random.Generator:
@@ -94,24 +108,27 @@ def _continued(state: dict | None, fallback: np.random.Generator) -> np.random.G
 def carried_of_checkpoint(path: Path, n_states: int, geometry: Any) -> Carried:
     """A saved agent (``train(..., save=...)``, ``rnhql train --save``) as a warm start; a
     file of another format or size raises :class:`CheckpointError` naming it."""
-    ck = load_checkpoint(path)  # its format; its size and arrays are checked below
-    got = n_states_of(ck.state)
-    if got != n_states:
-        raise CheckpointError(f"{path}: was trained on a map of {got:,} cells, this scenario "
-                              f"has {n_states:,}; use an agent trained on this scenario")
-    ck.check_state(geometry)
+    try:
+        ck = load_checkpoint(path, None, None, geometry)  # its format, shapes and values
+    except CheckpointError as original:
+        try:  # another map's agent: say so by its size, when the file tells it
+            got = n_states_of(load_checkpoint(path).state)
+        except (CheckpointError, AttributeError, KeyError, ValueError):
+            raise original from None
+        if got != n_states:
+            raise CheckpointError(f"{path}: was trained on a map of {got:,} cells, this "
+                                  f"scenario has {n_states:,}; use an agent trained on this "
+                                  "scenario") from None
+        raise
     problem = ck.problem or {}
     world = problem.get("world", "grid")
-    steps = np.asarray(ck.metrics.get("steps", ()))
     phase = {"world": world, "fidelity": problem.get("fidelity"), "episodes": ck.episodes,
              "env_steps": int(ck.env_steps),
              "wall_time_s": float(np.sum(ck.metrics.get("wall_time_s", ()))),
              "final_route_length": (int(ck.metrics["test_route_length"][-1])
                                     if len(ck.metrics.get("test_route_length", ())) else -1)}
-    if world == "physics" and steps.size:
-        phase["robot_primitives"] = int(steps.sum())
     return Carried(ck.method, ck.config, ck.state, None, ck.rng_state, ck.start_rng_state,
-                   phase, problem.get("layout"), n_states, str(path))
+                   phase, problem.get("layout"), n_states, str(path), problem.get("rewards"))
 
 
 def phase_record(result: Any, world: str, fidelity: str | None) -> dict[str, Any]:
@@ -131,7 +148,8 @@ def phase_record(result: Any, world: str, fidelity: str | None) -> dict[str, Any
 
 def carried_of(method: str, result: Any, learner_rng: np.random.Generator | None,
                start_rng: np.random.Generator | None, world: str, fidelity: str | None,
-               layout: str | None, n_states: int, source: str) -> Carried:
+               layout: str | None, n_states: int, source: str,
+               rewards: str | None = None) -> Carried:
     """What a finished run carries (``result``: a TrainResult, grid or physics)."""
     cfg = result.config
     plain = is_plain(cfg)
@@ -140,7 +158,7 @@ def carried_of(method: str, result: Any, learner_rng: np.random.Generator | None
                    agent.learner if plain else None,
                    None if learner_rng is None else learner_rng.bit_generator.state,
                    None if start_rng is None else start_rng.bit_generator.state,
-                   phase_record(result, world, fidelity), layout, n_states, source)
+                   phase_record(result, world, fidelity), layout, n_states, source, rewards)
 
 
 def pretrain_in_grid(method: str, cfg: Any, model: Any, episodes: int, test_every: int,

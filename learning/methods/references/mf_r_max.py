@@ -69,6 +69,12 @@ class MFRMax(MethodConfig):
 
     params_type: ClassVar[type] = Params
 
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not 1 <= self.m <= self.m_rung:
+            raise ValueError(f"MFRMax.m = {self.m}, m_rung = {self.m_rung}: need 1 <= m <= "
+                             "m_rung (a move the grid knew must stay known at the rung)")
+
 
 class State(NamedTuple):
     par: Params
@@ -101,16 +107,17 @@ def init_state(cfg: MFRMax, geom: Geometry, rng: np.random.Generator) -> State:
 
 
 def carry(st: State) -> State:
-    """The switch up a level (before a warm start's first act): every move the grid knew
-    becomes known below, its model worth ``m_rung`` tries; Φ the grid's costs to G where it
-    knew one (never below the free-space distance)."""
+    """The switch up a level (before a warm start's first act): every move known below
+    becomes trusted, its model worth ``m_rung`` tries (a move a lower rung contradicted keeps
+    its counts); Φ the level below's costs to G where it knew one (never below the
+    free-space distance)."""
     r_max.refresh_costs(st)
     m_rung = int(st.par.m_rung)
-    known = st.tries >= int(st.par.m)
-    works = known & (st.clean > 0)
-    st.below[...] = known.astype(np.int8)
+    counted = st.below == 2  # contradicted at a lower rung: its counts carry as they are
+    known = (st.tries >= int(st.par.m)) & ~counted
+    st.below[...] = np.where(counted, 2, known.astype(np.int8))
+    st.clean[...] = np.where(known, np.where(st.clean > 0, m_rung, 0), st.clean)
     st.tries[...] = np.where(known, m_rung, st.tries)
-    st.clean[...] = np.where(works, m_rung, np.where(known, 0, st.clean))
     st.phi[...] = np.where(np.isfinite(st.cost), np.maximum(st.cost, st.phi), st.phi)
     st.version[0] += 1
     st.plan.at[0] = -1

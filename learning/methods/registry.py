@@ -308,3 +308,15 @@ def config_from_fields(cli: str, fields: dict[str, object]) -> MethodConfig:
     if cli not in METHODS and not is_located(cli):
         raise ValueError(f"unknown method {cli!r}; known: {', '.join(METHODS)}")
     return config_class(cli).from_fields(fields)
+
+
+def shown_name(method: str) -> str:
+    """How tables, figures and verdicts name a method: its key (``rnh-ql+``), or, for a
+    learner of one's own (``module:Class``), the ``name`` it declares ("how tables name it");
+    its key where the class cannot be imported here (a results.json read elsewhere)."""
+    if not is_located(method):
+        return method
+    try:
+        return str(config_class(method).name)
+    except (ValueError, ImportError, AttributeError):
+        return method

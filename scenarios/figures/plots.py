@@ -11,11 +11,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from learning.methods.registry import shown_name
 from learning.metrics import windowed_reward_per_step
 from scenarios.figures.mpl import pyplot
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
-from scenarios.runs.results import shown_name
 from sim.grid import TabularModel
 from sim.grid.planning import bfs_route
 from sim.scenario import Scenario

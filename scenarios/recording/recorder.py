@@ -52,11 +52,11 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
+from learning.methods.registry import shown_name
 from scenarios.recording import blueprint as layouts
 from scenarios.recording import scene
 from scenarios.recording.batch import EpisodeRecord, ValueFrame, send_episodes, send_values
 from scenarios.recording.file import RecordingFile, rerun_cli, verify_recording
-from scenarios.runs.results import shown_name
 from sim.grid import TabularModel
 from sim.grid.actions import ACTION_DELTAS
 from sim.scenario import Scenario

@@ -63,7 +63,7 @@ from typing import Any
 
 import numpy as np
 
-from learning.methods.registry import config_class, is_located
+from learning.methods.registry import shown_name
 from scenarios.runs.statistics import (
     LEVEL,
     N_RESAMPLES,
@@ -298,18 +298,6 @@ def _name(method: str) -> str:
     """RNH-QL by its name (as the verdict always has); every other method as tables show it
     (:func:`shown_name`)."""
     return "RNH-QL" if method == "rnh-ql" else shown_name(method)
-
-
-def shown_name(method: str) -> str:
-    """How tables, figures and verdicts name a method: its key (``rnh-ql+``), or, for a
-    learner of one's own (``module:Class``), the ``name`` it declares ("how tables name it");
-    its key where the class cannot be imported here (a results.json read elsewhere)."""
-    if not is_located(method):
-        return method
-    try:
-        return str(config_class(method).name)
-    except (ValueError, ImportError, AttributeError):
-        return method
 
 
 def ranked_figure(summ_world: dict[str, dict[str, Any]]) -> tuple[str, bool, str]:

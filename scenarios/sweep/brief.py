@@ -7,7 +7,8 @@ from __future__ import annotations
 import textwrap
 from typing import Any
 
-from scenarios.runs.results import shown_name, verdict
+from learning.methods.registry import shown_name
+from scenarios.runs.results import verdict
 
 
 def _ci(stat: dict[str, Any]) -> str:

@@ -168,7 +168,8 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
             s_starts: float | None = None, start: Cell | None = None,
             goal: Cell | None = None, record_every: int = 100, record_values_every: int = 300,
             record_seeds: int = 1, figures: bool = True, progress: bool = False,
-            start_method: str | None = None, pretrain: Any = None) -> Comparison:
+            start_method: str | None = None, pretrain: Any = None,
+            announce: Callable[[int, list[str], list[str]], None] | None = None) -> Comparison:
     """Methods x seeds (x worlds) on one scenario: the sweep ``rnhql compare`` runs.
 
     ``methods``: names, ``"module:Class"`` or classes (default: the comparison's list);
@@ -180,8 +181,9 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
     stderr; ``start_method``: the worker pool's (``"fork"``, ``"spawn"``,
     ``"forkserver"``; default Python's); ``pretrain``: ``("grid", n)``: every physics run
     first trains ``n`` episodes in the grid on its own streams, then ``episodes`` at the
-    rung (common random numbers: the same grid phase as a grid run of that seed). The rest
-    as :func:`train`.
+    rung (common random numbers: the same grid phase as a grid run of that seed);
+    ``announce``: called once every argument is checked, before any run, with (runs,
+    methods, worlds) (the command prints its first lines there). The rest as :func:`train`.
     """
     fn = "compare"
     scenario = scenario_arg(fn, scenario)
@@ -220,6 +222,8 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
             values_every=whole(fn, "record_values_every", record_values_every, 1,
                                 MAX_EPISODES, 300),
             detail_seeds=whole(fn, "record_seeds", record_seeds, 1, MAX_SEEDS, 1))
+    if announce is not None:
+        announce(len(specs), names, worlds)
     bar = Progress(len(specs), enabled=bool(progress))
     if out is None and recording is None:
         try:
@@ -260,15 +264,16 @@ def _backend(fn: str, backend: str, address: str | None, jobs: int | None,
              start_method: str | None) -> tuple[Callable[..., Any], dict[str, Any]]:
     if backend == "local":
         if address is not None:
-            raise err(fn, "address", "only applies with backend='ray'",
-                       "pass backend='ray', or drop address")
+            raise err(fn, "address", "only applies with the Ray backend",
+                       "pass backend='ray', or drop address=...")
         if start_method not in (None, "fork", "spawn", "forkserver"):
             raise err(fn, "start_method", f"is {start_method!r}",
                        "use 'fork', 'spawn' or 'forkserver' (or None)")
         return run_local, {"jobs": jobs or os.cpu_count() or 1, "start_method": start_method}
     if backend == "ray":
         return run_ray, {"address": address, "num_cpus": jobs}
-    raise err(fn, "backend", f"is {backend!r}", "use 'local' or 'ray'")
+    raise err(fn, "backend", f"is {backend!r}, not a backend", "pass backend='local' or "
+              "backend='ray'")
 
 
 @contextlib.contextmanager

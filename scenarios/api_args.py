@@ -16,13 +16,15 @@ from learning.config import MethodConfig
 from learning.methods.registry import METHODS, comparison_methods
 from learning.plain.learner import located_name, remember
 from scenarios.runs.spec import WORLDS, load, method_class, physics_budget
+from sim.env_args import DEFAULT_REWARDS  # the one default (the envs', the command's, ours):
+
+#                                          goal-only; the paper's own is rewards="paper"
 from sim.errors import InputError
 from sim.files import check_output
 from sim.physics.fidelity import PRESETS, Fidelity, parse_fidelity
 from sim.scenario import REWARD_SCHEMES, Cell, Rewards, Scenario, rewards_from_text
 
 DEFAULT_EPISODES = 3000  # the paper's
-DEFAULT_REWARDS = "goal-only"  # as the command: the paper's own is rewards="paper"
 MAX_EPISODES = 10_000_000
 MAX_SEEDS = 10_000
 MAX_SEED = 2**63 - 1
@@ -43,8 +45,11 @@ def err(fn: str, arg: str, problem: str, fix: str) -> InputError:
 def whole(fn: str, arg: str, value: Any, lo: int, hi: int, example: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int | np.integer):
         raise err(fn, arg, f"is {value!r}, not a whole number", f"pass e.g. {arg}={example}")
-    if not lo <= int(value) <= hi:
-        raise err(fn, arg, f"is {value}, outside {lo}..{hi:,}", f"pass e.g. {arg}={example}")
+    if int(value) < lo:
+        raise err(fn, arg, f"must be >= {lo}, got {value}", f"pass e.g. {arg}={example}")
+    if int(value) > hi:
+        raise err(fn, arg, f"is {value:,}, more than the limit {hi:,}",
+                  f"pass at most {arg}={hi}")
     return int(value)
 
 

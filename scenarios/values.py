@@ -14,6 +14,8 @@ the ``rnhql[notebook]`` extra, Rerun's notebook viewer).
 from __future__ import annotations
 
 import math
+import os
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,10 +45,27 @@ def _readonly(d: Mapping[str, Any]) -> Mapping[str, Any]:
     return MappingProxyType(dict(d))
 
 
+def _in_notebook() -> bool:
+    """Whether this runs in a Jupyter kernel (where a widget can be drawn)."""
+    try:
+        from IPython import get_ipython  # optional: only notebooks have it
+    except ImportError:
+        return False
+    shell = get_ipython()
+    return shell is not None and "IPKernelApp" in getattr(shell, "config", {})
+
+
 def show_recording(path: Path | None, width: int = 1000, height: int = 640) -> Any:
-    """Rerun's notebook viewer on ``path`` (the ``rnhql[notebook]`` extra)."""
+    """Rerun's notebook viewer on ``path`` (the ``rnhql[notebook]`` extra). Its script and
+    viewer are served from this machine (``RERUN_NOTEBOOK_ASSET=serve-local``, unless set
+    otherwise), so it draws offline too; outside a notebook it says what to run instead."""
     if path is None:
         raise ValueError("this value has no recording: pass record=True (or a .rrd path)")
+    if not _in_notebook():
+        print(f"show() draws in a Jupyter notebook; here, open the recording with: rnhql view "
+              f"{path}  (or rnhql view {path} --web)", file=sys.stderr)
+        return None
+    os.environ.setdefault("RERUN_NOTEBOOK_ASSET", "serve-local")  # read at its import
     try:
         # optional (rnhql[notebook]); 335 ms at import
         from rerun.notebook import Viewer

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -236,7 +237,7 @@ def test_a_sweep_with_spawned_workers_runs_plain_and_external_methods():
     assert cmp.of(mod.Throwaway.cli)[0].method_name == "THROWAWAY-QL"
 
 
-def test_a_plain_learners_run_records_and_shows_in_a_notebook(tmp_path):
+def test_a_plain_learners_run_records_and_shows_in_a_notebook(tmp_path, capsys, monkeypatch):
     """A plain learner's run is recorded like any (its q shown as the values); in Jupyter a
     Run shows its recording inline (Rerun's notebook viewer, the notebook extra)."""
     from tests.plain_learners.st_ql import STQLPort
@@ -244,9 +245,14 @@ def test_a_plain_learners_run_records_and_shows_in_a_notebook(tmp_path):
     rrd = tmp_path / "port.rrd"
     run = api.train("paper-40", STQLPort, episodes=20, record=rrd)
     assert run.recording == rrd and rrd.stat().st_size > 10_000
+    assert run.show() is None  # not a notebook: it says what to run instead
+    assert f"rnhql view {rrd}" in capsys.readouterr().err
     pytest.importorskip("rerun_notebook")
+    monkeypatch.setattr("scenarios.values._in_notebook", lambda: True)
+    monkeypatch.delenv("RERUN_NOTEBOOK_ASSET", raising=False)
     viewer = run.show()
     assert type(viewer).__name__ == "Viewer"
+    assert os.environ["RERUN_NOTEBOOK_ASSET"] == "serve-local"  # offline: served from here
     bare = api.train("paper-40", "st-ql", episodes=5)
     with pytest.raises(ValueError, match="no recording: pass record=True"):
         bare.show()

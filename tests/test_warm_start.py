@@ -101,6 +101,9 @@ def test_cli_init_and_pretrain_give_the_apis_runs(tmp_path, capsys):
     swept = json.loads((tmp_path / "cmp" / "results.json").read_text())["runs"][0]
     assert differing(cli, swept) == []
     assert "|pre-grid20" in swept["key"]
+    summary = (tmp_path / "cmp" / "summary.md").read_text()
+    assert "| haql | 20 [20, 20] episodes in grid, " in summary  # each phase, its currency
+    assert "robot primitives | robot seconds |" in summary
 
 
 def test_a_pretrained_sweep_resumes_after_an_interrupt(tmp_path, capsys):

@@ -416,13 +416,13 @@ FLAG_OF = {
 }
 
 
-def flag_words(err: InputError) -> InputError:
+def flag_words(err: InputError, renamed: dict[str, str] | None = None) -> InputError:
     """``err`` as the command says it: a library argument named by its flag, ``arg=value``
     in the fix written ``--flag value``; errors from elsewhere (a file, a field) unchanged."""
     if not err.source.startswith("scenarios.api."):
         return err
     name = err.field.split("[", 1)[0]
-    flag = FLAG_OF.get(name)
+    flag = (renamed or {}).get(name) or FLAG_OF.get(name)
     if flag is None:
         return err
     field = flag + err.field[len(name):]
@@ -444,9 +444,10 @@ def flag_words(err: InputError) -> InputError:
 
 
 @contextlib.contextmanager
-def in_flag_words() -> Iterator[None]:
-    """Library errors raised in the block reach the user in flag words (exit 2)."""
+def in_flag_words(**renamed: str) -> Iterator[None]:
+    """Library errors raised in the block reach the user in flag words (exit 2);
+    ``renamed``: this subcommand's flag for an argument (compare: ``method="--methods"``)."""
     try:
         yield
     except InputError as err:
-        raise flag_words(err) from None
+        raise flag_words(err, renamed) from None

@@ -246,6 +246,7 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
                 f"{_fmt(e['success_rate'], 2)} | {_fmt(e['reward_per_step'], 3)} | "
                 f"{_fmt(e['wall_time_s'], 2)} |")
     lines += _policy_table(summ, methods, fid, results.get("optimum_at_fidelity"))
+    lines += _robot_time_table(results["runs"], methods)
     lines += ["", *verdict(results)]
     return "\n".join(lines) + "\n"
 
@@ -278,6 +279,39 @@ def _policy_table(summ: dict[str, Any], methods: list[str], fid: str | None,
                    f"{_fmt(e['final_policy_primitives_mean'], 1, missing='no G')} | "
                    f"{_fmt(e['final_policy_contacts_mean'], 1)} |")
     return out
+
+
+def _robot_time_table(runs: list[dict[str, Any]], methods: list[str]) -> list[str]:
+    """Physics runs: each phase in its own currency. A run pretrained in the grid (or at a
+    lower rung) shows that phase's episodes and moves, and its policy's P(G) here before the
+    robot drove; every physics run its robot primitives and robot seconds."""
+    def q(values: list[float], digits: int = 0) -> str:
+        return _fmt({"median": quantile(values, 0.5), "q25": quantile(values, 0.25),
+                     "q75": quantile(values, 0.75)}, digits) if values else "–"
+
+    rows = []
+    for m in methods:
+        mine = [r for r in runs if r.get("method") == m and r.get("world") == "physics"]
+        if not mine:
+            continue
+        pre = [r["pretrain"] for r in mine if r.get("pretrain")]
+        first = "–"
+        if pre:
+            where = pre[0]["world"] if pre[0]["world"] == "grid" else f"`{pre[0]['fidelity']}`"
+            first = (f"{q([p['episodes'] for p in pre])} episodes in {where}, "
+                     f"{q([p['env_steps'] for p in pre])} moves")
+        rows.append(f"| {shown_name(m)} | {first} | "
+                    f"{q([p['policy']['p_goal'] for p in pre], 2) if pre else '–'} | "
+                    f"{q([r['env_steps'] for r in mine])} | "
+                    f"{q([r['robot_seconds'] for r in mine if 'robot_seconds' in r], 1)} |")
+    if not rows:
+        return []
+    return ["", "Robot time, phase by phase (median [25th, 75th percentile] over seeds): the "
+            "first phase of a warm-started run (`--pretrain`, `--init`) and its policy's P(G) "
+            "here before the robot drove; then this world's robot primitives and simulated "
+            "robot seconds.", "",
+            "| method | first phase | its policy here: P(G) | robot primitives | robot seconds |",
+            "|---|---|---|---|---|", *rows]
 
 
 RANKING = ("most seeds optimal, then fewest episodes to a stable optimal route, then most seeds "

@@ -53,6 +53,8 @@ FIGURES = (
                    "scenarios.studies.maps.ablation:figure_from_artifact"),
     ArtifactFigure("docs/ladder.png", ("ladder.study",),
                    "scenarios.studies.ladder.continuous_vs_grid:figure_from_artifact"),
+    ArtifactFigure("docs/warm-start.png", ("warm-start.study",),
+                   "scenarios.studies.ladder.warm_start:figure_from_artifact"),
     ArtifactFigure("docs/aliasing-noisy.png", ("aliasing.paper-50-noisy",),
                    "scenarios.studies.ladder.aliasing:figure_from_artifact"),
     ArtifactFigure("docs/physics_batch.png", ("physics-batch.this-machine",),

@@ -246,7 +246,7 @@ def summary_markdown(results: dict[str, Any], method_order: list[str] | None = N
                 f"{_fmt(e['success_rate'], 2)} | {_fmt(e['reward_per_step'], 3)} | "
                 f"{_fmt(e['wall_time_s'], 2)} |")
     lines += _policy_table(summ, methods, fid, results.get("optimum_at_fidelity"))
-    lines += _robot_time_table(results["runs"], methods)
+    lines += _robot_time_table(results.get("runs", []), methods)
     lines += ["", *verdict(results)]
     return "\n".join(lines) + "\n"
 

@@ -132,27 +132,22 @@ def act(st, s, rng):
 
 @njit(**HOOK)
 def update(st, s, a, r, s2, terminated, rng):
-    """R-max's count; at a rung, a move known below is trusted until the rung contradicts
-    it, then its outcomes are counted on top of the grid's model (rule 2)."""
-    clean = read_move(st.reading.r_stay, st.reading.r_clean, s, r, s2, terminated)
+    """R-max's count for a move not known below; at a rung, a move known below is trusted
+    until the rung contradicts it, then its outcomes are counted on top of the grid's model
+    (rule 2)."""
     tier = st.below[s, a]
+    if tier == 0:
+        r_max.update(st, s, a, r, s2, terminated, rng)
+        return
+    clean = read_move(st.reading.r_stay, st.reading.r_clean, s, r, s2, terminated)
     if tier == 1:
         if clean == (st.clean[s, a] > 0):
             return  # as the level below said: trusted, nothing to learn
         st.below[s, a] = 2
-        tier = 2
-    if tier == 2:
-        st.tries[s, a] += 1
-        if clean:
-            st.clean[s, a] += 1
-        st.version[0] += 1  # its cost changed: the route is replanned
-        return
-    if st.tries[s, a] < st.par.m:
-        st.tries[s, a] += 1
-        if clean:
-            st.clean[s, a] += 1
-        if st.tries[s, a] == st.par.m:
-            st.version[0] += 1
+    st.tries[s, a] += 1
+    if clean:
+        st.clean[s, a] += 1
+    st.version[0] += 1  # its cost changed: the route is replanned
 
 
 begin = begin_plain

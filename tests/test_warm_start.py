@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 import rnhql
-from learning.methods.registry import METHODS, comparison_methods
 from scenarios import api
 from scenarios.cli import main
 from sim.errors import InputError
@@ -64,18 +63,6 @@ def test_a_warm_start_carries_the_learned_state():
     assert warm.record["test_route_length"][0] == warm.optimal_route_length
     assert warm.final_route_optimal and not cold.final_route_optimal
     assert np.array_equal(grid.carried.state.q, q_before)
-
-
-def test_every_registered_method_warm_starts_in_physics():
-    """Every registered method (the compared ones, the named variants and the references run
-    on request, mf-r-max among them) runs a pretrained physics run."""
-    methods = list(METHODS)
-    assert set(comparison_methods()) < set(methods) and "mf-r-max" in methods
-    cmp = api.compare("paper-40", methods, worlds="physics", seeds=1, episodes=2,
-                      pretrain=("grid", 5), jobs=1)
-    assert len(cmp.runs) == len(methods)
-    for run in cmp.runs:
-        assert run.pretrain["episodes"] == 5 and run.episodes == 2, run.method
 
 
 def test_cli_init_and_pretrain_give_the_apis_runs(tmp_path, capsys):

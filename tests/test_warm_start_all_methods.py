@@ -1,13 +1,17 @@
-"""Every registered method can start a physics run from the grid (issue 62's first target):
-its own file, so that its compile of every method's physics kernels (minutes on a cold
-cache) runs beside the other warm-start tests, not after them."""
+"""Every registered method can start a physics run from the grid (issue 62's first target).
+It compiles every method's physics kernels (minutes on a cold cache), so it is a slow test:
+``pytest -m slow tests/test_warm_start_all_methods.py``."""
 
 from __future__ import annotations
+
+import pytest
 
 from learning.methods.registry import METHODS, comparison_methods
 from scenarios import api
 
 
+@pytest.mark.slow  # minutes on a cold cache (CI): `pytest -m slow`; the default run warm-starts
+#                   haql, rnh-ql+, mf-r-max and plain learners (tests/test_warm_start.py)
 def test_every_registered_method_warm_starts_in_physics():
     """Every registered method (the compared ones, the named variants and the references run
     on request, mf-r-max among them) runs a pretrained physics run."""

@@ -230,7 +230,7 @@ def test_view_without_a_display_suggests_the_web_viewer(tmp_path, monkeypatch, c
 
 
 def test_single_run_output_says_never_without_a_unit(capsys):
-    from scenarios.cli.args import print_run
+    from scenarios.cli.train import print_run
 
     print_run({"episodes_to_stable_optimal": None, "episodes_to_optimal": None,
                "final_route_length": -1, "success_rate": 0.0, "optimal_action_fraction": 0.5,

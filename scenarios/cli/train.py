@@ -19,7 +19,6 @@ from scenarios.cli.args import (
     parse_overrides,
     physics_budget,
     positive,
-    print_run,
     problem_arg,
     rewards_note,
     seed_value,
@@ -97,3 +96,29 @@ def print_pretrain(run) -> None:
           f"{pol['rollouts']} drives")
     print(f"  robot time            {run.robot_primitives:,} primitives, "
           f"{run.robot_seconds:,.1f} s simulated")
+
+
+def print_run(rec_like: dict, optimal: int) -> None:
+    stable = rec_like.get("episodes_to_stable_optimal")
+    first = rec_like["episodes_to_optimal"]
+    length = rec_like["final_route_length"]
+    print(f"  success rate          {rec_like['success_rate']:.3f}")
+    print(f"  stable optimal after  {'never' if stable is None else f'{stable} episodes'} "
+          f"(first optimal test: {'never' if first is None else f'episode {first}'})")
+    pol = rec_like.get("final_policy")
+    above = rec_like.get("world") == "physics" and (rec_like.get("fidelity") or "exact") != \
+        "exact"
+    if rec_like.get("world") == "physics":
+        print(f"  physics fidelity      {rec_like.get('fidelity') or 'exact'}")
+    what = "final greedy route" if not above else "final route (median)"
+    print(f"  {what:<21} {'G not reached' if length < 0 else length} "
+          f"(optimal {rec_like.get('optimal_route_length', optimal)})")
+    if pol is not None and pol["rollouts"] > 1:
+        lo, hi = pol["p_goal_ci95"]
+        prims = pol["primitives_mean"]
+        print(f"  final policy driven   {pol['rollouts']} times: P(G) {pol['p_goal']:.2f} "
+              f"[{lo:.2f}, {hi:.2f}], {'—' if prims is None else f'{prims:.1f}'} primitives, "
+              f"{pol['contacts_mean']:.1f} contacts per drive")
+    print(f"  greedy moves on a shortest route  {rec_like['optimal_action_fraction']:.3f}")
+    print(f"  env steps             {rec_like['env_steps']}")
+    print(f"  wall time             {rec_like['wall_time_s']:.3f} s")

@@ -35,6 +35,7 @@ from learning.compiled.readout import greedy_actions
 from learning.drivers.checkpoint import load_checkpoint
 from learning.drivers.train import greedy_test
 from learning.geometry import geometry_of
+from learning.plain.learner import is_plain
 from learning.plain.policy import policy_state
 from scenarios.api_args import (
     DEFAULT_EPISODES,
@@ -51,6 +52,7 @@ from scenarios.api_args import (
     init_arg,
     method_arg,
     methods_arg,
+    output_arg,
     policy_table,
     pretrain_arg,
     problem_of,
@@ -82,16 +84,15 @@ from scenarios.sweep.run import (
     optimum_at_fidelity,
     run_sweep,
 )
-from scenarios.values import Comparison, Grade, Optimum, Run
+from scenarios.values import Comparison, Grade, Optimum, Run, TrainPlan
 from sim.errors import InputError
-from sim.files import check_output
 from sim.physics.fidelity import PRESETS, Fidelity
 from sim.physics.models.optimum import continuous_optimum_m
 from sim.physics.models.transition import physics_model
 from sim.scenario import Cell, Scenario
 
-__all__ = ["Comparison", "Grade", "InputError", "Optimum", "Run", "compare", "grade",
-           "optimum", "route", "train"]
+__all__ = ["Comparison", "Grade", "InputError", "Optimum", "Run", "TrainPlan", "compare",
+           "grade", "optimum", "route", "train"]
 
 # ---------------------------------------------------------------- train
 
@@ -103,7 +104,8 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
           start: Cell | None = None, goal: Cell | None = None,
           save: str | Path | None = None, resume: str | Path | None = None,
           record_every: int = 10, record_values_every: int = 300,
-          init: Run | str | Path | None = None, pretrain: Any = None) -> Run:
+          init: Run | str | Path | None = None, pretrain: Any = None,
+          announce: Callable[[TrainPlan], None] | None = None) -> Run:
     """One method on one scenario, one seed: the run ``rnhql train`` makes.
 
     ``world``: ``"grid"`` or ``"physics"`` (``fidelity``: a rung such as ``"noisy"``, a
@@ -120,12 +122,14 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
     seed=s)`` is the run ``compare(..., pretrain=("grid", n))`` makes for seed ``s``.
     ``pretrain=("grid", n)`` does both phases in one call. The record's ``pretrain`` entry
     counts the first phase in its own currency and grades its policy at this run's rung.
+    ``announce``: called once every argument is checked (and a checkpoint to resume
+    loaded), before any training, with a :class:`TrainPlan`.
     """
     fn = "train"
     scenario = scenario_arg(fn, scenario)
     name = method_arg(fn, method)
     if world not in WORLDS:
-        raise err(fn, "world", f"is {world!r}", f"use one of: {', '.join(WORLDS)}")
+        raise err(fn, "world", f"is {world!r}, not a world", f"use one of: {', '.join(WORLDS)}")
     episodes = whole(fn, "episodes", DEFAULT_EPISODES if episodes is None else episodes, 1,
                       MAX_EPISODES, 300)
     seed = whole(fn, "seed", seed, 0, MAX_SEED, 0)
@@ -143,15 +147,31 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
     if carried is not None and n_pre:
         raise err(fn, "pretrain", "and init both say where the learner starts",
                   "pass one of them")
+    cfg = make_config(name, overrides)  # a bad setting fails here, before any work
+    if is_plain(cfg) and (save is not None or resume is not None):
+        raise err(fn, "save" if save is not None else "resume",
+                  f"does not apply: {name} is a plain-Python learner, its state is its own",
+                  "save it from your own code (the returned Run has its policy), or drop "
+                  + ("save=..." if save is not None else "resume=..."))
+    if resume is not None and world != "grid":
+        raise err(fn, "resume", "is only supported for grid runs",
+                  "drop resume=... or pass world='grid'")
     if save is not None:  # checked now: not after training, with the run lost
-        check_output(Path(save), "save")
+        output_arg(fn, "save", save)
 
     rec_path = record_arg(fn, record, sc.name, f"{name.replace(':', '.')}-{world}-s{seed}")
     spec = RunSpec(scenario, name, seed, episodes, world, overrides, start=start, goal=goal,
                    rewards=rewards_text, fidelity=fid, s_starts=s_starts, pretrain=n_pre)
+
+    def said(resumed: int | None) -> None:
+        if announce is not None:
+            announce(TrainPlan(cfg.name, sc, world, spec.fidelity_spec.label
+                               if world == "physics" else None, seed, episodes, resumed,
+                               n_pre))
+
     rec, out = train_single(spec, sc, model, save=save, resume=resume, record=rec_path,
-                            record_every=record_every,
-                            record_values_every=record_values_every, init=carried)
+                            record_every=record_every, record_values_every=record_values_every,
+                            init=carried, announce=said)
     return dataclasses.replace(Run.from_record(rec, None if rec_path is None
                                                else Path(rec_path)), carried=out)
 

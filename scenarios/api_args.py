@@ -1,10 +1,11 @@
 """The arguments of :mod:`scenarios.api`, checked before any work: each helper returns the
 value as a sweep holds it (text, a name, a cell) or raises :class:`sim.errors.InputError`
-naming the function, the argument and the fix (the command's flags are checked by
-:mod:`scenarios.cli.args`, naming the flag)."""
+naming the function, the argument and the fix. These are the only checks: the command
+passes its flags here and says a refusal in flag words (:func:`scenarios.cli.args.flag_words`)."""
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -16,6 +17,7 @@ from learning.config import MethodConfig
 from learning.methods.registry import METHODS, comparison_methods
 from learning.plain.learner import located_name, remember
 from scenarios.runs.spec import WORLDS, load, method_class, physics_budget
+from scenarios.sweep.outdir import check_output_file
 from sim.env_args import DEFAULT_REWARDS  # the one default (the envs', the command's, ours):
 
 #                                          goal-only; the paper's own is rewards="paper"
@@ -266,6 +268,17 @@ def problem_of(fn: str, scenario: str | Scenario, start: Cell | None, goal: Cell
     sc, model = load(scenario, start, goal, rewards, s_starts)
     physics_budget(sc, worlds)
     return sc, model
+
+
+def output_arg(fn: str, arg: str, path: Any, suffix: str | None = None) -> Path:
+    """A file the call writes at the end, checked before any work: a path whose folder
+    exists and takes files, not a folder (the run is not lost to a bad name)."""
+    if not isinstance(path, str | os.PathLike):
+        raise err(fn, arg, f"is {path!r}, not a path", f"pass {arg}='agent.npz'")
+    try:
+        return check_output_file(Path(path), arg, suffix)
+    except InputError as e:
+        raise err(fn, arg, e.problem, e.fix) from None
 
 
 def scenario_name(scenario: str | Scenario) -> str:

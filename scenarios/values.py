@@ -4,6 +4,7 @@ writes (a run's ``results.json`` entry), so a script and the CLI see the same fi
 - :class:`Run`: one trained run (one method, world, seed);
 - :class:`Comparison`: a sweep's runs, its ``results.json`` payload, and how to write it;
 - :class:`Grade`: a policy driven from S at a fidelity, as the tool grades its own;
+- :class:`TrainPlan`: what a call of ``train`` is about to run (its ``announce``);
 - :class:`Optimum`: the yardsticks: the grid's BFS optimum, the physics world's at
   ``exact``, V* at the fidelity where it is defined, the disc's continuous path.
 
@@ -207,6 +208,21 @@ class Comparison:
 
 def _method_key(cls: type) -> str:
     return cls.cli if issubclass(cls, MethodConfig) else located_name(cls)
+
+
+@dataclass(frozen=True)
+class TrainPlan:
+    """What :func:`scenarios.api.train` is about to run, every argument checked, before any
+    training (its ``announce`` callback gets it: the command prints its first lines there)."""
+
+    method: str  # as tables name it
+    scenario: Scenario
+    world: str  # "grid" or "physics"
+    fidelity: str | None  # the rung's label (physics), else None
+    seed: int
+    episodes: int
+    resumed_episodes: int | None  # episodes already in the checkpoint resumed, else None
+    pretrain: int  # grid episodes first (0: none)
 
 
 @dataclass(frozen=True)

@@ -41,7 +41,7 @@ ARENA = str(MAPS / "arena.map")  # what the word ARENA stands for in a command b
     ("train paper-40 --set alpha", "FIELD=NUMBER"),
     ("train paper-40 --set colour=1", "has no field"),
     ("train paper-40 --set alpha=7", "alpha"),
-    ("train paper-40 --world moon", "unknown world"),
+    ("train paper-40 --world moon", "--world: is 'moon', not a world"),
     ("train paper-40 --episodes 0", "must be >= 1"),
     ("train paper-40 --save /nonexistent/dir/a.npz --episodes 1", "cannot write"),
     ("compare paper-40 --methods st-ql,nope --out x", "unknown method"),

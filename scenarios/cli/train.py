@@ -1,6 +1,8 @@
 """``rnhql train``: one method, one scenario, one seed; optional checkpoint and recording.
 
-The flags are checked here (errors name the flag); the run is :func:`scenarios.api.train`.
+The flags go straight to :func:`scenarios.api.train`, which checks them (its refusals are
+said in flag words, exit 2) and runs; this module prints what it is about to run and what
+ran.
 """
 
 from __future__ import annotations
@@ -9,71 +11,54 @@ import argparse
 import json
 from pathlib import Path
 
-from learning.drivers.checkpoint import load_checkpoint
-from learning.geometry import geometry_of
 from scenarios.cli.args import (
-    MAX_EPISODES,
-    check_world,
     compile_notice,
     in_flag_words,
     parse_overrides,
-    physics_budget,
-    positive,
     problem_arg,
     rewards_note,
-    seed_value,
     starts_note,
 )
-from scenarios.runs.spec import ExperimentError, make_config
 from scenarios.sweep.outdir import check_output_file, record_path
 from sim.files import atomic_write_text
-from sim.physics.fidelity import parse_fidelity
 
 
 def cmd_train(args: argparse.Namespace) -> int:
     # lazy: scenarios.api (sweeps, values) costs 22 ms at startup
     from scenarios import api
 
-    pb = problem_arg(args)
-    sc, model = pb.sc, pb.model
-    check_world(args.world)
-    physics_budget(sc, [args.world])
-    positive(args.episodes, "--episodes", MAX_EPISODES)
-    seed_value(args.seed, "--seed")
-    if args.json:
+    pb = problem_arg(args)  # the scenario loaded, --rewards/--s-starts/--fidelity parsed
+    if args.json:  # a flag of the command's own (the library returns the record)
         check_output_file(Path(args.json), "--json")
-    if args.save:  # a folder at --save fails now, not after training (the agent lost)
-        check_output_file(Path(args.save), "--save")
-    if args.resume and args.world != "grid":
-        raise ExperimentError("command line", "--resume", "is only supported for grid runs",
-                              "drop --resume or use --world grid")
-    overrides = parse_overrides(args.set)
-    cfg = make_config(args.method, overrides)
-    every = positive(10 if args.record_every is None else args.record_every, "--record-every")
-    values_every = positive(args.record_values_every, "--record-values-every")
-    record = record_path(args, sc.name, f"{args.method}-{args.world}-s{args.seed}")
-    world = (args.world if args.world == "grid" else
-             f"physics at fidelity {(pb.fidelity or parse_fidelity(sc.physics)).label}")
-    print(f"{cfg.name} on {sc.name} ({world}), seed {args.seed}, {args.episodes} episodes, "
-          f"rewards {sc.rewards.label()}{rewards_note(args)}{starts_note(sc)}")
-    if args.resume:  # say what it resumes from (the checks run again in the run itself)
-        ck = load_checkpoint(args.resume, args.method, model.n_states, geometry_of(model))
-        print(f"resuming {args.resume}: {ck.episodes} of {args.episodes} episodes done, "
-              f"training the other {max(args.episodes - ck.episodes, 0)}")
-    if args.init:
-        print(f"warm start from {args.init}")
-    compile_notice(1, physics=args.world == "physics")
-    with in_flag_words():  # the library checks --init and --pretrain (and says so in flags)
+    record = record_path(args, pb.sc.name, f"{args.method}-{args.world}-s{args.seed}")
+
+    def announce(plan: api.TrainPlan) -> None:
+        """Every argument checked, nothing trained yet: what is about to run."""
+        world = plan.world if plan.fidelity is None else f"physics at fidelity {plan.fidelity}"
+        print(f"{plan.method} on {plan.scenario.name} ({world}), seed {plan.seed}, "
+              f"{plan.episodes} episodes, rewards {plan.scenario.rewards.label()}"
+              f"{rewards_note(args)}{starts_note(plan.scenario)}")
+        if plan.resumed_episodes is not None:
+            print(f"resuming {args.resume}: {plan.resumed_episodes} of {plan.episodes} "
+                  f"episodes done, training the other "
+                  f"{max(plan.episodes - plan.resumed_episodes, 0)}")
+        if args.init:
+            print(f"warm start from {args.init}")
+        compile_notice(1, physics=plan.world == "physics")
+
+    with in_flag_words():  # the library checks every argument (and says so in flags)
         run = api.train(pb.scenario, args.method, world=args.world, fidelity=pb.fidelity,
                         episodes=args.episodes, seed=args.seed,
                         rewards="scenario" if pb.rewards is None else pb.rewards,
-                        record=record, settings=dict(overrides), s_starts=pb.s_starts,
-                        start=pb.start, goal=pb.goal, save=args.save, resume=args.resume,
-                        record_every=every, record_values_every=values_every,
-                        init=args.init, pretrain=args.pretrain)
+                        record=record, settings=dict(parse_overrides(args.set)),
+                        s_starts=pb.s_starts, start=pb.start, goal=pb.goal, save=args.save,
+                        resume=args.resume,
+                        record_every=10 if args.record_every is None else args.record_every,
+                        record_values_every=args.record_values_every, init=args.init,
+                        pretrain=args.pretrain, announce=announce)
     if record is not None:
         print(f"  recording             {record}  (open: rnhql view {record})")
-    print_run(dict(run.record), model.optimal_route_length)
+    print_run(dict(run.record), pb.model.optimal_route_length)
     print_pretrain(run)
     if args.save:
         print(f"  saved agent           {args.save}")

@@ -8,6 +8,7 @@ record equals the sweep's record of the same spec (the same streams: a run of
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +20,6 @@ from learning.plain.learner import is_plain
 from learning.streams import streams
 from scenarios.runs.physics import log_final, train_physics
 from scenarios.runs.spec import (
-    ExperimentError,
     RunOutcome,
     RunSpec,
     layout_digest,
@@ -36,24 +36,18 @@ from sim.scenario import Scenario
 def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
                  save: str | Path | None = None, resume: str | Path | None = None,
                  record: str | None = None, record_every: int = 10,
-                 record_values_every: int = 300, init: Carried | None = None
+                 record_values_every: int = 300, init: Carried | None = None,
+                 announce: Callable[[int | None], None] | None = None
                  ) -> tuple[dict[str, Any], Carried]:
     """Train ``spec`` (its scenario already loaded as ``sc``, ``model``): its record, and what
     the trained learner carries into another world (``init`` of a next run).
 
     ``init``: a warm start for a physics run (:class:`scenarios.runs.warm.Carried`, checked
     by the caller): its learner and start streams continue; ``spec.pretrain`` > 0 trains
-    that grid phase here first, as a sweep does."""
+    that grid phase here first, as a sweep does. ``announce``: called once the checkpoint
+    to resume is loaded and checked, before any training, with its episodes (or None)."""
     cfg = make_config(spec.method, spec.overrides)
-    plain = is_plain(cfg)
-    if plain and (save or resume):
-        raise ExperimentError("command line", "--save" if save else "--resume",
-                              f"{spec.method} is a plain-Python learner: its state is its own",
-                              "save it from your own code (api.train returns the policy), "
-                              "or drop the flag")
-    if resume and spec.world != "grid":
-        raise ExperimentError("command line", "--resume", "is only supported for grid runs",
-                              "drop --resume or use --world grid")
+    plain = is_plain(cfg)  # (save/resume: refused for plain learners by the caller)
     problem = {"scenario": scenario_digest(*spec.problem), "rewards": sc.rewards.label(),
                "layout": layout_digest(spec.scenario, spec.start, spec.goal),
                "world": spec.world}  # (a warm start says which world it learned in)
@@ -67,6 +61,8 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
     if resume:
         checkpoint = load_checkpoint(resume, spec.method, model.n_states, geometry_of(model))
         checkpoint.check_problem(problem)
+    if announce is not None:
+        announce(None if checkpoint is None else int(checkpoint.episodes))
     recorder = plan = observer = None
     if record is not None:
         # lazy: scenarios.recording (rerun) costs 270 ms at import; only a recorded run needs it

@@ -6,6 +6,9 @@ values back. The ``rnhql`` command is a shell over these calls.
 - :func:`grade`: any policy (an action per cell, or a function of the cell) driven from S at
   a fidelity, as the tool grades its own final policies -> :class:`Grade`
 - :func:`optimum`: the yardsticks of a scenario at a fidelity (V* where defined) -> :class:`Optimum`
+- :func:`route`: a saved agent's greedy policy graded from S -> :class:`Grade`
+- :func:`aliasing`: how many next cells a (cell, action) leads to at a fidelity -> :class:`Aliasing`
+- :func:`crosscheck`: the same primitives in IR-SIM, an independent simulator -> :class:`Crosscheck`
 
 ``scenario`` is a built-in name, a ``.toml``/``.map`` path or a :class:`sim.scenario.Scenario`;
 a method is a registry name (``"rnh-ql+"``), ``"module:Class"``, or the class itself: a
@@ -21,11 +24,8 @@ keywords are kept stable.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import os
-import tempfile
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -64,6 +64,7 @@ from scenarios.api_args import (
     whole,
     worlds_arg,
 )
+from scenarios.api_models import _optimum_always, aliasing, crosscheck, optimum, optimum_of
 from scenarios.runs.physics_grading import FINAL_TAG, Grader
 from scenarios.runs.single import train_single
 from scenarios.runs.spec import (
@@ -75,24 +76,29 @@ from scenarios.runs.spec import (
     method_class,
     settable_fields,
 )
-from scenarios.sweep.backends import Progress, run_local, run_ray
+from scenarios.sweep.execute import BACKENDS, START_METHODS, sweep
 from scenarios.sweep.run import (
     SweepRecording,
-    assemble,
     make_specs,
     matches_optimum,
     optimum_at_fidelity,
-    run_sweep,
 )
-from scenarios.values import Comparison, Grade, Optimum, Run, TrainPlan
+from scenarios.values import (
+    Aliasing,
+    Comparison,
+    Crosscheck,
+    Grade,
+    Optimum,
+    Run,
+    TrainPlan,
+)
 from sim.errors import InputError
-from sim.physics.fidelity import PRESETS, Fidelity
-from sim.physics.models.optimum import continuous_optimum_m
-from sim.physics.models.transition import physics_model
-from sim.scenario import Cell, Scenario
+from sim.physics.fidelity import PRESETS
+from sim.scenario import Cell
 
-__all__ = ["Comparison", "Grade", "InputError", "Optimum", "Run", "TrainPlan", "compare",
-           "grade", "optimum", "route", "train"]
+__all__ = ["Aliasing", "Comparison", "Crosscheck", "Grade", "InputError", "Optimum", "Run",
+           "TrainPlan", "aliasing", "compare", "crosscheck", "grade", "optimum", "route",
+           "train"]
 
 # ---------------------------------------------------------------- train
 
@@ -232,7 +238,7 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
     if n_pre:
         specs = [dataclasses.replace(sp, pretrain=n_pre) if sp.world == "physics" else sp
                  for sp in specs]
-    execute, kwargs = _backend(fn, backend, address, jobs, start_method)
+    _check_backend(fn, backend, address, start_method)
     rec_path = record_arg(fn, record, scenario_name(scenario).rsplit("/", 1)[-1]
                        .removesuffix(".toml"), "compare")
     recording = None
@@ -244,17 +250,9 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
             detail_seeds=whole(fn, "record_seeds", record_seeds, 1, MAX_SEEDS, 1))
     if announce is not None:
         announce(len(specs), names, worlds)
-    bar = Progress(len(specs), enabled=bool(progress))
-    if out is None and recording is None:
-        try:
-            records = execute(specs, progress=bar, **kwargs)
-        finally:
-            bar.close()
-        results = assemble(specs, records)
-    else:
-        with _out_dir(out) as out_dir:
-            results = run_sweep(specs, out_dir, execute, resume=resume, recording=recording,
-                                progress=bar, figures=figures and out is not None, **kwargs)
+    results = sweep(specs, out, backend_name=backend, jobs=jobs, address=address,
+                    start_method=start_method, resume=resume, recording=recording,
+                    figures=figures, progress=bool(progress))
     rec = None if rec_path is None else Path(rec_path)
     return Comparison(sc, [Run.from_record(r, rec) for r in results["runs"]], results,
                       None if out is None else Path(out), rec)
@@ -280,72 +278,20 @@ def settings_per_method(methods: Sequence[str], overrides: tuple[tuple[str, floa
     return out
 
 
-def _backend(fn: str, backend: str, address: str | None, jobs: int | None,
-             start_method: str | None) -> tuple[Callable[..., Any], dict[str, Any]]:
-    if backend == "local":
-        if address is not None:
-            raise err(fn, "address", "only applies with the Ray backend",
-                       "pass backend='ray', or drop address=...")
-        if start_method not in (None, "fork", "spawn", "forkserver"):
-            raise err(fn, "start_method", f"is {start_method!r}",
-                       "use 'fork', 'spawn' or 'forkserver' (or None)")
-        return run_local, {"jobs": jobs or os.cpu_count() or 1, "start_method": start_method}
-    if backend == "ray":
-        return run_ray, {"address": address, "num_cpus": jobs}
-    raise err(fn, "backend", f"is {backend!r}, not a backend", "pass backend='local' or "
-              "backend='ray'")
+def _check_backend(fn: str, backend: str, address: str | None,
+                   start_method: str | None) -> None:
+    if backend not in BACKENDS:
+        raise err(fn, "backend", f"is {backend!r}, not a backend", "pass backend='local' or "
+                  "backend='ray'")
+    if backend == "local" and address is not None:
+        raise err(fn, "address", "only applies with the Ray backend",
+                  "pass backend='ray', or drop address=...")
+    if backend == "local" and start_method not in START_METHODS:
+        raise err(fn, "start_method", f"is {start_method!r}",
+                  "use 'fork', 'spawn' or 'forkserver' (or None)")
 
 
-@contextlib.contextmanager
-def _out_dir(out: str | Path | None) -> Iterator[Path]:
-    """``out``, or a folder that is gone afterwards (a recorded sweep with nothing to keep)."""
-    if out is not None:
-        yield Path(out)
-        return
-    with tempfile.TemporaryDirectory(prefix="rnhql-sweep-") as tmp:
-        yield Path(tmp)
-
-
-# ---------------------------------------------------------------- grade, optimum
-
-
-def optimum(scenario: ScenarioLike, *, fidelity: Any = "exact", rewards: Any = None,
-            start: Cell | None = None, goal: Cell | None = None) -> Optimum:
-    """The yardsticks at ``fidelity``: the grid's BFS optimum, the physics world's at exact,
-    V*(S) (expected primitives) and P(G) where V* is defined (not where the state is
-    hidden: open loop, localisation), and the disc's continuous path. V* is built by
-    driving and cached on disk (``rnhql optimum`` says what it cost)."""
-    fn = "optimum"
-    scenario = scenario_arg(fn, scenario)
-    fid = fidelity_arg(fn, fidelity, True) or PRESETS["exact"]
-    sc, model = problem_of(fn, scenario, cell_arg(fn, "start", start), cell_arg(fn, "goal", goal),
-                         rewards_arg(fn, rewards), None, ["physics"])
-    return _optimum(sc, model, fid)
-
-
-def _optimum(sc: Scenario, model: Any, fid: Fidelity) -> Optimum:
-    exact = physics_model(sc).optimal_route_length
-    if fid.is_exact:
-        v, p = (float(exact), 1.0) if exact >= 0 else (float("inf"), 0.0)
-    else:
-        with _optimum_always():
-            at = optimum_at_fidelity(sc, fid)
-        v, p = (None, None) if at is None else (at["expected_primitives"],
-                                                at["p_goal_within_budget"])
-    cont = continuous_optimum_m(sc)
-    return Optimum(fid.label, int(model.optimal_route_length), int(exact), v, p,
-                   int(sc.steps_per_episode), None if cont is None else round(cont, 4))
-
-
-@contextlib.contextmanager
-def _optimum_always() -> Iterator[None]:
-    """V* even where a test sweep switched it off for its sweeps (RNHQL_NO_OPTIMUM)."""
-    old = os.environ.pop("RNHQL_NO_OPTIMUM", None)
-    try:
-        yield
-    finally:
-        if old is not None:
-            os.environ["RNHQL_NO_OPTIMUM"] = old
+# ---------------------------------------------------------------- grade, route
 
 
 def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: ScenarioLike,
@@ -378,7 +324,7 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
                      else 0, measure_metres=True, keep_routes=True, keep_path=True)
     summary = r.summary()
     walk, _ = greedy_test(st, model)
-    opt = _optimum(sc, model, fid) if with_optimum else None
+    opt = optimum_of(sc, model, fid) if with_optimum else None
     optimal = None
     if opt is not None and opt.expected_primitives is not None:
         if fid.is_exact:

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import shlex
 import types
 import typing
 from collections.abc import Sequence
@@ -119,6 +120,40 @@ def parser_of(cls: type, doc: str | None) -> argparse.ArgumentParser:
         else:
             p.add_argument(flag, **{"type": kind, "default": f.default, **f.metadata})
     return p
+
+
+def command_line(prog: str, parser: argparse.ArgumentParser, values: Any) -> str:
+    """The command that gives ``values`` (a parsed namespace or an ``Args`` instance),
+    derived from ``parser``'s declared arguments: the positionals, then every flag that has
+    a value (its default too: a default may change, the record may not), in declaration
+    order. An artifact's provenance is written this way, never by hand, so it names what
+    ran."""
+    got = (values if isinstance(values, dict) else dataclasses.asdict(values)
+           if dataclasses.is_dataclass(values) else vars(values))
+    words = prog.split()
+    for act in parser._actions:
+        if isinstance(act, argparse._HelpAction | argparse._VersionAction) or \
+                act.dest.startswith("_") or act.dest in ("func", "command"):
+            continue
+        v = got.get(act.dest, act.default)
+        if not act.option_strings:
+            words += [] if v is None else [str(v)]
+        elif v is None or v is False:
+            continue
+        elif isinstance(act, argparse._StoreTrueAction):
+            words.append(act.option_strings[-1])
+        else:
+            for one in (v if isinstance(act, argparse._AppendAction) else [v]):
+                words += [act.option_strings[-1], str(one)]
+    return " ".join(shlex.quote(w) for w in words)
+
+
+def study_command(module: str, cls: type, args: Any) -> str:
+    """``python -m MODULE`` and the flags that give ``args`` (an ``Args`` instance of
+    ``cls``), derived from the declared fields (:func:`command_line`); ``--resume`` says how
+    a run went, not what it computed, and is left out."""
+    return command_line(f"python -m {module}", parser_of(cls, None),
+                        {**dataclasses.asdict(args), "resume": False})
 
 
 def parse(cls: type[T], doc: str | None, argv: Sequence[str] | None = None) -> T:

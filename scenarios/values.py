@@ -6,7 +6,11 @@ writes (a run's ``results.json`` entry), so a script and the CLI see the same fi
 - :class:`Grade`: a policy driven from S at a fidelity, as the tool grades its own;
 - :class:`TrainPlan`: what a call of ``train`` is about to run (its ``announce``);
 - :class:`Optimum`: the yardsticks: the grid's BFS optimum, the physics world's at
-  ``exact``, V* at the fidelity where it is defined, the disc's continuous path.
+  ``exact``, V* at the fidelity where it is defined, the disc's continuous path
+  (:class:`ModelBuild`: how V* was found);
+- :class:`Aliasing`: how many next cells a (cell, action) can lead to at a fidelity;
+- :class:`Crosscheck`: how far this physics and IR-SIM agree (:class:`Stratum`,
+  :class:`PolicyAgreement`).
 
 In a Jupyter notebook a value with a recording shows it inline (:meth:`Run.show`; needs
 the ``rnhql[notebook]`` extra, Rerun's notebook viewer).
@@ -18,7 +22,7 @@ import math
 import os
 import sys
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -226,8 +230,30 @@ class TrainPlan:
 
 
 @dataclass(frozen=True)
+class ModelBuild:
+    """How V* was found: the stochastic model of the physics world at the fidelity, built by
+    driving (:mod:`sim.physics.models.build`, cached on disk) and solved by value iteration."""
+
+    states: int  # model states (cell, context[, rest pose])
+    arrived: int  # states of a robot that arrived on a cell centre
+    facing: tuple[int, ...]  # ... arrived facing each action's direction (up, down, left, right)
+    resting: int  # states of a robot resting where a contact left it
+    resting_pairs: int  # (cell, bumped action) pairs those rest poses come from
+    primitives: int  # driven to build it
+    build_s: float  # what building it cost [s]
+    loaded_s: float | None  # what loading it from the disk cache took [s] (None: built now)
+    samples: int  # drives per (state, action)
+    refined: int  # ... where they disagreed
+    particles: int  # rest poses per (cell, bumped action)
+    particle_samples: int  # drives per rest pose
+    seed: int
+    sweeps: int  # of value iteration
+
+
+@dataclass(frozen=True)
 class Optimum:
-    """The yardsticks of a scenario at a fidelity."""
+    """The yardsticks of a scenario at a fidelity (``model``, ``driven``: how V* was found
+    and checked; not compared: two equal optima may come from a build and a cache load)."""
 
     fidelity: str
     grid_route_length: int  # BFS moves S -> G on the grid (-1: none)
@@ -236,6 +262,9 @@ class Optimum:
     p_goal_within_budget: float | None  # P(G) within the episode under V*'s policy
     budget: int  # the episode's primitives
     continuous_route_m: float | None  # the disc's any-angle path [m]
+    scenario: str = ""  # its name
+    model: ModelBuild | None = field(default=None, compare=False)
+    driven: Any = field(default=None, compare=False)  # RolloutStats of V*'s policy, if asked
 
     def __str__(self) -> str:
         v = ("undefined (hidden state)" if self.expected_primitives is None
@@ -243,6 +272,90 @@ class Optimum:
              else f"{self.expected_primitives:.2f} expected primitives")
         return (f"optimum at {self.fidelity}: V*(S) {v}; exact physics "
                 f"{self.physics_route_length}, grid {self.grid_route_length} moves")
+
+
+@dataclass(frozen=True)
+class Aliasing:
+    """How many next cells one (cell, action) can lead to at a fidelity
+    (:mod:`sim.physics.models.aliasing`): what the grid's states cannot see."""
+
+    scenario: str
+    fidelity: str
+    repeats: int  # drives per (cell, action)
+    seed: int
+    pairs: int  # (cell that reaches G, action) pairs driven
+    primitives: int
+    seconds: float  # driving them [s]
+    multi_outcome_fraction: float  # share of pairs with more than one next cell
+    mean_entropy_bits: float  # of the next-cell distribution, over the pairs
+    mean_bump_probability: float
+    heat_map: np.ndarray  # float64[ny, nx]: a cell's largest next-cell entropy (nan: none)
+    record: Mapping[str, Any]  # aliasing.json's figures, per pair too
+
+    def __str__(self) -> str:
+        return (f"{self.scenario}, fidelity {self.fidelity}: {self.pairs} (cell, action) "
+                f"pairs x {self.repeats} drives in {self.seconds:.1f} s; "
+                f"multi_outcome_fraction {self.multi_outcome_fraction:.4f}, mean entropy "
+                f"{self.mean_entropy_bits:.4f} bits, mean bump probability "
+                f"{self.mean_bump_probability:.4f}")
+
+
+@dataclass(frozen=True)
+class Stratum:
+    """One stratum of a crosscheck's (cell, action) pairs: how far the simulators agree
+    (None: the map has no pair of it)."""
+
+    pairs: int
+    bump_agree: float | None  # share of pairs whose majority bump-or-not agrees
+    bump_gap: float | None  # mean |P(bump) here - P(bump) in IR-SIM|
+    class_agree: float | None  # share whose most frequent outcome class agrees
+    tv: float | None  # mean total variation distance of the outcome classes
+    p_bump_ours: float | None
+    p_bump_irsim: float | None
+
+
+@dataclass(frozen=True)
+class PolicyAgreement:
+    """One policy driven from S in both simulators."""
+
+    drives: int
+    p_goal_rnhql: float
+    p_goal_irsim: float
+    primitives_rnhql: float | None  # mean over the drives that reached G
+    primitives_irsim: float | None
+
+
+@dataclass(frozen=True)
+class Crosscheck:
+    """The same primitives, and policies, here and in IR-SIM
+    (:mod:`sim.physics.crosscheck.agreement`)."""
+
+    scenario: str
+    fidelity: str
+    pairs: int
+    repeats: int  # drives per pair in each simulator
+    primitives: int
+    seed: int
+    strata: Mapping[str, Stratum]  # grid-blocked, free-near-obstacle, free-open, all
+    seconds_rnhql: float
+    seconds_irsim: float
+    policies: Mapping[str, PolicyAgreement]
+
+    @classmethod
+    def of(cls, r: Mapping[str, Any]) -> Crosscheck:
+        """From the dict :func:`sim.physics.crosscheck.agreement.crosscheck` returns."""
+        return cls(r["scenario"], r["fidelity"], r["pairs"], r["repeats"], r["primitives"],
+                   r["seed"], _readonly({k: Stratum(**v) for k, v in r["strata"].items()}),
+                   r["seconds"]["rnhql"], r["seconds"]["irsim"],
+                   _readonly({k: PolicyAgreement(**v) for k, v in r["policies"].items()}))
+
+    def as_dict(self) -> dict[str, Any]:
+        """The JSON form (``--json``, the artifact): the figures as the simulators gave them."""
+        return {"scenario": self.scenario, "fidelity": self.fidelity, "pairs": self.pairs,
+                "repeats": self.repeats, "primitives": self.primitives, "seed": self.seed,
+                "strata": {k: asdict(v) for k, v in self.strata.items()},
+                "seconds": {"rnhql": self.seconds_rnhql, "irsim": self.seconds_irsim},
+                "policies": {k: asdict(v) for k, v in self.policies.items()}}
 
 
 @dataclass(frozen=True)

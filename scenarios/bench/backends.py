@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from scenarios.script_args import arg, parse
-from scenarios.sweep.backends import run_local, run_ray
-from scenarios.sweep.run import make_specs, run_sweep
+from scenarios.sweep.execute import BACKENDS, sweep
+from scenarios.sweep.run import make_specs
 
 
 def run_bench(cpus: int = 2) -> dict:
@@ -26,10 +26,10 @@ def run_bench(cpus: int = 2) -> dict:
     specs = make_specs("paper-40", ["rnh-ql", "st-ql", "dyna-q"], list(range(8)), 1000, ["grid"])
     out: dict = {"runs": len(specs), "cpus": cpus}
     with tempfile.TemporaryDirectory() as tmp:
-        for name, execute, kw in (("local", run_local, {"jobs": cpus}),
-                                  ("ray", run_ray, {"num_cpus": cpus})):
+        for name in BACKENDS:
             t0 = time.perf_counter()
-            run_sweep(specs, Path(tmp) / name, execute, figures=False, **kw)
+            sweep(specs, Path(tmp) / name, backend_name=name, jobs=cpus, figures=False,
+                  progress=False)
             dt = time.perf_counter() - t0
             out[f"{name}_s"] = dt
             out[f"{name}_runs_per_s"] = len(specs) / dt

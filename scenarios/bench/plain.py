@@ -31,8 +31,8 @@ from learning.drivers.train import train_tabular
 from learning.plain.learner import is_plain
 from scenarios.artifacts import write_artifact
 from scenarios.runs.spec import load, make_config
-from scenarios.script_args import arg, artifact_arg, parse
-from scenarios.sweep.backends import run_local
+from scenarios.script_args import arg, artifact_arg, parse, study_command
+from scenarios.sweep.execute import sweep
 from scenarios.sweep.run import make_specs
 
 SCENARIO = "paper-50"
@@ -65,7 +65,7 @@ def physics_rates(seeds: int, episodes: int, with_port: bool) -> dict[str, float
     methods = ["st-ql", PORT] if with_port else ["st-ql"]
     specs = make_specs(SCENARIO, methods, list(range(seeds)), episodes, ["physics"],
                        rewards="goal-only")
-    records = run_local(specs, jobs=1)
+    records = sweep(specs, jobs=1, progress=False)["runs"]
     out: dict[str, float] = {}
     for m in methods:
         recs = [r for r in records if r["method"] == m]
@@ -104,11 +104,8 @@ def main(argv: list[str] | None = None) -> int:
     data = measure(a.episodes, a.repeats, a.seeds, a.physics_episodes)
     print(json.dumps(data, indent=1))
     if a.artifact is not None:
-        cmd = (f"python -m scenarios.bench.plain --episodes {a.episodes} --repeats {a.repeats} "
-               f"--seeds {a.seeds} --physics-episodes {a.physics_episodes} "
-               f"--artifact {a.artifact}")
-        write_artifact(f"plain-learner.{a.artifact}", cmd, ["grid", "physics-exact"], data,
-                       study=__file__)
+        write_artifact(f"plain-learner.{a.artifact}", study_command(__spec__.name, Args, a),
+                       ["grid", "physics-exact"], data, study=__file__)
     return 0
 
 

@@ -387,6 +387,8 @@ FLAG_OF = {
     "record": "--record", "record_every": "--record-every",
     "record_values_every": "--record-values-every", "record_seeds": "--record-seeds",
     "init": "--init", "pretrain": "--pretrain", "drives": "--drives",
+    "samples": "--samples", "rollouts": "--rollouts", "repeats": "--repeats",
+    "pairs": "--pairs", "policies": "--policy", "agents": "--agent", "agent": "--agent",
 }
 
 
@@ -395,6 +397,11 @@ def flag_words(err: InputError, renamed: dict[str, str] | None = None) -> InputE
     in the fix written ``--flag value``; errors from elsewhere (a file, a field) unchanged."""
     if not err.source.startswith("scenarios.api."):
         return err
+    if ": " in err.source:  # a part of an argument ("scenarios.api.optimum: fidelity")
+        flag = (renamed or {}).get(err.source.split(": ", 1)[1]) or \
+            FLAG_OF.get(err.source.split(": ", 1)[1])
+        if flag is not None:
+            return type(err)("command line", f"{flag}: {err.field}", err.problem, err.fix)
     name = err.field.split("[", 1)[0]
     flag = (renamed or {}).get(name) or FLAG_OF.get(name)
     if flag is None:

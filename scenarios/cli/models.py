@@ -1,14 +1,14 @@
-"""The physics world at a fidelity as a stochastic model: ``rnhql optimum`` and ``rnhql aliasing``;
-and checked by an independent simulator: ``rnhql crosscheck``.
+"""``rnhql optimum``, ``rnhql aliasing`` and ``rnhql crosscheck``: the physics world as a
+model, printed. Each is a call of the library (:mod:`scenarios.api_models`, re-exported by
+:mod:`scenarios.api`), which checks every argument; this module prints what it returns and
+writes the artifact, whose command line is derived from the declared flags.
 
 ``rnhql optimum``: V*, the optimum of the physics world at a fidelity (the yardstick).
-
 "Optimal at F" means matching V* at F (``/work/shared/DESIGN.md``, Fidelity): the
 expected primitives from S under the best policy in the stochastic model of the physics
-world at that fidelity, built by driving (:mod:`sim.physics.models.build`) and solved
-by value iteration (:mod:`sim.physics.models.solve`). The command prints it next to
-the exact optimum and the continuous one, with what the model cost to build; with
-``--rollouts N`` it also drives the optimal policy N times as a check.
+world at that fidelity, built by driving and solved by value iteration. The command prints
+it next to the exact optimum and the continuous one, with what the model cost to build;
+with ``--rollouts N`` it also drives the optimal policy N times as a check.
 """
 
 from __future__ import annotations
@@ -16,227 +16,166 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import time
 from pathlib import Path
 
 from scenarios.artifacts import check_artifact_target, write_artifact
-from scenarios.cli.args import (
-    compile_notice,
-    positive,
-    scenario_from_args,
-    scenario_key,
-    seed_value,
-)
+from scenarios.cli.args import compile_notice, in_flag_words, scenario_key
+from scenarios.script_args import command_line
 from scenarios.sweep.outdir import check_output_file
-from sim.errors import InputError
 from sim.grid.actions import ACTION_NAMES
-from sim.physics.fidelity import parse_fidelity
-from sim.physics.models.build import cache_dir, digest, stochastic_model
-from sim.physics.models.optimum import continuous_optimum_m
-from sim.physics.models.solve import solve
-from sim.physics.models.stochastic import (
-    ARRIVED,
-    FACING,
-    MAX_SAMPLES,
-    REFINE,
-    RESTING,
-    Sampling,
-    is_resting,
-)
-from sim.physics.models.stochastic_rollouts import drive_model_policy
-from sim.physics.models.transition import physics_model
-from sim.physics.static import PhysicsConfig
-
-MAX_ROLLOUTS = 100_000
-MAX_PAIRS = 10_000  # crosscheck: (cell, action) pairs (IR-SIM drives about 20 a second)
-MAX_REPEATS = 100_000  # aliasing: drives per (cell, action)
 
 
-def _states_line(model) -> str:
-    counts = model.context_counts()
-    facing = counts[FACING:FACING + len(ACTION_NAMES)]
-    resting = counts[RESTING:RESTING + len(ACTION_NAMES)]
-    resting_families = len({(int(c), int(x)) for c, x in
-                            zip(model.state_cell, model.state_context, strict=True)
-                            if RESTING <= x < FACING})
+def _artifact_command(args: argparse.Namespace) -> str:
+    return command_line(f"rnhql {args.command}", args._parser, args)
+
+
+def _compiling(scenario: str, fidelity: str) -> None:
+    """Every argument checked: say so if the physics kernels compile first."""
+    compile_notice(0, physics=True)
+
+
+def _model_line(b) -> str:
     parts = []
-    if counts[ARRIVED]:
-        parts.append(f"{counts[ARRIVED]:,} arrived")
-    if facing.sum():
-        parts.append(f"{facing.sum():,} arrived facing ("
-                     + ", ".join(f"{n} {k:,}" for n, k in zip(ACTION_NAMES, facing, strict=True))
-                     + ")")
-    if resting.sum():
-        parts.append(f"{resting.sum():,} resting: rest poses in {resting_families:,} "
+    if b.arrived:
+        parts.append(f"{b.arrived:,} arrived")
+    if sum(b.facing):
+        parts.append(f"{sum(b.facing):,} arrived facing ("
+                     + ", ".join(f"{n} {k:,}" for n, k in zip(ACTION_NAMES, b.facing,
+                                                               strict=True)) + ")")
+    if b.resting:
+        parts.append(f"{b.resting:,} resting: rest poses in {b.resting_pairs:,} "
                      "(cell, bumped action) pairs")
-    return f"{model.n_states:,} states: " + "; ".join(parts)
+    return f"{b.states:,} states: " + "; ".join(parts)
 
 
 def cmd_optimum(args: argparse.Namespace) -> int:
-    if getattr(args, "artifact", None):
-        check_artifact_target(args.artifact)  # before the work: a name, in a checkout
-    fid = parse_fidelity(args.fidelity)
-    samples = (None if args.samples is None
-               else positive(args.samples, "--samples", MAX_SAMPLES // REFINE))
-    seed = seed_value(args.seed, "--seed")
-    rollouts = args.rollouts
-    if rollouts:
-        positive(rollouts, "--rollouts", MAX_ROLLOUTS)
-    sc = scenario_from_args(args)
-    compile_notice(0, physics=True)
-    sampling = Sampling.default(fid, samples, seed)
-    path = cache_dir() / f"{digest(sc, PhysicsConfig(), fid, sampling)}.npz"
-    cached = path.exists()
-    t0 = time.perf_counter()
-    model = stochastic_model(sc, fid, sampling)
-    wall = time.perf_counter() - t0
-    budget = sc.steps_per_episode
-    opt = solve(model, budget)
-    exact = physics_model(sc).optimal_route_length
-    continuous = continuous_optimum_m(sc)
+    from scenarios import api
 
-    sp = model.sampling
-    print(f"{sc.name} at fidelity {fid.label}: the optimum in the physics world (V*)")
-    print(f"  model       {_states_line(model)}")
-    how = (f"{sp.samples} drives per (state, action), {sp.refined} where they disagreed"
-           if sp.refined > sp.samples else f"{sp.samples} drive(s) per (state, action)")
-    if is_resting(model.state_context).any():
-        how += f"; {sp.particles} rest poses x {sp.particle_samples} drives"
-    built = f"{model.primitives:,} primitives driven in {model.build_s:.1f} s"
-    if cached and wall < model.build_s:
-        built = f"loaded from the cache in {wall:.1f} s (built from {built})"
-    print(f"  built       {built}; {how}; seed {sp.seed}")
-    start = opt.start
-    if math.isinf(start.expected_primitives):
-        print("  V*(S)       inf: no policy reaches G with probability 1 in the model")
+    if args.artifact:
+        check_artifact_target(args.artifact)  # before the work: a name, in a checkout
+    name, start, goal = scenario_key(args)
+    with in_flag_words():
+        opt = api.optimum(name, fidelity=args.fidelity, rewards=args.rewards,
+                          start=start, goal=goal, samples=args.samples, seed=args.seed,
+                          rollouts=args.rollouts, announce=_compiling)
+    print(f"{opt.scenario} at fidelity {opt.fidelity}: the optimum in the physics world (V*)")
+    b = opt.model
+    if b is None:
+        print(f"  V*(S)       undefined: fidelity {opt.fidelity} has hidden state (open loop or "
+              "localisation) the model's states do not capture; grade by driving "
+              "(rnhql compare ... --fidelity F) and compare with the best method")
     else:
-        print(f"  V*(S)       {start.expected_primitives:.2f} expected primitives "
-              f"(value iteration, {opt.sweeps} sweeps)")
-    print(f"  P(G)        {start.p_goal_within_budget:.4f} within the episode's {budget} "
-          "primitives, under the optimal policy")
+        print(f"  model       {_model_line(b)}")
+        how = (f"{b.samples} drives per (state, action), {b.refined} where they disagreed"
+               if b.refined > b.samples else f"{b.samples} drive(s) per (state, action)")
+        if b.particles:
+            how += f"; {b.particles} rest poses x {b.particle_samples} drives"
+        built = f"{b.primitives:,} primitives driven in {b.build_s:.1f} s"
+        if b.loaded_s is not None:
+            built = f"loaded from the cache in {b.loaded_s:.1f} s (built from {built})"
+        print(f"  built       {built}; {how}; seed {b.seed}")
+        if math.isinf(opt.expected_primitives):
+            print("  V*(S)       inf: no policy reaches G with probability 1 in the model")
+        else:
+            print(f"  V*(S)       {opt.expected_primitives:.2f} expected primitives "
+                  f"(value iteration, {b.sweeps} sweeps)")
+        print(f"  P(G)        {opt.p_goal_within_budget:.4f} within the episode's {opt.budget} "
+              "primitives, under the optimal policy")
+    exact = opt.physics_route_length
     print(f"  exact       {exact if exact >= 0 else 'G not reached'} primitives "
           "(the physics world at exact)")
-    if continuous is not None:
-        print(f"  continuous  {continuous:.1f} m (Theta* path of the disc: an upper bound on "
-              "the shortest)")
-    if rollouts:
-        r = drive_model_policy(sc, model, opt.policy, rollouts, seed=seed + 1)
+    if opt.continuous_route_m is not None:
+        print(f"  continuous  {opt.continuous_route_m:.1f} m (Theta* path of the disc: an "
+              "upper bound on the shortest)")
+    r = opt.driven
+    if r is not None:
         lo, hi = r.p_goal_interval
-        print(f"  driven      {rollouts} rollouts of the optimal policy: P(G) {r.p_goal:.4f} "
+        print(f"  driven      {r.n} rollouts of the optimal policy: P(G) {r.p_goal:.4f} "
               f"(95 % interval {lo:.3f}-{hi:.3f}), mean {r.mean_primitives:.2f} primitives "
               f"(median {r.median_primitives:g}), {r.mean_contacts:.2f} contacts per rollout")
-    if getattr(args, "artifact", None):
-        driven = None if not rollouts else {
-            "rollouts": rollouts, "p_goal": r.p_goal, "p_goal_ci95": list(r.p_goal_interval),
+    if args.artifact and b is not None:
+        driven = None if r is None else {
+            "rollouts": r.n, "p_goal": r.p_goal, "p_goal_ci95": list(r.p_goal_interval),
             "primitives_mean": r.mean_primitives, "contacts_mean": r.mean_contacts}
-        cmd = (f"rnhql optimum {args.scenario} --fidelity {fid.label} --seed {seed}"
-               + ("" if samples is None else f" --samples {samples}")
-               + (f" --rollouts {rollouts}" if rollouts else "")
-               + f" --artifact {args.artifact}")
-        write_artifact(f"optimum.{args.artifact}", cmd, ["physics-exact", "physics-noisy"], {
-            "scenario": sc.name, "fidelity": fid.label, "budget": budget,
-            "v_star": None if math.isinf(start.expected_primitives)
-            else start.expected_primitives,
-            "p_goal": start.p_goal_within_budget, "exact": exact, "continuous_m": continuous,
-            "states": int(model.n_states), "drives": int(model.primitives),
-            "build_s": float(model.build_s), "driven": driven}, study=__file__)
+        write_artifact(f"optimum.{args.artifact}", _artifact_command(args),
+                       ["physics-exact", "physics-noisy"], {
+                           "scenario": opt.scenario, "fidelity": opt.fidelity, "budget": opt.budget,
+                           "v_star": None if math.isinf(opt.expected_primitives)
+                           else opt.expected_primitives,
+                           "p_goal": opt.p_goal_within_budget, "exact": exact,
+                           "continuous_m": opt.continuous_route_m, "states": b.states,
+                           "drives": b.primitives, "build_s": b.build_s, "driven": driven},
+                       study=__file__)
     return 0
 
 
 def cmd_aliasing(args: argparse.Namespace) -> int:
     """``rnhql aliasing``: the next-cell distribution of every (cell, action) at a fidelity."""
     # lazy: the aliasing study (matplotlib) costs 290 ms at startup
-    from scenarios.studies.ladder.aliasing import run
+    from scenarios import api
+    from scenarios.studies.ladder.aliasing import report
 
     if args.artifact:
         check_artifact_target(args.artifact)
     name, start, goal = scenario_key(args)
-    seed_value(args.seed, "--seed")
-    positive(args.repeats, "--repeats", MAX_REPEATS)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         check_output_file(out / "aliasing.json", "--out")
-    compile_notice(0, physics=True)
-    run(argparse.Namespace(scenario=name, start=start, goal=goal, fidelity=args.fidelity or
-                           "exact", repeats=args.repeats, seed=args.seed, rewards=args.rewards,
-                           out=out, artifact=args.artifact))
+    with in_flag_words():
+        result = api.aliasing(name, fidelity=args.fidelity, repeats=args.repeats,
+                              seed=args.seed, rewards=args.rewards, start=start, goal=goal,
+                              announce=_compiling)
+    report(result, out, args.artifact, _artifact_command(args))
     return 0
 
 
 def cmd_crosscheck(args: argparse.Namespace) -> int:
     """``rnhql crosscheck``: the same primitives, and policies, in IR-SIM (see
     :mod:`sim.physics.crosscheck.agreement`): how far the two simulators agree."""
-    from learning.compiled.readout import greedy_actions
-    from learning.drivers.checkpoint import load_checkpoint
-    from learning.geometry import geometry_of
-    from scenarios.runs.spec import layout_digest, load
+    from scenarios import api
     from sim.files import atomic_write_text
     from sim.physics.crosscheck import agreement
-    from sim.physics.crosscheck.agreement import (
-        CrosscheckOptions,
-        crosscheck,
-        grid_optimal_policy,
-    )
-    from sim.physics.crosscheck.irsim_world import _irsim, check_rung
 
     if args.artifact:
         check_artifact_target(args.artifact)
     if args.json:
         check_output_file(Path(args.json), "--json", ".json")
-    fid = parse_fidelity(args.fidelity)
-    check_rung(fid)  # before any work: a rung IR-SIM cannot model is refused
-    _irsim()  # ... and a missing IR-SIM
-    options = CrosscheckOptions(pairs=positive(args.pairs, "--pairs", MAX_PAIRS),
-                                repeats=positive(args.repeats, "--repeats", MAX_REPEATS),
-                                policy_drives=positive(args.drives, "--drives", MAX_ROLLOUTS),
-                                seed=seed_value(args.seed, "--seed"))
     name, start, goal = scenario_key(args)
-    sc, model = load(name, start, goal, getattr(args, "rewards", None))
-    policies = {}
-    for word in args.policy or []:
-        if word != "optimal":
-            raise InputError("command line", "--policy", f"{word!r} is not a policy name",
-                             "use --policy optimal (the grid's), or --agent FILE")
-        policies["grid optimal"] = grid_optimal_policy(model)
-    for path in args.agent or []:
-        ckpt = load_checkpoint(path, None, model.n_states, geometry_of(model))
-        ckpt.check_problem({"layout": layout_digest(name, start, goal)})
-        policies[f"{ckpt.method} ({Path(path).name})"] = greedy_actions(ckpt.state)
-    compile_notice(0, physics=True)
-    print(f"{sc.name} at {fid.label}: the same primitives in this physics and in IR-SIM")
-    result = crosscheck(sc, model, fid, options, policies)
+
+    def announce(scenario: str, fidelity: str) -> None:
+        _compiling(scenario, fidelity)
+        print(f"{scenario} at {fidelity}: the same primitives in this physics and in IR-SIM")
+
+    with in_flag_words(policies="--policy", agents="--agent"):
+        result = api.crosscheck(name, fidelity=args.fidelity, pairs=args.pairs,
+                                repeats=args.repeats, drives=args.drives, seed=args.seed,
+                                policies={"grid optimal": "optimal"} if args.policy else None,
+                                agents=args.agent or (), rewards=args.rewards, start=start,
+                                goal=goal, announce=announce)
     _print_crosscheck(result)
     if args.json:
-        atomic_write_text(Path(args.json), json.dumps(result, indent=1) + "\n")
+        atomic_write_text(Path(args.json), json.dumps(result.as_dict(), indent=1) + "\n")
         print(f"wrote {args.json}")
     if args.artifact:
-        words = ["rnhql crosscheck", name, "--fidelity", fid.name if fid.label == fid.name
-                 else args.fidelity, "--pairs", str(options.pairs), "--repeats",
-                 str(options.repeats), "--drives", str(options.policy_drives), "--seed",
-                 str(options.seed)]
-        words += [w for p in args.policy or [] for w in ("--policy", p)]
-        words += [w for p in args.agent or [] for w in ("--agent", p)]
-        words += ["--artifact", args.artifact]
-        path = write_artifact(f"crosscheck.{args.artifact}", " ".join(words),
-                              ["physics-exact", "physics-noisy"], result,
+        path = write_artifact(f"crosscheck.{args.artifact}", _artifact_command(args),
+                              ["physics-exact", "physics-noisy"], result.as_dict(),
                               study=agreement.__file__)  # its edits make the table stale
         print(f"wrote {path}")
     return 0
 
 
-def _print_crosscheck(r: dict) -> None:
+def _print_crosscheck(r) -> None:
     def f(x: float | None, digits: int = 3) -> str:
         return "—" if x is None else f"{x:.{digits}f}"
 
-    sec = r["seconds"]
-    print(f"  {r['pairs']} (cell, action) pairs x {r['repeats']} drive(s): "
-          f"{sec['rnhql']:.1f} s here, {sec['irsim']:.1f} s in IR-SIM")
+    print(f"  {r.pairs} (cell, action) pairs x {r.repeats} drive(s): "
+          f"{r.seconds_rnhql:.1f} s here, {r.seconds_irsim:.1f} s in IR-SIM")
     print("  stratum             pairs  bump-or-not agrees  |P(bump) gap|  class agrees  "
           "total variation")
-    for name, t in r["strata"].items():
-        print(f"  {name:<18} {t['pairs']:>6}  {f(t['bump_agree']):>18}  "
-              f"{f(t['bump_gap']):>13}  {f(t['class_agree']):>12}  {f(t['tv']):>15}")
-    for name, p in r["policies"].items():
-        print(f"  policy {name}: P(G) {p['p_goal_rnhql']:.2f} here, {p['p_goal_irsim']:.2f} "
-              f"in IR-SIM over {p['drives']} drive(s); primitives to G "
-              f"{f(p['primitives_rnhql'], 1)} here, {f(p['primitives_irsim'], 1)} in IR-SIM")
+    for name, t in r.strata.items():
+        print(f"  {name:<18} {t.pairs:>6}  {f(t.bump_agree):>18}  "
+              f"{f(t.bump_gap):>13}  {f(t.class_agree):>12}  {f(t.tv):>15}")
+    for name, p in r.policies.items():
+        print(f"  policy {name}: P(G) {p.p_goal_rnhql:.2f} here, {p.p_goal_irsim:.2f} "
+              f"in IR-SIM over {p.drives} drive(s); primitives to G "
+              f"{f(p.primitives_rnhql, 1)} here, {f(p.primitives_irsim, 1)} in IR-SIM")

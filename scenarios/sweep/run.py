@@ -136,7 +136,12 @@ def optimum_at_fidelity(sc: Any, fid: Any) -> dict[str, Any] | None:
     if os.environ.get("RNHQL_NO_OPTIMUM") == "1" or fid.hidden_state:
         return None  # hidden state (open loop, localisation): no V* (Fidelity.hidden_state)
 
-    opt = solve(stochastic_model(sc, fid), sc.steps_per_episode).start
+    return optimum_record(solve(stochastic_model(sc, fid), sc.steps_per_episode).start)
+
+
+def optimum_record(opt: Any) -> dict[str, Any]:
+    """V* from S (:class:`sim.physics.models.solve`'s start) as results.json holds it, with
+    the tolerance "optimal at F" is judged within."""
     return {"expected_primitives": round(float(opt.expected_primitives), 4),
             "p_goal_within_budget": round(float(opt.p_goal_within_budget), 6),
             "budget": int(opt.budget),

@@ -20,7 +20,6 @@ diameter, as the held-out study makes them).
 
 from __future__ import annotations
 
-import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,11 +34,10 @@ from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import RunSpec, load, make_config
-from scenarios.script_args import arg, artifact_arg, jobs_arg, parse
+from scenarios.script_args import arg, artifact_arg, jobs_arg, parse, study_command
 from scenarios.studies.ladder.predictivity import srcc
 from scenarios.studies.maps.heldout import KIND, write_problem
-from scenarios.sweep.backends import Progress, run_local
-from scenarios.sweep.run import run_sweep
+from scenarios.sweep.execute import sweep
 from sim.files import atomic_write_text
 from sim.grid.planning import bfs_route
 from sim.physics.fidelity import parse_fidelity
@@ -138,9 +136,7 @@ def main(argv: list[str] | None = None) -> int:
                      for spec in _rung_specs(name, methods, args, world, rung)]
             sub = out / _slug(label) / rung
             print(f"{label} at {rung}: {len(specs)} runs -> {sub}", flush=True)
-            results = run_sweep(specs, sub, run_local, resume=args.resume,
-                                jobs=args.jobs or os.cpu_count() or 1,
-                                progress=Progress(len(specs)))
+            results = sweep(specs, sub, resume=args.resume, jobs=args.jobs)
             cells.append(dict(map=label, path=name, rung=rung, results=results,
                               aliasing=_aliasing(sc, model, rung, args.repeats),
                               predictivity=srcc(results["runs"], sc.steps_per_episode),
@@ -151,8 +147,7 @@ def main(argv: list[str] | None = None) -> int:
     data = ladder_data(cells, args)
     ladder_figure(data["rows"], methods, out / "ladder.png", data["rungs"])
     if args.artifact:  # the docs' table and figure, from the same data
-        write_artifact(f"ladder.{args.artifact}", ladder_command(args)
-                       + f" --artifact {args.artifact}",
+        write_artifact(f"ladder.{args.artifact}", ladder_command(args),
                        ["grid", "physics-exact", "physics-noisy"], data, study=__file__)
         figure_from_artifact(f"ladder.{args.artifact}", ROOT / "docs" / "ladder.png")
     print(text)
@@ -203,7 +198,7 @@ def warmup_for_budget(method: str, episodes: int) -> tuple[tuple[str, float], ..
 
 def _aliasing(sc: Any, model: Any, rung: str, repeats: int) -> dict[str, float]:
     # lazy: the aliasing study imports matplotlib (270 ms), in each spawned sweep worker too
-    from scenarios.studies.ladder.aliasing import measure_aliasing
+    from sim.physics.models.aliasing import measure_aliasing
 
     r = measure_aliasing(sc, model, parse_fidelity(rung), repeats=repeats)
     return {"multi_outcome_fraction": r["multi_outcome_fraction"],
@@ -274,10 +269,7 @@ def ladder_data(cells: list[dict[str, Any]], args: Args) -> dict[str, Any]:
 
 
 def ladder_command(args: Args) -> str:
-    return (f"python -m scenarios.studies.ladder.continuous_vs_grid --maps {args.maps} "
-            f"--methods {args.methods} --rungs {args.rungs} --seeds {args.seeds} "
-            f"--episodes {args.episodes} --rewards {args.rewards} --map-seed {args.map_seed} "
-            f"--repeats {args.repeats}")
+    return study_command(__spec__.name, Args, args)
 
 
 def ladder_report(cells: list[dict[str, Any]], args: Args) -> str:

@@ -16,7 +16,6 @@ Then ``REPORT.md`` states each claim, the figure we measured, and whether it hol
 from __future__ import annotations
 
 import math
-import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,10 +28,10 @@ from learning.metrics import reward_per_step
 from scenarios.artifacts import write_artifact
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
-from scenarios.script_args import arg, artifact_arg, jobs_arg, parse
+from scenarios.script_args import arg, artifact_arg, jobs_arg, parse, study_command
 from scenarios.studies.paper.reward_facts import reward_facts
-from scenarios.sweep.backends import Progress, run_local, run_ray
-from scenarios.sweep.run import make_specs, run_sweep
+from scenarios.sweep.execute import sweep as run_specs
+from scenarios.sweep.run import make_specs
 from sim.files import atomic_write_text
 
 PAPER_FIVE = ("st-ql", "rn-ql", "pfh-rl", "sarsa-rs", "haql")
@@ -140,10 +139,7 @@ def claims(compare: dict[str, dict[str, Any]], alpha: dict[float, dict[str, Any]
 def report(claim_rows: list[tuple[str, bool, str]], args: Args) -> str:
     held = sum(h for _, h, _ in claim_rows)
     lines = ["# The RNH-QL paper, reproduced", "",
-             "Command: `python -m scenarios.studies.paper.reproduce_paper "
-             f"--out {args.out} --seeds "
-             f"{args.seeds} --episodes {args.episodes}"
-             + (f" --rewards {args.rewards}`" if args.rewards else "`"), "",
+             f"Command: `{study_command(__spec__.name, Args, args)}`", "",
              f"{held} of {len(claim_rows)} claims hold. Each sub-directory holds its "
              "`results.json`, `summary.md` and figures.", "",
              "| claim | holds | measured |", "|---|---|---|"]
@@ -183,17 +179,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parse(Args, __doc__, argv)
     out = Path(args.out)
     seeds = list(range(args.seeds))
-    if args.backend == "local":
-        execute, kw = run_local, {"jobs": args.jobs or os.cpu_count() or 1}
-    else:
-        execute, kw = run_ray, {"address": args.address, "num_cpus": args.jobs}
-
     def sweep(sub: str, scenario: str, methods, overrides=()) -> dict[str, Any]:
         specs = make_specs(scenario, methods, seeds, args.episodes, ["grid"], overrides,
                            rewards=args.rewards)
         print(f"{sub}: {len(specs)} runs", file=sys.stderr)
-        return run_sweep(specs, out / sub, execute, resume=args.resume,
-                         progress=Progress(len(specs)), **kw)
+        return run_specs(specs, out / sub, backend_name=args.backend, jobs=args.jobs,
+                         address=args.address, resume=args.resume)
 
     compare = {s: sweep(f"compare-{s}", s, comparison_methods()) for s in ("paper-40", "paper-50")}
     alpha = {a: sweep(f"alpha-{a:g}", "paper-50", SWEEP_METHODS, (("alpha", a),))
@@ -203,11 +194,8 @@ def main(argv: list[str] | None = None) -> int:
     text = report(rows, args)
     atomic_write_text(out / "REPORT.md", text)
     if args.artifact:
-        command = (f"python -m scenarios.studies.paper.reproduce_paper --out {args.out} --seeds "
-                   f"{args.seeds} --episodes {args.episodes}"
-                   + (f" --rewards {args.rewards}" if args.rewards else "")
-                   + f" --artifact {args.artifact}")
-        write_artifact(f"paper-claims.{args.artifact}", command, ["grid"],
+        write_artifact(f"paper-claims.{args.artifact}", study_command(__spec__.name, Args, args),
+                       ["grid"],
                        {"seeds": args.seeds, "episodes": args.episodes,
                         "rewards": args.rewards or "the scenarios' own (paper)",
                         "claims": [{"claim": c, "holds": bool(h), "measured": e}

@@ -16,7 +16,6 @@ so every number in the explanation is computed, not typed.
 from __future__ import annotations
 
 import dataclasses
-import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,10 +24,10 @@ from typing import Any
 from learning.methods.registry import comparison_methods
 from scenarios.artifacts import write_artifact
 from scenarios.runs.spec import load, make_config
-from scenarios.script_args import arg, artifact_arg, jobs_arg, parse
+from scenarios.script_args import arg, artifact_arg, jobs_arg, parse, study_command
 from scenarios.studies.paper.reward_facts import RewardFacts, facts_markdown, reward_facts
-from scenarios.sweep.backends import Progress, run_local
-from scenarios.sweep.run import make_specs, run_sweep
+from scenarios.sweep.execute import sweep
+from scenarios.sweep.run import make_specs
 from sim.files import atomic_write_text
 from sim.scenario import REWARD_SCHEMES, Rewards
 
@@ -73,8 +72,7 @@ def explain(facts: list[RewardFacts]) -> list[str]:
 def report(args: Args, methods: list[str], facts: list[RewardFacts],
            grid: dict[tuple[str, float], dict[str, Any]]) -> str:
     lines = ["# Reward design: which scheme lets the learners find the optimal route", "",
-             f"Command: `python -m scenarios.studies.paper.reward_design --out {args.out} "
-             f"--scenario {args.scenario} --seeds {args.seeds} --episodes {args.episodes}`", "",
+             f"Command: `{study_command(__spec__.name, Args, args)}`", "",
              "## What each scheme asks of a learner (value iteration, exact)", "",
              facts_markdown(facts), *explain(facts), "",
              "## What the learners do", "",
@@ -113,23 +111,18 @@ def main(argv: list[str] | None = None) -> int:
     sc, _ = load(args.scenario)
     facts = [reward_facts(sc, s, Rewards.preset(s), g) for g in GAMMAS for s in REWARD_SCHEMES]
     grid: dict[tuple[str, float], dict[str, Any]] = {}
-    jobs = args.jobs or os.cpu_count() or 1
     for g in GAMMAS:
         for s in REWARD_SCHEMES:
             specs = make_specs(args.scenario, methods, list(range(args.seeds)), args.episodes,
                                ["grid"], (("gamma", g),), rewards=s)
             print(f"{s}, gamma {g:g}: {len(specs)} runs", file=sys.stderr)
-            grid[(s, g)] = run_sweep(specs, Path(args.out) / f"{s}-gamma{g:g}", run_local,
-                                     resume=args.resume, figures=False, jobs=jobs,
-                                     progress=Progress(len(specs)))
+            grid[(s, g)] = sweep(specs, Path(args.out) / f"{s}-gamma{g:g}",
+                                 resume=args.resume, figures=False, jobs=args.jobs)
     text = report(args, methods, facts, grid)
     atomic_write_text(Path(args.out) / "REPORT.md", text)
     if args.artifact:
-        cmd = (f"python -m scenarios.studies.paper.reward_design --out {args.out} --scenario "
-               f"{args.scenario} --seeds {args.seeds} --episodes {args.episodes}"
-               + ("" if args.methods == Args.methods else
-                  f" --methods {args.methods}") + f" --artifact {args.artifact}")
-        write_artifact(f"reward-design.{args.artifact}", cmd, ["grid"],
+        write_artifact(f"reward-design.{args.artifact}", study_command(__spec__.name, Args, args),
+                       ["grid"],
                        artifact_data(args, methods, facts, grid), study=__file__)
     print(text)
     return 0

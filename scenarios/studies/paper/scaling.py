@@ -19,7 +19,6 @@ median is finite).
 from __future__ import annotations
 
 import math
-import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,9 +28,9 @@ import numpy as np
 
 from scenarios.artifacts import ROOT, check_artifact_name, load_artifact, write_artifact
 from scenarios.figures.scaling import figure
-from scenarios.script_args import arg, parse, parser_of
-from scenarios.sweep.backends import Progress, run_local
-from scenarios.sweep.run import make_specs, run_sweep
+from scenarios.script_args import arg, parse, parser_of, study_command
+from scenarios.sweep.execute import sweep
+from scenarios.sweep.run import make_specs
 from sim.files import atomic_write_text
 
 DENSITY = 28 / 2500  # circles per m^2, as paper-50
@@ -82,15 +81,14 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     sizes = [int(s) for s in args.sizes.split(",")]
     methods = [m for m in args.methods.split(",") if m]
-    jobs = args.jobs or os.cpu_count() or 1
     per_size: dict[int, dict[str, Any]] = {}
     for n in sizes:
         toml = arena(n, out)
         specs = make_specs(str(toml), methods, list(range(args.seeds)), 60 * n, ["grid"],
                            rewards=args.rewards)
         print(f"{n}x{n}: {len(specs)} runs", file=sys.stderr)
-        per_size[n] = run_sweep(specs, out / f"n{n}", run_local, resume=args.resume,
-                                figures=False, jobs=jobs, progress=Progress(len(specs)))
+        per_size[n] = sweep(specs, out / f"n{n}", resume=args.resume, figures=False,
+                            jobs=args.jobs)
     rows: dict[str, list[dict[str, Any]]] = {m: [] for m in methods}
     for n, res in per_size.items():
         states = n * n
@@ -107,8 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     title = (f"Scaling, rewards {args.rewards}: arenas {', '.join(f'{n}x{n}' for n in sizes)}, "
              f"steps/episode 12n, episodes 60n, {args.seeds} seeds")
     figure(rows, out / "scaling.png", title)
-    command = (f"python -m scenarios.studies.paper.scaling --out {args.out} --sizes {args.sizes} "
-               f"--methods {args.methods} --seeds {args.seeds} --rewards {args.rewards}")
+    command = study_command(__spec__.name, Args, args)
     if args.artifact:
         write_scaling_artifact(args, command, sizes, rows, title)
     lines = [f"# {title}", "", f"Command: `{command}`", "",
@@ -142,8 +139,7 @@ def write_scaling_artifact(args: Args, command: str, sizes: list[int],
     from it (:func:`figure_from_artifact`)."""
     data = {"title": title, "sizes": sizes, "seeds": args.seeds, "rewards": args.rewards,
             "rows": rows}
-    write_artifact(f"scaling.{args.artifact}", f"{command} --artifact {args.artifact}",
-                   ["grid"], data, study=__file__)
+    write_artifact(f"scaling.{args.artifact}", command, ["grid"], data, study=__file__)
     figure_from_artifact(f"scaling.{args.artifact}")
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 PACKAGES = ("sim", "learning", "scenarios")
-SCENARIO_RANK = {"figures": 1, "recording": 2, "runs": 3, "sweep": 4, "studies": 5, "bench": 6,
+SCENARIO_RANK = {"artifacts": 0, "figures": 1, "recording": 2, "runs": 3, "sweep": 4, "studies": 5, "bench": 6,
                  "cli": 7}
 FORBIDDEN = {
     "sim": ("learning", "scenarios", "rerun", "matplotlib"),

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from scenarios.artifact_figures import FIGURES, SCREENSHOTS
 from scenarios.artifacts import ROOT, artifact_names
+from scenarios.artifacts.figures import FIGURES, SCREENSHOTS
 
 DOCS = ROOT / "docs"
 

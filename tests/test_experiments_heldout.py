@@ -85,7 +85,7 @@ def test_the_diagnosis_says_where_an_untrained_test_from_s_hits_a_wall(tmp_path)
 
 
 def test_the_diagnosis_renders_its_lines_as_one_block():
-    from scenarios.artifact_tables import KINDS
+    from scenarios.artifacts.tables import KINDS
 
     text = KINDS["test-from-s"].render({"lines": ["rooms-64@uniform ...", "seed 0: test 92"]})
     assert text == "```text\nrooms-64@uniform ...\nseed 0: test 92\n```\n"
@@ -94,7 +94,7 @@ def test_the_diagnosis_renders_its_lines_as_one_block():
 def test_the_finding_across_studies_names_each_map_kinds_winner():
     """The README's finding: a row per study and protocol, a column per map kind, each
     cell the map's winner with its interval, and the lowest IQM of the row."""
-    from scenarios.artifact_tables import KINDS
+    from scenarios.artifacts.tables import KINDS
     from scenarios.studies.maps.ranking import ranking
 
     def study(size):

@@ -1,6 +1,6 @@
 """Adding a study with a table in the docs touches three places, nothing else: the study's
 script (it measures, then writes its artifact), a renderer of the artifact's kind in
-``scenarios/artifact_tables.py``, and a Cog block in the page that shows the table. A
+``scenarios/artifacts/tables.py``, and a Cog block in the page that shows the table. A
 throwaway study does the three here, end to end through Cog, and its table says when its
 script changed (docs/architecture.md, "How to add").
 """
@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from scenarios import artifact_tables, artifacts
+from scenarios import artifacts
+from scenarios.artifacts import tables as artifact_tables
 
 STUDY = '''\
 """A throwaway study: the mean of three seeds' numbers."""
@@ -43,7 +44,8 @@ PAGE = """\
 
 @pytest.fixture
 def demo_kind(monkeypatch, tmp_path):
-    """The renderer a new study adds to artifact_tables.py, and docs/results in tmp_path."""
+    """The renderer a new study adds to scenarios/artifacts/tables.py, and docs/results in
+    tmp_path."""
     monkeypatch.setitem(artifact_tables.KINDS, "demo-mean", None)  # restored afterwards
 
     @artifact_tables.renderer("demo-mean")

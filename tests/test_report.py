@@ -39,7 +39,7 @@ def test_a_dry_refresh_names_the_stale_commands_and_runs_nothing(capsys, monkeyp
 
 
 def test_report_lists_every_docs_figure_with_its_artifacts(capsys):
-    from scenarios.artifact_figures import FIGURES
+    from scenarios.artifacts.figures import FIGURES
 
     assert main(["report"]) == 0
     out = capsys.readouterr().out

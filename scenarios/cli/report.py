@@ -6,7 +6,8 @@ and at which code version they were measured, what they took, and whether the co
 behaviour has changed since (stale), and the tables still typed by hand. ``--refresh``
 re-runs the command of every stale artifact, one after another (each is a study that
 uses every core), then redraws the figures and regenerates the pages (``cog -r``).
-``--figures`` redraws every ``docs/`` figure from its artifacts (:mod:`scenarios.artifact_figures`).
+``--figures`` redraws every ``docs/`` figure from its artifacts
+(:mod:`scenarios.artifacts.figures`).
 ``--dry-run`` says what a refresh would run and how long it took last time.
 """
 
@@ -104,7 +105,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         if parts:
             stale.append(doc)
     # lazy: the figures' studies load matplotlib (about 270 ms) at every rnhql command's start
-    from scenarios.artifact_figures import FIGURES, redraw
+    from scenarios.artifacts.figures import FIGURES, redraw
 
     print("\nfigure | drawn from | state")
     names = set(artifact_names())

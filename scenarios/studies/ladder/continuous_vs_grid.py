@@ -27,8 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from scenarios.artifact_ladder import ladder_table
 from scenarios.artifacts import ROOT, load_artifact, write_artifact
+from scenarios.artifacts.ladder import ladder_table
 from scenarios.figures.plots import draw_map
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl

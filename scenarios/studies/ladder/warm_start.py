@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from scenarios import api
-from scenarios.artifact_ladder import warm_start_table
 from scenarios.artifacts import ROOT, load_artifact, write_artifact
+from scenarios.artifacts.ladder import warm_start_table
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
 from scenarios.runs.results import quantile

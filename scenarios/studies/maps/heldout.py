@@ -44,8 +44,8 @@ from pathlib import Path
 from shlex import quote
 from typing import Any
 
-from scenarios.artifact_heldout import heldout
 from scenarios.artifacts import check_artifact_name, write_artifact
+from scenarios.artifacts.heldout import heldout
 from scenarios.runs.spec import load
 from scenarios.script_args import arg, parse, parser_of
 from scenarios.studies.maps.ranking import ranking

@@ -1,7 +1,7 @@
 """The fidelity ladder's tables (:mod:`scenarios.studies.ladder.continuous_vs_grid`): how
 well the grid predicts each rung (rho, MMRV, the predictive mark, the control variates),
 P(G) and primitives per method and rung, and every figure. Registered with
-:mod:`scenarios.artifact_tables` on import."""
+:mod:`scenarios.artifacts.tables` on import."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import math
 import statistics
 from typing import Any
 
-from scenarios.artifact_tables import _q, renderer, row_renderer
+from scenarios.artifacts.tables import _q, renderer, row_renderer
 from sim.physics.fidelity import parse_fidelity
 
 

@@ -1,12 +1,12 @@
 """The held-out studies' tables (:mod:`scenarios.studies.maps.heldout`): the per-map table
 with its rankings under it, and the finding across studies (a row per study and protocol,
-each map kind's winner). Registered with :mod:`scenarios.artifact_tables` on import."""
+each map kind's winner). Registered with :mod:`scenarios.artifacts.tables` on import."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from scenarios.artifact_tables import renderer, row_renderer
+from scenarios.artifacts.tables import renderer, row_renderer
 
 RANKING_NOTE = ("each method's IQM share of the episode budget spent before a stable optimal "
                 "route (never: all of it; lower is better) [95 % stratified bootstrap "

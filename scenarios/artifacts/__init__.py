@@ -38,15 +38,15 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from scenarios import (
-    artifact_heldout,  # noqa: F401 (registers the held-out tables)
-    artifact_ladder,  # noqa: F401 (registers the ladder's tables)
+from scenarios.artifacts import (
+    heldout,  # noqa: F401 (registers the held-out tables)
+    ladder,  # noqa: F401 (registers the ladder's tables)
 )
-from scenarios.artifact_tables import KINDS
+from scenarios.artifacts.tables import KINDS
 from sim.errors import InputError
 from sim.files import atomic_write_text
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 RESULTS_DIR = ROOT / "docs" / "results"
 GOLDEN = ROOT / "tests" / "data" / "golden_sweep.json"
 PARTS = ("grid", "physics-exact", "physics-noisy")

@@ -89,15 +89,17 @@ from scenarios.values import (
     Crosscheck,
     Grade,
     Optimum,
+    Route,
     Run,
     TrainPlan,
 )
 from sim.errors import InputError
-from sim.physics.fidelity import PRESETS
-from sim.scenario import Cell
+from sim.grid.planning import bfs_route
+from sim.physics.fidelity import Fidelity, parse_fidelity
+from sim.scenario import Cell, Scenario
 
-__all__ = ["Aliasing", "Comparison", "Crosscheck", "Grade", "InputError", "Optimum", "Run",
-           "TrainPlan", "aliasing", "compare", "crosscheck", "grade", "optimum", "route",
+__all__ = ["Aliasing", "Comparison", "Crosscheck", "Grade", "InputError", "Optimum", "Route",
+           "Run", "TrainPlan", "aliasing", "compare", "crosscheck", "grade", "optimum", "route",
            "train"]
 
 # ---------------------------------------------------------------- train
@@ -305,18 +307,25 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
     ``policy``: an action per cell (``int[n_states]``, state = ``iy * nx + ix``) or a
     function of the cell returning an action (e.g. ``lambda s: int(model.predict(s,
     deterministic=True)[0])`` for a Stable-Baselines3 model), called once per cell.
-    ``drives``: above ``exact`` (at ``exact`` every drive is the same, so it drives once).
-    ``with_optimum``: also build V* (cached on disk) and say whether the policy matches it.
+    ``fidelity``: a rung (None: the scenario's own). ``drives``: above ``exact`` (at
+    ``exact`` every drive is the same, so it drives once). ``with_optimum``: also build V*
+    (cached on disk) and say whether the policy matches it.
     """
     fn = "grade"
     scenario = scenario_arg(fn, scenario)
-    fid = fidelity_arg(fn, fidelity, True) or PRESETS["exact"]
+    fid = fidelity_arg(fn, fidelity, True)
     drives = whole(fn, "drives", drives, 1, MAX_DRIVES, 50)
     seed = whole(fn, "seed", seed, 0, MAX_SEED, 0)
     sc, model = problem_of(fn, scenario, cell_arg(fn, "start", start), cell_arg(fn, "goal", goal),
-                         rewards_arg(fn, rewards), None, ["physics"])
+                           rewards_arg(fn, rewards), None, ["physics"])
     table = policy_table(fn, policy, model.n_states)
+    return _graded(sc, model, table, fid or parse_fidelity(sc.physics), drives, seed,
+                   with_optimum)[0]
 
+
+def _graded(sc: Scenario, model: Any, table: np.ndarray, fid: Fidelity, drives: int, seed: int,
+            with_optimum: bool) -> tuple[Grade, Any]:
+    """:func:`grade` of checked arguments, and its drives (their routes and paths)."""
     grader = Grader(sc, fid)
     st = policy_state(table)
     n = 1 if fid.is_exact else drives
@@ -338,18 +347,40 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
                  tuple(summary["p_goal_ci95"]),
                  summary["primitives_mean"], None if med is None else float(med),
                  float(r.contacts.mean()), None if walk < 0 else int(walk), opt, optimal,
-                 dict(summary))
+                 dict(summary)), r
 
 
-def route(agent: str | Path, scenario: ScenarioLike, *, fidelity: Any = "exact",
-          rewards: Any = None, drives: int = 50, seed: int = 0) -> Grade:
-    """A saved agent (``train(..., save=...)``, ``rnhql train --save``) graded from S: its
-    greedy policy through :func:`grade`."""
-    scenario = scenario_arg("route", scenario)
-    _, model = problem_of("route", scenario, None, None, rewards_arg("route", rewards), None,
-                         ["physics"])
+def route(agent: str | Path, scenario: ScenarioLike, *, world: str = "physics",
+          fidelity: Any = None, rewards: Any = None, drives: int = 50, seed: int = 0,
+          start: Cell | None = None, goal: Cell | None = None,
+          with_optimum: bool = True) -> Route:
+    """A saved agent's (``train(..., save=...)``, ``rnhql train --save``) greedy route from S
+    against the grid's BFS optimum: ``rnhql route``. ``world="grid"``: its greedy walk on
+    the grid; ``"physics"``: its greedy policy driven and graded through :func:`grade` at
+    ``fidelity`` (None: the scenario's own), the route shown being the first drive's. The
+    :class:`Route`'s ``grade`` fields read through it (``route(...).p_goal``)."""
+    fn = "route"
+    scenario = scenario_arg(fn, scenario)
+    if world not in WORLDS:
+        raise err(fn, "world", f"is {world!r}, not a world", f"use one of: {', '.join(WORLDS)}")
+    fid = fidelity_arg(fn, fidelity, world == "physics")
+    drives = whole(fn, "drives", drives, 1, MAX_DRIVES, 50)
+    seed = whole(fn, "seed", seed, 0, MAX_SEED, 0)
+    start, goal = cell_arg(fn, "start", start), cell_arg(fn, "goal", goal)
+    sc, model = problem_of(fn, scenario, start, goal, rewards_arg(fn, rewards), None, [world])
     ck = load_checkpoint(agent, None, model.n_states, geometry_of(model))
-
-    ck.check_problem({"layout": layout_digest(scenario)})  # trained on this layout
-    return grade(greedy_actions(ck.state), scenario, fidelity=fidelity, drives=drives,
-                 seed=seed, rewards=rewards)
+    # an agent trained on another scenario of the same size loads; its route here would
+    # mean nothing. The layout is checked, not the rewards or starts: a route ignores them
+    ck.check_problem({"layout": layout_digest(scenario, start, goal)})
+    optimum = tuple(bfs_route(model.next_state, model.distance_to_goal, model.start))
+    length, cells = greedy_test(ck.state, model)
+    graded = path = poses = first = None
+    if world == "physics":
+        graded, r = _graded(sc, model, greedy_actions(ck.state),
+                            fid or parse_fidelity(sc.physics), drives, seed, with_optimum)
+        cells, path, poses = r.routes[0], r.path, r.poses
+        length = len(cells) - 1 if r.reached[0] else -1
+        first = {"reached": bool(r.reached[0]), "metres": float(r.metres[0]),
+                 "contacts": int(r.contacts[0]), "sim_time_s": float(r.sim_time_s[0])}
+    return Route(ck.method, ck.config.name, int(ck.episodes), world, tuple(int(c) for c in cells),
+                 int(length), tuple(int(c) for c in optimum), graded, path, poses, first, ck)

@@ -4,6 +4,7 @@ writes (a run's ``results.json`` entry), so a script and the CLI see the same fi
 - :class:`Run`: one trained run (one method, world, seed);
 - :class:`Comparison`: a sweep's runs, its ``results.json`` payload, and how to write it;
 - :class:`Grade`: a policy driven from S at a fidelity, as the tool grades its own;
+- :class:`Route`: a saved agent's greedy route from S, driven where asked;
 - :class:`TrainPlan`: what a call of ``train`` is about to run (its ``announce``);
 - :class:`Optimum`: the yardsticks: the grid's BFS optimum, the physics world's at
   ``exact``, V* at the fidelity where it is defined, the disc's continuous path
@@ -212,6 +213,43 @@ class Comparison:
 
 def _method_key(cls: type) -> str:
     return cls.cli if issubclass(cls, MethodConfig) else located_name(cls)
+
+
+@dataclass(frozen=True, eq=False)
+class Route:
+    """A saved agent's greedy route from S against the grid's BFS optimum (``rnhql route``).
+    In the physics world its policy was driven and graded: ``grade`` (whose fields read
+    through, ``route.p_goal``), the route shown being the first drive's."""
+
+    method: str  # the registry's name
+    name: str  # as tables name it
+    episodes: int  # the agent trained
+    world: str  # "grid": the greedy walk; "physics": driven
+    cells: tuple[int, ...]  # the route shown, S first
+    length: int  # its moves (-1: G not reached)
+    optimal_cells: tuple[int, ...]  # a shortest route on the grid (BFS), S first
+    grade: Grade | None  # physics: every drive at the fidelity
+    path: np.ndarray | None  # physics: the first drive's poses, float64[m, 3] [m, m, rad]
+    poses: np.ndarray | None  # physics: its pose at S and after each primitive
+    first_drive: Mapping[str, Any] | None  # physics: reached, metres, contacts, sim_time_s
+    agent: Any = field(repr=False, default=None)  # the loaded checkpoint (state, config)
+
+    @property
+    def optimal(self) -> bool:
+        """Whether the route shown is as short as the BFS optimum."""
+        return self.length == len(self.optimal_cells) - 1
+
+    def __getattr__(self, name: str) -> Any:
+        grade = self.__dict__.get("grade")
+        if grade is None or name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(grade, name)
+
+    def __str__(self) -> str:
+        shown = "G not reached" if self.length < 0 else f"{self.length} moves"
+        return (f"{self.name} greedy route ({self.world}): {shown} "
+                f"({'optimal' if self.optimal else 'not optimal'}); BFS optimum "
+                f"{len(self.optimal_cells) - 1} moves")
 
 
 @dataclass(frozen=True)

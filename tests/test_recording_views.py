@@ -12,6 +12,7 @@ import pytest
 import rerun as rr
 import rerun.blueprint as rrb
 
+from learning.methods.registry import comparison_methods
 from scenarios.palette import method_colour
 from scenarios.recording import blueprint, scene
 from scenarios.recording.comparison import gather_comparison
@@ -118,8 +119,7 @@ THIRD, HALF_OF_RIGHT = 36, 36
 
 
 def test_comparison_titles_show_whole(paper50):
-    runs = [(m, 0) for m in ("rnh-ql", "rnh-ql+", "st-ql", "rn-ql", "pfh-rl", "sarsa-rs",
-                             "haql", "q-opt", "q-lambda", "dyna-q")]
+    runs = [(m, 0) for m in comparison_methods()]
     for v in _views(blueprint.comparison_blueprint(runs, paper50, run_prefix,
                                                       ((-5, 5), (0, 12)))):
         assert len(v.name) <= THIRD, v.name

@@ -110,6 +110,17 @@ def plain_learner(d: dict[str, Any]) -> str:
             f"{ph['st-ql beside the port']:,.0f} |\n")
 
 
+def plain_learner_sentence(d: dict[str, Any]) -> str:
+    """How much slower the Python port is than the compiled learner, in each world."""
+    g, ph = d["grid"], d["physics"]
+    return (f"On the grid the port is {g['slowdown']:.0f}x slower than the fused kernel (two "
+            "Python calls and numpy's small-array overhead per step); in physics at `exact` "
+            f"it is {ph['st-ql alone'] / ph['python port']:.0f}x slower "
+            f"({ph['python port']:,.0f} primitives/s against {ph['st-ql alone']:,.0f}): the "
+            "compiled learner trains inside the fused physics step, while the port is called "
+            "once per robot per primitive.\n")
+
+
 @renderer("memory", timed=True)
 def memory(d: dict[str, Any]) -> str:
     """Peak RSS and checkpoint size per method and map size."""

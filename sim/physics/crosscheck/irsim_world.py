@@ -45,7 +45,7 @@ from sim.grid.discretiser import Discretiser
 from sim.physics.drive_profiles import DriveLimits, profiles
 from sim.physics.fidelity import Fidelity
 from sim.physics.kernel.sweep import static_geometry
-from sim.physics.reference.controller import at_target, cell_of, plan_commands
+from sim.physics.motion import at_target, cell_of, plan_commands
 from sim.physics.static import PhysicsConfig
 from sim.scenario import Scenario
 

@@ -26,7 +26,7 @@ from sim.grid.env import check_start, start_state_from_options
 from sim.physics.drive_profiles import DriveLimits, rate_limit
 from sim.physics.envs.parts import Trail, info_pose
 from sim.physics.fidelity import Fidelity
-from sim.physics.reference.wheels import wheels_to_twist
+from sim.physics.motion import wheels_to_twist
 from sim.physics.reference.world import PhysicsConfig, PhysicsWorld, SharedSpace
 from sim.physics.static import Contact
 from sim.scenario import Rewards, Scenario

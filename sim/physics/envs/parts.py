@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from sim.physics.reference.controller import wrap_angle
+from sim.physics.motion import wrap_angle
 from sim.render import AGENT, PATH, MapCanvas
 from sim.scenario import Scenario
 

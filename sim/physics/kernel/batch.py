@@ -45,7 +45,7 @@ from sim.physics.kernel.noise import refill_one
 from sim.physics.kernel.readouts import outcome, path_lengths
 from sim.physics.kernel.state import ROBOT, Geometry, Scratch, Status, by_name, params_of
 from sim.physics.kernel.sweep import static_geometry
-from sim.physics.reference.controller import PrimitiveOutcome
+from sim.physics.motion import PrimitiveOutcome
 from sim.physics.static import (
     STATIC_CATEGORY,
     CollisionType,

@@ -57,15 +57,15 @@ from sim.physics.kernel.queries import (
 )
 from sim.physics.kernel.state import Geometry, Params, Phase, Scratch, Status
 from sim.physics.kernel.wheels import deliver
-from sim.physics.reference.controller import (
+from sim.physics.motion import (
     SETTLE_M_S,
     Leg,
     at_target,
     cell_of,
     leg_command,
     plan_leg,
+    wheel_twist,
 )
-from sim.physics.reference.wheels import wheel_twist
 from sim.physics.static import DEEPER_M, HOLD_STEP_M
 
 _DELTAS = np.array(ACTION_DELTAS, dtype=np.int64)

@@ -22,7 +22,7 @@ from sim.physics.kernel.sweep import (
     overlap_depth,
     sweep_fraction,
 )
-from sim.physics.reference.controller import cell_of
+from sim.physics.motion import cell_of
 
 CHECK_MARGIN_M = 1e-6  # steps ending this close to a surface ask Chipmunk [m]
 CLEAR_MARGIN_M = 1e-3  # a step this far from every surface needs no sweep (new_clear_region) [m]

@@ -1,6 +1,6 @@
 """A control period's command as the wheels deliver it above ``exact``, per robot record:
 latency's commands in flight and lag, slip events, then noise and bias
-(:func:`sim.physics.reference.wheels.wheels_twist`). The reference world's rule is
+(:func:`sim.physics.motion.wheels_twist`). The reference world's rule is
 :meth:`sim.physics.reference.controller.PrimitiveController._deliver`; the two are tested
 field by field (``tests/test_physics_batch.py``)."""
 
@@ -11,7 +11,7 @@ import math
 from numba import njit
 
 from sim.physics.kernel.state import SENT_RING
-from sim.physics.reference.wheels import lag_wheel, slip_step, twist_to_wheels, wheels_twist
+from sim.physics.motion import lag_wheel, slip_step, twist_to_wheels, wheels_twist
 
 
 @njit(cache=True)

@@ -1,10 +1,9 @@
-"""Differential-drive kinematics, the primitive's plan, and the reference controller.
+"""The reference controller: grid actions driven as motion primitives, every step through
+Chipmunk.
 
-Compiled part (numba, no pymunk): angle wrapping, the cell of a pose, minimal-time
-*discrete* velocity profiles, a leg's plan and commands, the end-of-leg test (what the
-wheels deliver: :mod:`sim.physics.reference.wheels`): the one definition of each, called
-by :class:`PrimitiveController` (the reference, one robot, every step through Chipmunk) and
-by the batched kernel (:mod:`sim.physics.kernel.primitive`) alike, so their plans agree bit for bit.
+The kinematics, a leg's plan and commands and the end-of-leg test live below this room, in
+:mod:`sim.physics.motion` (the one definition of each, which the batched kernel calls too,
+so their plans agree bit for bit).
 
 Why discrete profiles: the wheel commands change once per control period ``T``, by at
 most ``a_max * T``, never beyond ``v_max``. For a distance ``D`` the profile is the fewest
@@ -31,168 +30,37 @@ not a reset: the same actions still replay bit for bit). The knobs above ``exact
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numba import njit
 
 from sim.grid.actions import ACTION_DELTAS, ACTION_HEADINGS
 from sim.grid.discretiser import Discretiser
-from sim.physics.drive_profiles import DriveLimits, profile_index, profiles
+from sim.physics.drive_profiles import DriveLimits, profiles
 from sim.physics.fidelity import Fidelity, delay_periods, lag_keep, slip_start_probability
-from sim.physics.reference.wheels import (  # noqa: F401 (their home was here: re-exported)
+from sim.physics.motion import (  # noqa: F401 (their home was here: re-exported)
+    MIN_TURN_RAD,
+    SETTLE_M_S,
+    Leg,
+    PrimitiveOutcome,
+    at_target,
+    cell_of,
     lag_wheel,
+    leg_command,
+    plan_commands,
+    plan_leg,
     slip_step,
     twist_to_wheels,
     wheel_twist,
     wheels_to_twist,
     wheels_twist,
+    wrap_angle,
 )
 from sim.physics.static import DEEPER_M
 
 if TYPE_CHECKING:
     from sim.physics.reference.world import PhysicsConfig, PhysicsWorld
     from sim.scenario import Scenario
-
-# Turns smaller than this are skipped [rad]: after a drive the heading equals the
-# bearing up to rounding (~1e-13 rad), and a "turn" of that size would still cost
-# two control periods (command + stop).
-MIN_TURN_RAD = 1e-9
-
-# With latency a leg's commands end before its wheels do: the controller holds a stop until
-# the commands in flight are delivered and both wheels turn slower than this [m/s] (a
-# first-order lag delivers the whole commanded travel once it settles), then checks the
-# target. At 1 cm/s the drift still to come is 1.5 mm and 0.6 degrees at tau = 0.2 s.
-SETTLE_M_S = 0.01
-
-
-# ------------------------------------------------------------------ kinematics
-
-
-@njit(cache=True, inline="always")
-def wrap_angle(a_rad: float) -> float:
-    """Angle wrapped into [-pi, pi)."""
-    return (a_rad + math.pi) % (2.0 * math.pi) - math.pi
-
-
-@njit(cache=True, inline="always")
-def cell_of(x_m: float, y_m: float, cell_m: float, nx: int, ny: int) -> tuple[int, int]:
-    """The cell (ix, iy) holding the point, clamped into the grid (as Discretiser.cell_of)."""
-    ix = min(max(int(math.floor(x_m / cell_m)), 0), nx - 1)  # noqa: RUF046 (numba)
-    iy = min(max(int(math.floor(y_m / cell_m)), 0), ny - 1)  # noqa: RUF046 (numba)
-    return ix, iy
-
-
-# ------------------------------------------------------------------ one leg
-
-
-class Leg(NamedTuple):
-    """One leg of a primitive: turn in place (``nturn`` periods, then a stop period), then
-    drive straight (``ndrive`` periods, then a stop period); either may be absent (0)."""
-
-    nturn: int  # periods of the turn's profile
-    tsign: float  # +1 counter-clockwise, -1 clockwise
-    tscale: float  # scale of the turn table's row
-    ndrive: int  # periods of the drive's profile
-    dscale: float  # scale of the drive table's row
-    ex: float  # drive direction (unit)
-    ey: float
-    dist: float  # drive length [m] (0: no drive)
-
-
-@njit(cache=True, inline="always")
-def plan_leg(x: float, y: float, th: float, tx: float, ty: float, heading: float,
-             tol_m: float, period_s: float, turn_sums: np.ndarray, drive_sums: np.ndarray,
-             split_turn_rad: float = math.inf) -> Leg:
-    """From the pose (x, y, th): turn to face the target (tx, ty) and drive to it when it is
-    further than ``tol_m``; otherwise only turn to ``heading``. Nothing to do: both 0.
-
-    A turn larger than ``split_turn_rad`` is a leg of its own, the drive planned after it
-    (with latency: a drive begun while the wheels still turn would leave the line; the
-    controller lets the turn settle first, :data:`SETTLE_M_S`)."""
-    dx, dy = tx - x, ty - y
-    dist = math.hypot(dx, dy)
-    drive = dist > tol_m
-    turn = wrap_angle((math.atan2(dy, dx) if drive else heading) - th)
-    nturn, tsign, tscale = 0, 1.0, 0.0
-    if abs(turn) > MIN_TURN_RAD:
-        total = abs(turn) / period_s
-        n = profile_index(turn_sums, total)
-        if n < 0:
-            raise ValueError("turn longer than the profile table")
-        nturn, tscale = n + 1, total / turn_sums[n]
-        tsign = -1.0 if turn < 0.0 else 1.0
-    if not drive or abs(turn) > split_turn_rad:
-        return Leg(nturn, tsign, tscale, 0, 0.0, 0.0, 0.0, 0.0)
-    total = dist / period_s
-    n = profile_index(drive_sums, total)
-    if n < 0:
-        raise ValueError("drive longer than the profile table")
-    return Leg(nturn, tsign, tscale, n + 1, total / drive_sums[n], dx / dist, dy / dist, dist)
-
-
-@njit(cache=True, inline="always")
-def leg_command(leg: Leg, k: int, turn_caps: np.ndarray, drive_caps: np.ndarray
-                ) -> tuple[float, float, float]:
-    """Control-body twist (vx [m/s], vy [m/s], omega [rad/s]) of period ``k`` of the leg;
-    nan past its end. (Tables as arrays, not :class:`Profiles`: numba increfs every array of
-    a tuple argument at each call, and this runs once per control period.)"""
-    if leg.nturn > 0:
-        if k < leg.nturn:
-            return 0.0, 0.0, leg.tsign * (turn_caps[leg.nturn - 1, k] * leg.tscale)
-        if k == leg.nturn:
-            return 0.0, 0.0, 0.0
-        k -= leg.nturn + 1
-    if leg.ndrive > 0:
-        if k < leg.ndrive:
-            u = drive_caps[leg.ndrive - 1, k] * leg.dscale
-            return u * leg.ex, u * leg.ey, 0.0
-        if k == leg.ndrive:
-            return 0.0, 0.0, 0.0
-    return math.nan, math.nan, math.nan
-
-
-@njit(cache=True)
-def plan_commands(x: float, y: float, th: float, tx: float, ty: float, heading: float,
-                  tol_m: float, period_s: float, turn_caps: np.ndarray, turn_sums: np.ndarray,
-                  drive_caps: np.ndarray, drive_sums: np.ndarray,
-                  split_turn_rad: float = math.inf) -> tuple[Leg, np.ndarray]:
-    """:func:`plan_leg` and every :func:`leg_command` of it (float64[n, 3]) in one call."""
-    leg = plan_leg(x, y, th, tx, ty, heading, tol_m, period_s, turn_sums, drive_sums,
-                   split_turn_rad)
-    n = (leg.nturn + 1 if leg.nturn > 0 else 0) + (leg.ndrive + 1 if leg.ndrive > 0 else 0)
-    cmds = np.empty((n, 3))
-    for k in range(cmds.shape[0]):
-        cmds[k, 0], cmds[k, 1], cmds[k, 2] = leg_command(leg, k, turn_caps, drive_caps)
-    return leg, cmds
-
-
-@njit(cache=True, inline="always")
-def at_target(x: float, y: float, th: float, tx: float, ty: float, heading: float,
-              tol_m: float, tol_rad: float) -> bool:
-    """A leg that ends here has reached the primitive's target centre and heading."""
-    return math.hypot(tx - x, ty - y) <= tol_m and abs(wrap_angle(th - heading)) <= tol_rad
-
-
-# ------------------------------------------------------------------ the primitive
-
-
-class PrimitiveOutcome(NamedTuple):
-    """What motion primitives did: one robot's (the reference, :meth:`PrimitiveController.run`:
-    Python scalars) or a batch's (:meth:`sim.physics.kernel.batch.RouteBatch.step`: one entry per
-    robot, arrays; inactive robots zeros). The contact records and the trajectory stay with
-    the world that drove them (``world.contacts``, ``world.trajectory``; ``batch.contacts[i]``,
-    ``batch.trajectory(i)``)."""
-
-    state: Any  # int: Discretiser.state_of the final pose
-    bumped: Any  # bool: a contact began (exact: the robot is back on its start cell centre)
-    reached: Any  # bool: ended within tolerance of the target centre and heading
-    timeout: Any  # bool: gave up at PhysicsConfig.timeout_s
-    steps: Any  # int: physics steps driven
-    contacts: Any  # int: contacts that began
-    cell: Any = None  # int: the true cell of the final pose (``state`` is the believed one
-    #   with localisation; the reference, which has none, gives the state)
-
 
 class PrimitiveController:
     """Drives grid actions as motion primitives in a

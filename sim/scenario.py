@@ -58,6 +58,15 @@ REWARD_SCHEMES: dict[str, tuple[float, float, float]] = {
 }
 
 
+def move_reward(goal: float, bump: float, step: float, at_goal: bool, bumped: bool,
+                moved: bool = True) -> float:
+    """The route problem's reward rule for one move (:meth:`Rewards.of_moves` says why):
+    ``goal`` on entering G, else ``bump`` when a contact began, else ``step`` for a move that
+    left its cell, else 0. Plain Python, so compiled loops inline this same function
+    (:mod:`scenarios.runs.physics_fused`) rather than a copy of the rule."""
+    return goal if at_goal else bump if bumped else step if moved else 0.0
+
+
 @dataclass(frozen=True)
 class Rewards:
     """A reward scheme: what entering G, a bump and a free step are worth.
@@ -96,7 +105,7 @@ class Rewards:
         can touch a wall on its way into G; the move still reached G, and a model learner
         that stored it as "G, worth a bump" would replay the goal as a penalty.)"""
         if not isinstance(bumped, np.ndarray):  # one move (a single env's step): plain Python
-            return self.goal if at_goal else self.bump if bumped else self.step if moved else 0.0
+            return move_reward(self.goal, self.bump, self.step, at_goal, bumped, moved)
         return np.where(at_goal, self.goal,
                         np.where(bumped, self.bump, np.where(moved, self.step, 0.0)))
 

@@ -39,7 +39,7 @@ from learning.drivers.batch_agent import BatchAgent
 from learning.drivers.train import TrainResult
 from learning.geometry import geometry_of
 from learning.plain.learner import PlainBatchAgent, is_plain
-from scenarios.runs.physics_fused import FusedRuns
+from scenarios.runs.physics_fused import FusedRuns, Rules
 from scenarios.runs.physics_grading import FinalGrade, Grader, final_policy_label
 from scenarios.runs.work import add_episodes
 from scenarios.signals import sigint_handled_by
@@ -343,7 +343,7 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
 
 
 def fused_groups(agents: list[Any], bounds: list[tuple[int, int]], recorded: dict[int, Any],
-                 batch: Any, start_h: np.ndarray, starts: np.ndarray, rules: np.ndarray,
+                 batch: Any, start_h: np.ndarray, starts: np.ndarray, rules: Rules,
                  n_episodes: int, test_every: int, loop: dict[str, np.ndarray]
                  ) -> list[tuple[Any, FusedRuns]]:
     """(agent, its fused runs) for each group of compiled learners with unrecorded runs."""
@@ -356,11 +356,11 @@ def fused_groups(agents: list[Any], bounds: list[tuple[int, int]], recorded: dic
     return out
 
 
-def _rules(sc: Scenario, model: TabularModel, world: PhysicsRouteVectorEnv) -> np.ndarray:
+def _rules(sc: Scenario, model: TabularModel, world: PhysicsRouteVectorEnv) -> Rules:
     """The env's rules as :func:`scenarios.runs.physics_fused.drive_runs` reads them."""
     rw = sc.rewards
-    return np.array([model.goal, rw.goal, rw.bump, rw.step, sc.steps_per_episode,
-                     world.batch.config.dt_s], np.float64)
+    return Rules(int(model.goal), float(rw.goal), float(rw.bump), float(rw.step),
+                 int(sc.steps_per_episode), float(world.batch.config.dt_s))
 
 
 def batch_agent(cfg: Any, geom: Any, learner_rngs: list[np.random.Generator],

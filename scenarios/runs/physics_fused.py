@@ -19,8 +19,8 @@ its row of the stacked state with its own learner stream
 kernel's own functions (:func:`sim.physics.kernel.primitive.begin_one`,
 :func:`~sim.physics.kernel.primitive.advance_one`), its wheel noise refilled from its noise
 stream in its block layout (:func:`sim.physics.kernel.noise.refill`), and the reward is the
-env's rule (:meth:`sim.scenario.Rewards.of_moves`). Tested: per-run logs, tests and learned
-tables equal to the batched loop's at ``exact`` and above it.
+env's rule (:func:`sim.scenario.move_reward`, the same function inlined). Tested: per-run
+logs, tests and learned tables equal to the batched loop's at ``exact`` and above it.
 
 Wall time: a call's time is shared evenly among the primitives it drove (the batched loop
 shared a step's time among the robots it advanced).
@@ -32,7 +32,7 @@ import hashlib
 import os
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -47,8 +47,25 @@ from sim.physics.jitcache import sources_digest as physics_digest
 from sim.physics.kernel.noise import refill_one
 from sim.physics.kernel.primitive import advance_one, begin_one
 from sim.physics.kernel.state import Geometry, Params, Scratch, Status
+from sim.scenario import move_reward
+
+_move_reward = njit(inline="always")(move_reward)  # the env's rule, this very function
 
 STAMP = "physics-fused-sources.sha256"
+
+
+_REWARD_RULE = Path(__file__).resolve().parents[2] / "sim" / "scenario.py"  # inlined too
+
+
+class Rules(NamedTuple):
+    """The route problem's rules as the compiled loop reads them."""
+
+    goal_state: int  # G's state index
+    goal_reward: float  # entering G
+    bump_reward: float  # a contact began
+    step_reward: float  # any other move
+    steps_per_episode: int  # primitives before an episode is cut off
+    physics_step_s: float  # the physics step [s] (simulated time)
 
 
 def drop_stale_cache(module: Path | None = None) -> bool:
@@ -64,7 +81,7 @@ def drop_stale_cache(module: Path | None = None) -> bool:
     here = (module or Path(__file__)).resolve()
     cache = here.parent / "__pycache__"
     digest = hashlib.sha256((learning_digest() + physics_digest()).encode()
-                            + here.read_bytes()).hexdigest()
+                            + here.read_bytes() + _REWARD_RULE.read_bytes()).hexdigest()
     return restamp(cache, STAMP, digest, lambda: [*cache.glob(f"{here.stem}.*.nbi"),
                                                   *cache.glob(f"{here.stem}.*.nbc")])
 
@@ -83,17 +100,15 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                test_every, budget):
     """Drive every run ``i`` with ``mine[i]`` until it needs Python (see the module).
 
-    ``rules``: float64[6] = goal state, goal reward, bump reward, step reward, steps per
-    episode, physics step [s]. Per-episode logs: ``logs_i`` int64[3, n, episodes] (steps,
-    contacts, primitives of the episode driven in this call), ``logs_f`` float64[6, n,
-    episodes] (return, success, shaping mean, shaping std, wall [s] before this call,
+    ``rules``: the route problem's :class:`Rules`. Per-episode logs: ``logs_i`` int64[3, n,
+    episodes] (steps, contacts, primitives of the episode driven in this call), ``logs_f``
+    float64[6, n, episodes] (return, success, shaping mean, shaping std, wall [s] before this call,
     simulated time [s]). Returns (primitives driven, episodes ended, runs waiting on a
     Chipmunk check).
     """
     stt = box.state
     p, prof, g, sc = Params(*pt), Profiles(*prof_t), Geometry(*geo_t), Scratch(*st)
-    goal, r_goal, r_bump, r_step = int(rules[0]), rules[1], rules[2], rules[3]
-    max_steps, dt = int(rules[4]), rules[5]
+    goal, max_steps, dt = rules.goal_state, rules.steps_per_episode, rules.physics_step_s
     prims = ended = checks = 0
     for i in range(robots.shape[0]):
         callp[i] = 0
@@ -133,7 +148,8 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                 callp[i] += 1
                 s2 = rb.state
                 terminated = rb.tstate == goal  # the true cell (s2: the believed one)
-                r = r_goal if terminated else (r_bump if rb.bumped else r_step)
+                r = _move_reward(rules.goal_reward, rules.bump_reward, rules.step_reward,
+                                 terminated, rb.bumped, True)
                 t[i] += 1
                 ret[i] += r
                 ncontact[i] += rb.ncontact
@@ -168,7 +184,7 @@ class FusedRuns:
     shared with the caller, who placed every robot and began its episode."""
 
     def __init__(self, agent: Any, rows: np.ndarray, b0: int, batch: Any, start_h: np.ndarray,
-                 starts: np.ndarray, rules: np.ndarray, n_episodes: int, test_every: int,
+                 starts: np.ndarray, rules: Rules, n_episodes: int, test_every: int,
                  loop: dict[str, np.ndarray]) -> None:
         n = agent.n
         self.agent, self.b0, self.batch, self.n_episodes = agent, b0, batch, n_episodes

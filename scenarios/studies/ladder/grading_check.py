@@ -29,7 +29,7 @@ from scenarios.artifacts import write_artifact
 from scenarios.runs.physics import RunGroup, train_physics_runs
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import load, make_config
-from scenarios.script_args import arg, parse
+from scenarios.script_args import arg, parse, study_command
 from sim.files import atomic_write_text
 from sim.physics.fidelity import parse_fidelity
 from sim.physics.models.rollouts import wilson_interval
@@ -103,10 +103,7 @@ def main(argv: list[str] | None = None) -> int:
                         f"{fp['primitives_mean']} | {hits / args.drives:.2f} [{ilo:.2f}, "
                         f"{ihi:.2f}] | {mean_prims:.1f} | {'yes' if agree else 'NO'} |")
             print(f"done: {m} seed {seed}", file=sys.stderr, flush=True)  # progress only
-    cmd = (f"python -m scenarios.studies.ladder.grading_check --scenario {args.scenario} "
-           f"--fidelity {args.fidelity} --methods {args.methods} --seeds {args.seeds} "
-           f"--episodes {args.episodes} --rewards {args.rewards} --drives {args.drives} "
-           f"--out {args.out}")
+    cmd = study_command(__spec__.name, Args, args)
     reliable = {m: sum(o["tool"]["p_goal"] >= 0.98 for o in out if o["method"] == m)
                 for m in methods}
     lines = [f"# Physics grading on {args.scenario} at `{fid.label}`: the tool's rollouts "
@@ -126,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
         {"command": cmd, "fidelity": fid.label, "policies": out}, indent=1))
     atomic_write_text(outdir / "GRADING.md", text)
     if args.artifact:
-        write_artifact(f"physics-grading.{args.artifact}", cmd + f" --artifact {args.artifact}",
+        write_artifact(f"physics-grading.{args.artifact}", cmd,
                        ["grid", "physics-exact", "physics-noisy"],
                        artifact_data(args, fid.label, methods, out), study=__file__)
     print(text)

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from scenarios.artifacts import write_artifact
-from scenarios.script_args import arg, artifact_arg, parse
+from scenarios.script_args import arg, artifact_arg, parse, study_command
 from sim.grid import build_model
 from sim.grid.actions import ACTION_HEADINGS
 from sim.physics.fidelity import PRESETS, parse_fidelity
@@ -162,11 +162,8 @@ def main(argv: list[str] | None = None) -> int:
     arc = blind_arc(args.robots, args.seed)
     print(f"blind drive: cross-track over the arc's {arc['cross_track_over_arc']}", flush=True)
     if args.artifact:
-        rung_arg = ";".join(rungs)
-        command = (f"python -m scenarios.studies.ladder.primitives --maps {','.join(maps)} "
-                   f"--rungs '{rung_arg}' --robots {args.robots} --moves {args.moves} "
-                   f"--seed {args.seed} --artifact {args.artifact}")
-        write_artifact(f"primitives.{args.artifact}", command, ["physics-exact",
+        write_artifact(f"primitives.{args.artifact}", study_command(__spec__.name, Args, args),
+                       ["physics-exact",
                                                                  "physics-noisy"],
                        {"rows": rows, "robots": args.robots, "moves": args.moves,
                         "blind_arc": arc,

@@ -18,7 +18,6 @@ from __future__ import annotations
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from shlex import quote
 
 import numpy as np
 
@@ -27,7 +26,7 @@ from learning.methods.registry import family_of
 from learning.streams import streams
 from scenarios.artifacts import check_artifact_name, write_artifact
 from scenarios.runs.spec import load, make_config
-from scenarios.script_args import arg, parse, parser_of
+from scenarios.script_args import arg, parse, parser_of, study_command
 from scenarios.studies.maps.heldout import method_of, share_of, write_problem
 
 
@@ -108,10 +107,7 @@ def main(argv: list[str] | None = None) -> int:
         lines.append(describe(seed, result, model, result.state))
         print(lines[-1], flush=True)
     if args.artifact:
-        command = "python -m scenarios.studies.maps.test_from_s " + " ".join(
-            f"--{k.replace('_', '-')} {quote(str(v))}" for k, v in vars(args).items()
-            if v is not None and k not in ("artifact", "maps"))
-        write_artifact(f"test-from-s.{args.artifact}", f"{command} --artifact {args.artifact}",
+        write_artifact(f"test-from-s.{args.artifact}", study_command(__spec__.name, Args, args),
                        ["grid"], {"lines": lines}, study=__file__)
     return 0
 

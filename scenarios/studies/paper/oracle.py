@@ -32,7 +32,7 @@ from learning.streams import streams
 from scenarios.artifacts import write_artifact
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
-from scenarios.script_args import arg, artifact_arg, parse
+from scenarios.script_args import arg, artifact_arg, parse, study_command
 from sim.files import atomic_write_text
 from sim.grid.planning import value_iteration
 
@@ -81,8 +81,7 @@ def main(argv: list[str] | None = None) -> int:
     rows: list[dict] = []
     lines = [f"# Oracle bound on {args.scenario}: Q-learning shaped by the best potential each "
              "feature set can represent", "",
-             f"Command: `python -m scenarios.studies.paper.oracle --out {args.out} --scenario "
-             f"{args.scenario} --seeds {args.seeds} --episodes {args.episodes}`", "",
+             f"Command: `{study_command(__spec__.name, Args, args)}`", "",
              "Cells: seeds whose final greedy route is optimal / seeds · median [q25, q75] "
              "episodes to a stable optimal route. `fit error` is the mean absolute error of the "
              "fitted potential against V* over the free states, and V*(S) sets its scale.", "",
@@ -123,8 +122,8 @@ def main(argv: list[str] | None = None) -> int:
     text = "\n".join(lines) + "\n"
     atomic_write_text(Path(args.out) / "ORACLE.md", text)
     if args.artifact:
-        write_artifact(f"oracle.{args.artifact}", lines[2].removeprefix("Command: `")
-                       .removesuffix("`") + f" --artifact {args.artifact}", ["grid"],
+        write_artifact(f"oracle.{args.artifact}", study_command(__spec__.name, Args, args),
+                       ["grid"],
                        {"scenario": args.scenario, "episodes": args.episodes,
                         "gamma": args.gamma, "rows": rows}, study=__file__)
     print(text)

@@ -8,9 +8,11 @@ import numpy as np
 
 from scenarios.studies.ladder.predictivity import (
     control_variate,
+    cv_variance_factor,
     deployed_grid,
     deployed_rung,
     mmrv,
+    r_interval,
     ranks,
     seed_spread,
     spearman,
@@ -91,18 +93,50 @@ def test_the_control_variate_removes_the_variance_the_grid_explains():
     rng = np.random.default_rng(1)
     x = rng.normal(size=10)
     same = control_variate(x, 3.0 * x + 1.0)  # the rung a function of the grid: all of it
-    assert same["r"] == 1.0 and same["variance_reduction"] == 1.0
-    assert same["seeds_with_grid"] == 1
-    none = control_variate(x, rng.normal(size=10))
-    assert none["variance_reduction"] < 0.5 and none["seeds_with_grid"] > 5
+    assert same["r"] == 1.0 and same["variance_reduction"] == 1.0 and same["saving_shown"]
+    assert same["seeds_with_grid"] == 4  # the estimated beta needs m > 3 seeds
     flat = control_variate(np.ones(10), x)  # a grid without spread explains nothing
-    assert flat == {"r": 0.0, "variance_reduction": 0.0, "seeds": 10, "seeds_with_grid": 10}
+    assert flat["r"] == 0.0 and not flat["saving_shown"] and flat["seeds_with_grid"] == 10
     # the claim itself: over many draws, Y - beta (X - mu_X) has (1 - r^2) of Y's variance
     n, r = 200_000, 0.8
     x = rng.normal(size=n)
     y = r * x + math.sqrt(1 - r * r) * rng.normal(size=n)
     beta = np.cov(x, y)[0, 1] / x.var()
     assert math.isclose((y - beta * x).var() / y.var(), 1 - r * r, rel_tol=0.02)
+
+
+def test_the_control_variate_by_hand():
+    """r = 0.6 from 10 seeds: Fisher's z interval tanh(0.693 -+ 1.96 / sqrt 7 = 0.741) =
+    [-0.05, 0.89] covers 0, so no saving is claimed; r = 0.9: tanh(1.472 -+ 0.741) =
+    [0.62, 0.98], and the fewest m with (1 - 0.81)(m - 2) / ((m - 3) m) <= 1/10 is 4."""
+    lo, hi = r_interval(0.6, 10)
+    assert (round(lo, 2), round(hi, 2)) == (-0.05, 0.89)
+    lo, hi = r_interval(0.9, 10)
+    assert (round(lo, 2), round(hi, 2)) == (0.62, 0.98)
+    # m = 4: 0.19 * 2 / (1 * 4) = 0.095 <= 0.1: four seeds give the interval of ten
+    assert math.isclose(cv_variance_factor(0.9, 4), 0.38)
+    assert cv_variance_factor(0.9, 3) == math.inf
+    x = np.arange(10.0)
+    noise = np.array([1, -1, 1, -1, 1, -1, 1, -1, 1, -1], float)
+    for k, want_shown in ((0.3, True), (30.0, False)):
+        cv = control_variate(x, x + k * noise)
+        assert cv["saving_shown"] == want_shown
+        if not want_shown:
+            assert cv["seeds_with_grid"] == 10
+    # at rho = 0 the estimated beta makes things worse, never better: (n - 2) / (n - 3) > 1
+    assert cv_variance_factor(0.0, 10) == 8 / 7
+
+
+def test_the_interval_of_r_covers_rho_as_often_as_it_says():
+    """Coverage at the study's n = 10, by simulation: about 95 %."""
+    rng = np.random.default_rng(3)
+    rho, n, hits, trials = 0.5, 10, 0, 2000
+    for _ in range(trials):
+        x = rng.normal(size=n)
+        y = rho * x + math.sqrt(1 - rho * rho) * rng.normal(size=n)
+        lo, hi = r_interval(float(np.corrcoef(x, y)[0, 1]), n)
+        hits += lo <= rho <= hi
+    assert 0.93 <= hits / trials <= 0.97
 
 
 def test_a_rung_is_predictive_only_with_a_high_rho_and_violations_within_the_seed_spread():

@@ -65,8 +65,11 @@ def ladder_predictivity(d: dict[str, Any]) -> str:
              "then the mean maximum rank violation (MMRV, SIMPLER; in the figure's units: how "
              "much worse at the rung a method the grid ranked better can be), each with a 95 % "
              "bootstrap interval over seeds (`scenarios/studies/ladder/predictivity.py`). "
-             "✓: the rung is *predictive* of the figure, ρ ≥ 0.85 and MMRV within one seed "
-             "spread (the median over methods of the rung's interquartile range of seeds). "
+             "✓: the rung is *predictive* of the figure on the point values, ρ ≥ 0.85 and MMRV "
+             "within one seed spread (the median over methods of the rung's interquartile "
+             "range of seeds); ✓✓: on the intervals too, ρ's lower end ≥ 0.85 and MMRV's upper "
+             "end within the spread (the bootstrap resamples seeds, each bringing its grid run "
+             "and its rung run: the two are paired). "
              "*Deployed*: expected primitives of the final policy from S, a miss costing the "
              "episode budget; *P(G)*: its chance of reaching G; *learning*: mean training "
              "episode length. — (no spread): a world cannot tell the methods apart.", "",
@@ -75,12 +78,20 @@ def ladder_predictivity(d: dict[str, Any]) -> str:
              "|---|---|" + "---|---|" * len(_LADDER_FIGURES) + "---|"]
     for c in rungs:
         pr = c["predictivity"]
-        cells = [f"{_rho(pr[f])} | {_mmrv(pr[f], k)}{' ✓' if pr[f]['predictive'] else ''}"
+        cells = [f"{_rho(pr[f])} | {_mmrv(pr[f], k)}{_mark(pr[f])}"
                  for f, _, k in _LADDER_FIGURES]
         lines.append(f"| {c['map']} | {c['rung']} | " + " | ".join(cells)
                      + f" | {_v_star(d, c)} |")
     lines += ["", _first_not_predictive(rungs), "", _control_variates(rungs)]
     return "\n".join(lines) + "\n"
+
+
+def _mark(p: dict[str, Any]) -> str:
+    """✓ on the point values, ✓✓ on the intervals too (an artifact without the interval
+    mark shows the point mark only)."""
+    if not p["predictive"]:
+        return ""
+    return " ✓✓" if p.get("predictive_interval") else " ✓"
 
 
 def _first_not_predictive(rungs: list[dict[str, Any]]) -> str:
@@ -99,11 +110,15 @@ def _control_variates(rungs: list[dict[str, Any]]) -> str:
     """The grid as a control variate for the rung's seeds, per map and rung."""
     lines = ["#### The grid as a control variate for the rung's seeds", "",
              "Seed k's grid run and rung run share the seed's streams. Where their figures "
-             "correlate (r), the rung's mean corrected by the grid's has variance (1 − r²) "
-             "times the plain mean's, with the grid's mean pinned by many cheap grid seeds "
-             "(Sim2Val, SureSim). Per figure: the median over methods of r² (the variance "
-             "removed, range over methods) · the rung seeds that give the interval of the "
-             "study's seeds (median over methods).", "",
+             "correlate (r), the rung's mean corrected by the grid's has variance "
+             "(1 − r²)(n − 2)/(n − 3) times the plain mean's, β estimated from the same n "
+             "seeds (so below r² ≈ 1/(n − 2) nothing is saved), and only with the grid's "
+             "mean pinned by many cheap grid seeds (Sim2Val, SureSim), **which this study "
+             "does not run: the saving is hypothetical**. A method whose r has a 95 % "
+             "interval (Fisher's z) covering 0 shows no correlation and no saving. Per "
+             "figure: the median over methods of r² (range over methods) · the rung seeds "
+             "that would give the interval of the study's n plain seeds (median over "
+             "methods; no saving shown: n) · how many methods show a saving.", "",
              "| map | rung | " + " | ".join(t for _, t, _ in _LADDER_FIGURES) + " |",
              "|---|---|" + "---|" * len(_LADDER_FIGURES)]
     for c in rungs:
@@ -115,8 +130,10 @@ def _control_variates(rungs: list[dict[str, Any]]) -> str:
                 continue
             red = [v["variance_reduction"] for v in cv]
             need = float(statistics.median([v["seeds_with_grid"] for v in cv]))
+            shown = ("" if "saving_shown" not in cv[0] else
+                     f" · {sum(v['saving_shown'] for v in cv)}/{len(cv)}")
             cells.append(f"{statistics.median(red):.2f} ({min(red):.2f}–{max(red):.2f}) · "
-                         f"{need:g} of {cv[0]['seeds']}")
+                         f"{need:g} of {cv[0]['seeds']}{shown}")
         lines.append(f"| {c['map']} | {c['rung']} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

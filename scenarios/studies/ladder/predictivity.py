@@ -111,19 +111,55 @@ def seed_spread(per_method: list[np.ndarray]) -> float:
     return float(np.median(iqr)) if iqr else 0.0
 
 
+def r_interval(r: float, n: int, z95: float = 1.959964) -> tuple[float, float]:
+    """The 95 % interval of a correlation from ``n`` pairs (Fisher's z: atanh r is about
+    normal with standard error 1 / sqrt(n - 3)); the whole range below 4 pairs."""
+    if n < 4:
+        return -1.0, 1.0
+    z = math.atanh(min(max(r, -0.999999), 0.999999))
+    half = z95 / math.sqrt(n - 3)
+    return math.tanh(z - half), math.tanh(z + half)
+
+
+def cv_variance_factor(r: float, m: int) -> float:
+    """The control-variate mean's variance over the plain mean's, from ``m`` paired seeds
+    with the coefficient beta estimated from the same seeds: (1 - r^2) (m - 2) / (m - 3)
+    (the estimated beta costs a degree of freedom; at small m it eats the saving)."""
+    return (1.0 - r * r) * (m - 2) / (m - 3) if m > 3 else math.inf
+
+
 def control_variate(grid: np.ndarray, rung: np.ndarray) -> dict[str, Any]:
-    """One method's seeds, paired (seed k's grid run and rung run): the correlation r, the
-    variance reduction r^2 of the control-variate mean, and the rung seeds that give the
-    same interval width with it, ``ceil(n (1 - r^2))``. Without spread in either world
-    there is nothing to correlate (r = 0): the rung's own seeds are all it has."""
+    """One method's seeds, paired (seed k's grid run and rung run): the correlation r with
+    its 95 % interval (:func:`r_interval`), the variance reduction r^2, and the rung seeds
+    that would give the interval of the study's ``n`` plain seeds with the grid as a
+    control variate: the fewest m with ``cv_variance_factor(r, m) / m <= 1 / n``. Where
+    r's interval covers 0 the correlation is not shown to exist, and the saving is none
+    (m = n); so too without spread in either world (r = 0). The saving is hypothetical:
+    it takes the grid's own mean as pinned (by many cheap grid seeds, which the study
+    does not run)."""
     x, y = np.asarray(grid, float), np.asarray(rung, float)
     n = len(y)
     r = 0.0
     if n >= 3 and x.std() > 0.0 and y.std() > 0.0:
         r = float(np.corrcoef(x, y)[0, 1])
-    reduction = r * r
-    return {"r": round(r, 4), "variance_reduction": round(reduction, 4), "seeds": n,
-            "seeds_with_grid": max(1, math.ceil(round(n * (1.0 - reduction), 9)))}
+    lo, hi = r_interval(r, n)
+    shown = lo > 0.0 or hi < 0.0
+    need = n
+    if shown:
+        need = next((m for m in range(4, n + 1) if cv_variance_factor(r, m) / m <= 1.0 / n), n)
+    return {"r": round(r, 4), "r_ci95": [round(lo, 4), round(hi, 4)],
+            "variance_reduction": round(r * r, 4), "seeds": n,
+            "saving_shown": shown, "seeds_with_grid": need}
+
+
+def paired_pick(rng: np.random.Generator, n_grid: int, n_rung: int
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """One bootstrap resample of a method's seeds: the same seeds in both worlds where both
+    have every seed (paired), else each world's own draw."""
+    if n_grid == n_rung:
+        i = rng.integers(0, n_grid, n_grid)
+        return i, i
+    return rng.integers(0, n_grid, n_grid), rng.integers(0, n_rung, n_rung)
 
 
 def figures_by_method(runs: list[dict[str, Any]], budget: int
@@ -168,8 +204,11 @@ def srcc(runs: list[dict[str, Any]], budget: int, seed: int = 0,
         violation = mmrv(med_g, med_r)
         boots, boot_mmrv = [], []
         for _ in range(n_boot if enough else 0):
-            bg = np.array([np.median(v[rng.integers(0, len(v), len(v))]) for v in grid])
-            br = np.array([np.median(v[rng.integers(0, len(v), len(v))]) for v in rung])
+            # paired: a method's grid run and rung run of a seed share its streams, so a
+            # resample draws seeds, each bringing both of its runs
+            picks = [paired_pick(rng, len(g), len(r)) for g, r in zip(grid, rung, strict=True)]
+            bg = np.array([np.median(v[i]) for v, (i, _) in zip(grid, picks, strict=True)])
+            br = np.array([np.median(v[j]) for v, (_, j) in zip(rung, picks, strict=True)])
             boots.append(spearman(bg, br))
             boot_mmrv.append(mmrv(bg, br))
         b = np.asarray(boots)
@@ -183,6 +222,11 @@ def srcc(runs: list[dict[str, Any]], budget: int, seed: int = 0,
             "seed_spread": round(spread, 4),
             "predictive": bool(np.isfinite(rho) and rho >= PREDICTIVE_RHO
                                and violation <= spread),
+            # the same mark on the intervals: rho's lower end and MMRV's upper end
+            "predictive_interval": bool(
+                np.isfinite(rho) and _interval(boots) is not None and _interval(boot_mmrv)
+                is not None and _interval(boots)[0] >= PREDICTIVE_RHO
+                and _interval(boot_mmrv)[1] <= spread),
             "methods": methods,
             "grid_median": [round(float(x), 3) for x in med_g],
             "rung_median": [round(float(x), 3) for x in med_r],

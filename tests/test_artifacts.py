@@ -189,3 +189,19 @@ def test_every_committed_artifact_records_the_study_that_wrote_it():
     missing = [n for n in artifact_names(RESULTS_DIR)
                if "code_sha256" not in load_artifact(n).get("study", {})]
     assert missing == [], f"re-run these with --artifact: {missing}"
+
+
+def test_a_studys_hash_covers_the_study_code_it_computes_with():
+    """The ladder's numbers come from its predictivity statistics too, the crosscheck's from
+    its IR-SIM world: a change there stales the table as a change of the study does."""
+    from scenarios.artifacts import ROOT, study_changed, study_digest
+
+    ladder = study_digest(ROOT / "scenarios/studies/ladder/continuous_vs_grid.py")
+    assert "scenarios/studies/ladder/predictivity.py" in ladder["with"]
+    assert not study_changed(ladder)
+    edited = {**ladder, "with": {**ladder["with"],
+                                 "scenarios/studies/ladder/predictivity.py": "0" * 64}}
+    assert study_changed(edited)
+    crosscheck = study_digest(ROOT / "sim/physics/crosscheck/agreement.py")
+    assert "sim/physics/crosscheck/irsim_world.py" in crosscheck["with"]
+    assert study_digest(ROOT / "scenarios/bench/plain.py")["with"] == {}  # nothing beyond

@@ -174,21 +174,61 @@ def study_code_digest(source: str) -> str:
 _DOCUMENTED = (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)
 
 
-def study_digest(path: str | Path) -> dict[str, str]:
+def study_digest(path: str | Path) -> dict[str, Any]:
     """The study script a table came from, and a hash of its code
     (:func:`study_code_digest`): a change of the study's own code (a row's settings, what
-    it measures) is not in the behaviour digests."""
+    it measures) is not in the behaviour digests. ``with``: the same hash of every module
+    the study computes its numbers with beyond ``sim`` and ``learning`` (whose behaviour the
+    golden records hold): its own package's modules and the studies' helpers, found by
+    following its imports (:func:`study_helpers`)."""
     path = Path(path).resolve()
-    rel = path.relative_to(ROOT).as_posix() if path.is_relative_to(ROOT) else str(path)
-    return {"path": rel, "code_sha256": study_code_digest(path.read_text())}
+    return {"path": _rel(path), "code_sha256": study_code_digest(path.read_text()),
+            "with": {_rel(h): study_code_digest(h.read_text()) for h in study_helpers(path)}}
 
 
-def study_changed(study: dict[str, str]) -> bool:
-    """Whether the study script an artifact recorded is gone or its code changed (an
-    artifact written before the code hash holds the hash of the file's bytes)."""
+def _rel(path: Path) -> str:
+    return path.relative_to(ROOT).as_posix() if path.is_relative_to(ROOT) else str(path)
+
+
+# code that computes a table's numbers outside the golden records' reach (sim and learning,
+# the runs and sweeps): the studies and their helpers, and the crosscheck's IR-SIM side
+STUDY_CODE = ("scenarios/studies", "sim/physics/crosscheck")
+
+
+def study_helpers(path: Path) -> list[Path]:
+    """The modules a study's numbers also come from: following its imports (at any depth),
+    every module of the repository's study code, :data:`STUDY_CODE` (the predictivity
+    statistics of the ladder, the ranking of the held-out study, the IR-SIM world of the
+    crosscheck), not the study itself."""
+    seen: set[Path] = set()
+    todo = [path]
+    while todo:
+        tree = ast.parse(todo.pop().read_text())
+        for node in ast.walk(tree):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module] if isinstance(node, ast.ImportFrom) and node.module
+                     and node.level == 0 else [])
+            for name in names:
+                for cand in (ROOT / Path(*name.split("."))).with_suffix(".py"), \
+                        ROOT / Path(*name.split(".")) / "__init__.py":
+                    inside = any(cand.is_relative_to(ROOT / d) for d in STUDY_CODE)
+                    if cand.is_file() and inside and cand not in seen and cand != path:
+                        seen.add(cand)
+                        todo.append(cand)
+    return sorted(seen)
+
+
+def study_changed(study: dict[str, Any]) -> bool:
+    """Whether the study script an artifact recorded, or a module it computed with
+    (``with``), is gone or its code changed (an artifact written before the code hash holds
+    the hash of the file's bytes)."""
     path = ROOT / study["path"]
     if not path.is_file():
         return True
+    for helper, digest in study.get("with", {}).items():
+        h = ROOT / helper
+        if not h.is_file() or study_code_digest(h.read_text()) != digest:
+            return True
     if "code_sha256" in study:
         return study_code_digest(path.read_text()) != study["code_sha256"]
     return hashlib.sha256(path.read_bytes()).hexdigest() != study.get("sha256")

@@ -143,7 +143,9 @@ def iqm(samples: np.ndarray) -> np.ndarray:
     """Interquartile mean along the last axis: the mean of the middle half of the values
     (the 25 % trimmed mean; a run's share of the sorted values that falls across a quarter
     counts in part, so any number of runs is exact). Robust to the seeds that never got
-    there at either end, and less noisy than the median."""
+    there at either end, and less noisy than the median. It equals rliable's
+    ``scipy.stats.trim_mean(x, 0.25)`` when the count is a multiple of 4; otherwise that one
+    drops ``floor(n / 4)`` whole runs at each end and the two differ."""
     s = np.sort(np.asarray(samples, dtype=float), axis=-1)
     n = s.shape[-1]
     lo, hi = n / 4.0, 3.0 * n / 4.0

@@ -297,7 +297,7 @@ def _check_backend(fn: str, backend: str, address: str | None,
 
 
 def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: ScenarioLike,
-          *, fidelity: Any = "exact", drives: int = 50, seed: int = 0, rewards: Any = None,
+          *, fidelity: Any = "exact", drives: int = 50, seed: int = 0,
           start: Cell | None = None, goal: Cell | None = None,
           with_optimum: bool = True) -> Grade:
     """Drive ``policy`` from S at ``fidelity``, each drive with its own noise stream, exactly
@@ -316,8 +316,9 @@ def grade(policy: np.ndarray | Sequence[int] | Callable[[int], int], scenario: S
     fid = fidelity_arg(fn, fidelity, True)
     drives = whole(fn, "drives", drives, 1, MAX_DRIVES, 50)
     seed = whole(fn, "seed", seed, 0, MAX_SEED, 0)
+    # no rewards: a grade (P(G), primitives, contacts) does not depend on them
     sc, model = problem_of(fn, scenario, cell_arg(fn, "start", start), cell_arg(fn, "goal", goal),
-                           rewards_arg(fn, rewards), None, ["physics"])
+                           None, None, ["physics"])
     table = policy_table(fn, policy, model.n_states)
     return _graded(sc, model, table, fid or parse_fidelity(sc.physics), drives, seed,
                    with_optimum)[0]

@@ -8,7 +8,9 @@ one wrote: the saved agent, the example scenario), with ``HOME`` in that folder 
 user's own files the tour mentions (``my.toml``, ``~/my-scenarios``, ``my.map``) are made
 there first. A line passes when it exits as expected (0; ``rnhql report`` in an installed
 copy refuses in one line, exit 2: the artifacts live in the source tree) and prints no
-traceback. ``--installed`` builds a copy with ``pip install --no-deps --target`` and runs
+traceback, and where its note makes a claim (``shows``), its output bears the claim out (the
+default method's greedy route is optimal, the paper's rewards do not reach G, ...).
+``--installed`` builds a copy with ``pip install --no-deps --target`` and runs
 every line against it, away from the checkout: what ``pip install .`` gives a user.
 
 The docs' tour block is rendered from the artifact, each line with its measured time.
@@ -18,6 +20,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -40,21 +43,30 @@ class Line:
     note: str
     own_file: bool = False  # needs the user's own file (made by the tour from the example)
     runs: bool = True  # False: opens a viewer, not run here
+    shows: str = ""  # a regular expression the output must match: the note's claim, checked
+
+
+OPTIMAL = r"final greedy route\s+(\d+) \(optimal \1\)"  # the greedy route is the optimum
 
 
 MAIN_JOB = ("rnhql compare paper-50 --rewards goal-only --seeds 10 --episodes 3000 --out "
             "results/paper-50 --record")  # the README's set-up step 1, after the install
 TOUR = (
-    Line(MAIN_JOB, "set-up step 1's main job: every method x 10 seeds, recorded"),
-    Line("rnhql scenarios", "named scenarios: size, free cells, optimal route"),
+    Line(MAIN_JOB, "set-up step 1's main job: every method x 10 seeds, recorded",
+         shows=r"(?s)130 runs on paper-50.*recording: recordings/paper-50-compare\.rrd"),
+    Line("rnhql scenarios", "named scenarios: size, free cells, optimal route",
+         shows=r"paper-50"),
     Line("rnhql train paper-50", "rnh-ql+ (the default method), goal-only rewards (the "
-         "default): optimal route in a few dozen episodes"),
+         "default): optimal route in a few dozen episodes",
+         shows=r"(?s)stable optimal after  \d\d? episodes.*" + OPTIMAL),
     Line("rnhql train maze-1", "the suite's maps are named scenarios too; rnh-ql+ again finds "
-         "the optimal route"),
+         "the optimal route", shows=OPTIMAL),
     Line("rnhql train paper-50 --method rnh-ql --rewards paper", "the paper's method and "
-         "rewards: \"G not reached\" is expected (finding 1)"),
+         "rewards: \"G not reached\" is expected (finding 1)",
+         shows=r"final greedy route\s+G not reached"),
     Line("rnhql train paper-50 --method rnh-ql", "... with goal-only rewards it gets there, "
-         "late (thousands of episodes)"),
+         "late (thousands of episodes)",
+         shows=r"(?s)stable optimal after  \d{4} episodes.*" + OPTIMAL),
     Line("rnhql scenarios --example > my.toml", "a complete scenario file, every field "
          "commented"),
     Line("rnhql scenarios --check my.toml", "validate your own scenario", own_file=True),
@@ -64,21 +76,22 @@ TOUR = (
          "frame y down", own_file=True),
     Line("rnhql train paper-50 --seed 0 --save agent.npz --record", "one run, saved and "
          "recorded"),
-    Line("rnhql train paper-50 --episodes 6000 --resume agent.npz", "continue it exactly"),
+    Line("rnhql train paper-50 --episodes 6000 --resume agent.npz", "continue it exactly",
+         shows=r"resuming agent\.npz: 3000 of 6000 episodes done"),
     Line("rnhql route paper-50 --agent agent.npz --png route.png", "greedy route vs BFS "
          "optimum"),
     Line("rnhql route paper-50 --agent agent.npz --world physics", "drive a grid-learned "
-         "policy"),
+         "policy", shows=r"driven in physics at exact: P\(G\) 1\.00"),
     Line("rnhql train paper-50 --world physics --episodes 300", "learn in physics (rnh-ql+ "
-         "reaches G)"),
+         "reaches G)", shows=r"final greedy route\s+\d+ \(optimal"),
     Line("rnhql compare paper-50 --methods rnh-ql+,rnh-ql,st-ql,dyna-q --world grid,physics "
          "--seeds 3 --out out/", "grid and physics side by side"),
     Line("rnhql compare paper-50 --methods rnh-ql+,haql --world physics --fidelity noisy "
          "--episodes 1000 --out out/noisy", "a rung above exact"),
     Line("rnhql aliasing paper-50 --fidelity noisy --out out/aliasing", "next-cell "
-         "distributions"),
+         "distributions", shows=r"multi_outcome_fraction 0\.\d+"),
     Line("rnhql optimum paper-50 --fidelity noisy --rollouts 1000", "V*: the optimum at a "
-         "fidelity (built once, then cached)"),
+         "fidelity (built once, then cached)", shows=r"V\*\(S\)\s+\d+\.\d+ expected"),
     Line("rnhql compare paper-50 --set alpha=0.2 --out out/alpha-0.2", "override a config "
          "field"),
     Line("rnhql compare paper-50 --rewards paper --out out/p", "or step-cost, "
@@ -194,11 +207,14 @@ def run_tour(package_root: Path, installed: bool) -> list[dict[str, object]]:
             proc = _run_timed(argv, home, {**_env(home, package_root), **extra})
             if out is not None:
                 out.write_text(proc.stdout)
-            passed = proc.returncode == expected and TRACEBACK not in proc.stderr
+            said = re.search(line.shows, proc.stdout + proc.stderr) is not None \
+                if line.shows else None
+            passed = (proc.returncode == expected and TRACEBACK not in proc.stderr
+                      and said is not False)
             tail = (proc.stderr.strip().splitlines() or [""])[-1]
             wall = proc.wall_s
             rows.append({"command": line.command, "ran": True, "wall_s": round(wall, 1),
-                         "exit": proc.returncode, "passed": passed,
+                         "exit": proc.returncode, "passed": passed, "note_checked": said,
                          "longest_silence_s": round(proc.silence_s, 1),
                          **({} if passed else {"stderr": tail[-300:]})})
             print(f"{'ok ' if passed else 'FAIL'} {wall:7.1f} s  exit {proc.returncode}  "

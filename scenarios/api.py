@@ -272,7 +272,7 @@ def settings_per_method(methods: Sequence[str], overrides: tuple[tuple[str, floa
         make_config(m, out[m])
     for k, _ in overrides:
         if not any(k in dict(o) for o in out.values()):
-            raise ExperimentError("command line", f"--set {k}",
+            raise ExperimentError("scenarios.api.config", "settings",
                                   f"none of the methods ({', '.join(methods)}) has a field "
                                   f"{k!r}", "use one of their fields: " + ", ".join(sorted(
                                       {f for m in methods

@@ -168,13 +168,16 @@ def layout_digest(scenario: str | Scenario, start: Cell | None = None,
     return hashlib.sha256(blob).hexdigest()[:12]
 
 
+CONFIG = "scenarios.api.config"  # a method's config, built from the call's method and settings
+
+
 def method_class(method: str) -> type:
     """The config class of ``method``: a registered name, or ``module:Class`` (a compiled
     method's config or a plain-Python learner: :func:`learning.methods.registry.config_class`)."""
     try:
         return config_class(method)
     except ValueError as exc:
-        raise ExperimentError("command line", "--method", str(exc).removesuffix("."),
+        raise ExperimentError(CONFIG, "method", str(exc).removesuffix("."),
                               "name a method of docs/methods.md (rnhql train --help lists "
                               "them), or module:Class of a learner of your own "
                               "(docs/python-api.md)") from None
@@ -193,35 +196,35 @@ def make_config(method: str, overrides: Iterable[tuple[str, float]] = ()):
     kwargs: dict[str, Any] = {}
     for k, v in overrides:
         if k in getattr(cls, "IGNORED", ()):
-            raise ExperimentError("command line", f"--set {k}", f"{method}'s rules do not "
-                                  f"read {k} (it inherits the field)",
-                                  f"drop it, or use --method {cls.reader_of(k)}")
+            raise ExperimentError(CONFIG, "settings", f"{method}'s rules do not read {k} (it "
+                                  "inherits the field)",
+                                  f"drop {k}, or use method='{cls.reader_of(k)}'")
         if k not in names:
             wider = [c.cli for c in METHODS.values()  # e.g. rnh-ql+ablation, for rnh-ql+
                      if issubclass(c, cls) and k in {f.name for f in dataclasses.fields(c)}]
-            raise ExperimentError("command line", f"--set {k}", f"{method} has no field {k!r}",
+            raise ExperimentError(CONFIG, "settings", f"{method} has no field {k!r}",
                                   (f"use one of: {', '.join(names)}" if names else
-                                   "it has no settings to --set: set them in its class")
-                                  + (f"; or --method {wider[0]}, which has {k}" if wider
+                                   "it has no settings to change: set them in its class")
+                                  + (f"; or method='{wider[0]}', which has {k}" if wider
                                      else ""))
         problem = limit_problem(k, float(v))
         if problem is not None:
             limit = LIMITS.get(k, (None,))[0]
-            raise ExperimentError("command line", f"--set {k}={v:g}", problem,
-                                  f"pass at most --set {k}={limit:g}" if limit is not None
-                                  else "pass a finite number")
+            raise ExperimentError(CONFIG, "settings", f"{k}={v:g}: {problem}",
+                                  f"pass at most {limit:g} for {k}" if limit is not None
+                                  else f"pass a finite number for {k}")
         if names[k].type in (int, "int", bool, "bool"):
             if not float(v).is_integer():
-                raise ExperimentError("command line", f"--set {k}={v:g}",
-                                      f"{method}'s {k} is a whole number",
-                                      f"pass e.g. --set {k}={int(v)}")
+                raise ExperimentError(CONFIG, "settings", f"{k}={v:g}: {method}'s {k} is a "
+                                      "whole number", f"pass a whole number for {k}, e.g. "
+                                      f"{int(v)}")
             kwargs[k] = bool(v) if names[k].type in (bool, "bool") else int(v)
         else:
             kwargs[k] = v
     try:
         return cls(**kwargs)
     except (TypeError, ValueError) as exc:
-        raise ExperimentError("command line", "--set", str(exc), "pick a valid value") from None
+        raise ExperimentError(CONFIG, "settings", str(exc), "pick a valid value") from None
 
 
 @dataclass(frozen=True)

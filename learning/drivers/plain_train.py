@@ -11,17 +11,25 @@ calls into the learner (``rnhql bench`` style figures: ``scenarios/bench/plain.p
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 
 from learning.compiled.kernels import NO_TRACE
-from learning.drivers.train import EPISODE_FIELDS, TrainObserver, TrainResult, finished
+from learning.drivers.train import (
+    EPISODE_FIELDS,
+    TrainObserver,
+    TrainResult,
+    finished,
+    train_tabular,
+)
 from learning.geometry import TabularMDP, geometry_of
 from learning.plain.learner import (
     PlainAgent,
     PlainConfig,
     checked_action,
     greedy_walk,
+    is_plain,
     new_learner,
     snapshot,
 )
@@ -111,3 +119,19 @@ def train_plain(cfg: PlainConfig, model: TabularMDP, n_episodes: int, rng: np.ra
     result = finished(cfg, st, model, done, env_steps, arrays, tests_e, tests_l)
     result.agent = PlainAgent(cfg, learner, st)  # type: ignore[attr-defined]
     return result
+
+
+def train_grid(cfg: Any, model: TabularMDP, n_episodes: int, rng: np.random.Generator,
+               test_every: int = 10, observer: TrainObserver | None = None,
+               start_rng: np.random.Generator | None = None,
+               resume: Any = None) -> TrainResult:
+    """A grid run of any learner: the one place that chooses between a plain-Python learner
+    (:func:`train_plain`) and a compiled method (:func:`learning.drivers.train.train_tabular`,
+    the only one that resumes a checkpoint)."""
+    if is_plain(cfg):
+        if resume is not None:
+            raise ValueError(f"{cfg.name} is a plain-Python learner: it has no checkpoint "
+                             "to resume")
+        return train_plain(cfg, model, n_episodes, rng, test_every, observer, start_rng)
+    return train_tabular(cfg, model, n_episodes, rng, test_every, resume=resume,
+                         observer=observer, start_rng=start_rng)

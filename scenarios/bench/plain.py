@@ -26,9 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from learning.drivers.plain_train import train_plain
-from learning.drivers.train import train_tabular
-from learning.plain.learner import is_plain
+from learning.drivers.plain_train import train_grid
 from scenarios.artifacts import write_artifact
 from scenarios.runs.spec import load, make_config
 from scenarios.script_args import arg, artifact_arg, parse, study_command
@@ -50,7 +48,7 @@ def grid_steps_per_s(method: str, episodes: int, repeats: int) -> float:
     """Best-of-``repeats`` env steps/s of a fresh learner trained ``episodes`` episodes."""
     _, model = load(SCENARIO, rewards="goal-only")
     cfg = make_config(method)
-    train = train_plain if is_plain(cfg) else train_tabular
+    train = train_grid
     train(cfg, model, 1, np.random.default_rng(0))  # compile / import outside the clock
     best = 0.0
     for r in range(repeats):

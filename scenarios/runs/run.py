@@ -9,9 +9,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from learning.drivers.plain_train import train_plain
-from learning.drivers.train import epsilon_route_lengths, train_tabular
-from learning.plain.learner import is_plain
+from learning.drivers.plain_train import train_grid
+from learning.drivers.train import epsilon_route_lengths
 from learning.streams import streams
 from scenarios.runs.physics_batch import batchable, run_physics_batch
 from scenarios.runs.physics_grading import Grader
@@ -83,8 +82,7 @@ def _train(spec: RunSpec, sc: Scenario, model: TabularModel, cfg: Any, recorder:
 
         observer = GridRecorder(recorder, plan)
 
-    train = train_plain if is_plain(cfg) else train_tabular
-    result = train(cfg, model, spec.episodes, rng, test_every=spec.test_every,
+    result = train_grid(cfg, model, spec.episodes, rng, test_every=spec.test_every,
                    observer=CountingObserver(observer), start_rng=rs.starts)
     # the paper's test, on its own stream so it never changes the training run
     eps_routes = epsilon_route_lengths(result.state, model, cfg.eps, rs.evaluation)

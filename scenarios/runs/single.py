@@ -13,10 +13,9 @@ from pathlib import Path
 from typing import Any
 
 from learning.drivers.checkpoint import Checkpoint, checkpoint_bytes, load_checkpoint
-from learning.drivers.plain_train import train_plain
-from learning.drivers.train import epsilon_route_lengths, train_tabular
+from learning.drivers.plain_train import train_grid
+from learning.drivers.train import epsilon_route_lengths
 from learning.geometry import geometry_of
-from learning.plain.learner import is_plain
 from learning.streams import streams
 from scenarios.runs.physics import log_final, train_physics
 from scenarios.runs.spec import (
@@ -47,7 +46,6 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
     that grid phase here first, as a sweep does. ``announce``: called once the checkpoint
     to resume is loaded and checked, before any training, with its episodes (or None)."""
     cfg = make_config(spec.method, spec.overrides)
-    plain = is_plain(cfg)  # (save/resume: refused for plain learners by the caller)
     problem = {"scenario": scenario_digest(*spec.problem), "rewards": sc.rewards.label(),
                "layout": layout_digest(spec.scenario, spec.start, spec.goal),
                "world": spec.world}  # (a warm start says which world it learned in)
@@ -82,13 +80,8 @@ def train_single(spec: RunSpec, sc: Scenario, model: TabularModel, *,
                                                                     cfg, record_every,
                                                                     record_values_every))
         if spec.world == "grid":
-            if plain:
-                result = train_plain(cfg, model, spec.episodes, rng, spec.test_every,
-                                     observer=observer, start_rng=start_rng)
-            else:
-                result = train_tabular(cfg, model, spec.episodes, rng, spec.test_every,
-                                       resume=checkpoint, observer=observer,
-                                       start_rng=start_rng)
+            result = train_grid(cfg, model, spec.episodes, rng, spec.test_every,
+                                observer=observer, start_rng=start_rng, resume=checkpoint)
             if save:
                 ck = Checkpoint.of_result(result, rng, start_rng)
                 ck.problem = problem

@@ -25,8 +25,7 @@ import numpy as np
 
 from learning.compiled.named_state import copy_state
 from learning.drivers.checkpoint import CheckpointError, load_checkpoint
-from learning.drivers.plain_train import train_plain
-from learning.drivers.train import train_tabular
+from learning.drivers.plain_train import train_grid
 from learning.methods.registry import n_states_of
 from learning.plain.learner import is_plain, snapshot
 from sim.errors import InputError
@@ -167,8 +166,7 @@ def pretrain_in_grid(method: str, cfg: Any, model: Any, episodes: int, test_ever
     """The grid phase of a pretrained run: ``episodes`` in the grid on the run's own learner
     and start streams (which continue into the rung's phase: common random numbers);
     ``observer``: a recording of the phase (it changes nothing about the run)."""
-    train = train_plain if is_plain(cfg) else train_tabular
-    result = train(cfg, model, episodes, learner_rng, test_every, observer=observer,
+    result = train_grid(cfg, model, episodes, learner_rng, test_every, observer=observer,
                    start_rng=start_rng)
     c = carried_of(method, result, None, None, "grid", None, None, int(model.n_states),
                    "the grid phase")

@@ -4,7 +4,7 @@ with dyna-q and q-lambda for reference, on every map of the suite (goal-only rew
 ``python -m scenarios.studies.maps.ablation --out results/ablation --seeds 10 --episodes 3000
 --jobs 2`` builds the suite (:mod:`scenarios.studies.maps.suite`) in ``OUT/suite`` and writes
 ``OUT/ablation.md`` (the table), ``OUT/ablation.json`` (per-run figures and the summary) and
-``OUT/ablation.png``. It is a sweep of :func:`scenarios.sweep.execute.sweep` with
+``OUT/ablation.png``. It is a sweep of :func:`scenarios.sweep.run.run_sweep` with
 files of its own: while it runs, ``OUT/runs.partial.jsonl`` holds a line per finished run;
 after Ctrl-C the same command with ``--resume`` runs only the rest (a finished ablation is
 not read back: its runs carry no keys).
@@ -16,8 +16,11 @@ episodes) from which every later test through the last is optimal (``never`` sor
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
+import os
+import sys
 import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -31,10 +34,9 @@ from scenarios.artifacts import ROOT, load_artifact, write_artifact
 from scenarios.figures.save import save_figure
 from scenarios.runs.results import quantile
 from scenarios.runs.spec import RunSpec
-from scenarios.script_args import arg, artifact_arg, jobs_arg, parse, parser_of, study_command
+from scenarios.script_args import arg, artifact_arg, jobs_arg, parse, parser_of
 from scenarios.studies.maps.suite import build_suite
-from scenarios.sweep.execute import sweep
-from scenarios.sweep.run import SweepFiles, ctrl_c_held
+from scenarios.sweep.run import SweepFiles, ctrl_c_held, run_sweep
 from sim.files import atomic_write_text
 
 # label, method, overrides: each row adds one ingredient to the row above it, down to
@@ -319,26 +321,32 @@ def main(argv: list[str] | None = None) -> int:
         method, _, sets = ex.partition(":")
         ov = tuple((k, float(v)) for k, v in (kv.split("=") for kv in sets.split(",") if kv))
         rows.append((f"{method}|{sets}" if sets else method, method, ov))
+    # looked up per call: tests/test_experiments_ablation.py stands in for run_local
+    from scenarios.sweep.backends import Progress, run_local
+
     labelled = ablation_specs(rows, maps, a.seeds, a.episodes)
     specs = list({spec.key: spec for _, _, spec in labelled}.values())
-    payload = sweep(specs, out, resume=a.resume,
-                    files=ablation_files(rows, maps, labelled, a.rewards, a.seeds, a.episodes),
-                    jobs=a.jobs)
+    payload = run_sweep(specs, out, run_local, resume=a.resume,
+                        files=ablation_files(rows, maps, labelled, a.rewards, a.seeds,
+                                             a.episodes),
+                        jobs=a.jobs or os.cpu_count() or 1, progress=Progress(len(specs)))
     if a.artifact:
-        write_ablation_artifact(a, [r[0] for r in rows], maps, payload["summary"])
+        write_ablation_artifact(a, [r[0] for r in rows], maps, payload["summary"],
+                                sys.argv[1:] if argv is None else argv)
     return 0
 
 
-def write_ablation_artifact(a: Args, labels: list[str], maps: list[dict],
-                            summary: dict) -> None:
+def write_ablation_artifact(a: argparse.Namespace, labels: list[str], maps: list[dict],
+                            summary: dict, argv: Sequence[str]) -> None:
     """``docs/results/ablation.NAME.json`` (what the README's table shows) and
     ``docs/ablation.png`` drawn from it."""
     data = {"rewards": a.rewards, "seeds": a.seeds, "episodes": a.episodes,
             "min_seeds": target_seeds(a.seeds),
             "maps": [{"name": m["name"], "held_out": m["held_out"]} for m in maps],
             "labels": labels, "summary": summary}
-    write_artifact(f"ablation.{a.artifact}", study_command(__spec__.name, Args, a), ["grid"],
-                   data, study=__file__)
+    write_artifact(f"ablation.{a.artifact}",
+                   "python -m scenarios.studies.maps.ablation " + " ".join(argv),
+                   ["grid"], data, study=__file__)
     with ctrl_c_held():
         figure_from_artifact(f"ablation.{a.artifact}", ROOT / "docs" / "ablation.png")
 

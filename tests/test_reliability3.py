@@ -523,3 +523,16 @@ def test_a_signal_python_swallowed_still_ends_the_command_with_its_status(monkey
     monkeypatch.setattr(app, "build_parser", lambda: parser)
     monkeypatch.setattr(app, "_say", lambda line: None)
     assert app.main([]) == 143 and ran_on == [True]
+
+
+@pytest.mark.parametrize("args", [["scenarios", "--example"], ["scenarios"]])
+def test_a_closed_stdout_is_not_a_traceback(args):
+    """``rnhql scenarios --example >&-``: Python gives a closed stream as None; the command
+    writes into nothing and exits 0, as before, with no traceback."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run(["sh", "-c", 'exec "$@" >&-', "sh", sys.executable, "-m",
+                           "scenarios.cli", *args], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr

@@ -346,6 +346,9 @@ def _quiet_unraisable(unraisable: Any) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    for name in ("stdout", "stderr"):  # a stream the shell closed (``>&-``): Python's None
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(os.devnull, "w"))  # for the process's life
     parser = build_parser()
     args = parser.parse_args(argv)
     _received.clear()

@@ -230,11 +230,28 @@ def import_attribute(where: str, flag: str = "method"):
     if not module_name or not attr:
         raise ValueError(f"{flag} {where!r} is not module:Attribute; write e.g. "
                          "mypkg.mymodule:MyLearner")
+    if module_name.startswith(".") or "/" in module_name or module_name.endswith(".py"):
+        raise ValueError(f"{flag} {where!r}: {module_name!r} is not a module name (a relative "
+                         "name or a path); put the file's folder on PYTHONPATH and write "
+                         "mymodule:MyLearner")
     try:
         obj: object = importlib.import_module(module_name)
     except ImportError as exc:
         raise ValueError(f"{flag} {where!r}: cannot import {module_name} ({exc}); put its "
                          "folder on PYTHONPATH or install its package") from None
+    except SyntaxError as exc:  # the user's own module: one line, its file and line
+        raise ValueError(f"{flag} {where!r}: {exc.filename}:{exc.lineno}: {exc.msg}; fix "
+                         "the module") from None
+    except SystemExit as exc:  # sys.exit() at import: the run would end doing nothing
+        raise ValueError(f"{flag} {where!r}: importing {module_name} called sys.exit("
+                         f"{exc.code!r}); a learner's module must not exit") from None
+    except Exception as exc:  # an error in the user's module as it imports
+        tb = exc.__traceback__
+        while tb is not None and tb.tb_next is not None:
+            tb = tb.tb_next
+        at = "" if tb is None else f" at {tb.tb_frame.f_code.co_filename}:{tb.tb_lineno}"
+        raise ValueError(f"{flag} {where!r}: importing {module_name} raised "
+                         f"{type(exc).__name__}: {exc}{at}; fix the module") from None
     for part in attr.split("."):
         if not hasattr(obj, part):
             raise ValueError(f"{flag} {where!r}: {module_name} has no {attr!r}; name a class "

@@ -29,3 +29,53 @@ def test_a_relative_name_or_a_path_is_refused_with_the_fix(where, capsys):
     assert main(["train", "paper-40", "--method", where, "--episodes", "2"]) == 2
     err = capsys.readouterr().err
     assert "is not a module name" in err and "PYTHONPATH" in err and "Traceback" not in err
+
+
+LEARNERS = '''
+import sys
+
+
+class Base:
+    name = "base"
+
+    def __init__(self, n_states, n_actions, rng):
+        pass
+
+    def update(self, s, a, r, s2, terminated):
+        pass
+
+    def greedy(self, s):
+        return 0
+
+
+class Four(Base):
+    def act(self, s):
+        return 4
+
+
+class Exits(Base):
+    def act(self, s):
+        sys.exit(3)
+
+
+class Raises(Base):
+    def act(self, s):
+        raise ValueError("bad state")
+'''
+
+
+@pytest.mark.parametrize(("cls", "says"), [
+    ("Four", "returned 4, not an action in 0..3"),
+    ("Exits", "Exits called sys.exit(3) at"),
+    ("Raises", "Raises raised ValueError: bad state at"),
+])
+@pytest.mark.parametrize("world", ["grid", "physics"])
+def test_a_learner_that_fails_mid_run_fails_the_run_in_one_line(cls, says, world, tmp_path,
+                                                                 monkeypatch, capsys):
+    """Not a traceback, not a silent exit with the learner's code: the run failed, exit 1."""
+    (tmp_path / "bad_learners.py").write_text(LEARNERS)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert main(["train", "paper-40", "--method", f"bad_learners:{cls}", "--episodes", "2",
+                 "--world", world]) == 1
+    err = capsys.readouterr().err
+    assert says in err and "Traceback" not in err and "the run failed" in err, err

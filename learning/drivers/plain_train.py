@@ -30,6 +30,7 @@ from learning.plain.learner import (
     checked_action,
     greedy_walk,
     is_plain,
+    learner_calls,
     new_learner,
     snapshot,
 )
@@ -103,11 +104,13 @@ def train_plain(cfg: PlainConfig, model: TabularMDP, n_episodes: int, rng: np.ra
         if observer is not None and observer.trace_chunk(done, n):
             trace = np.full((n, int(model.max_steps) + 1), -1, dtype=np.int32)
         t0 = time.perf_counter()
-        env_steps += _episodes(learner, model, n, start_rng, arrays, done, trace)
+        with learner_calls(learner):  # its failure is the run's, said in one line
+            env_steps += _episodes(learner, model, n, start_rng, arrays, done, trace)
         arrays["wall_time_s"][done:done + n] = (time.perf_counter() - t0) / n
         done += n
-        test = greedy_walk(learner, model.next_state, model.terminal, int(model.start),
-                           int(model.max_steps))
+        with learner_calls(learner):
+            test = greedy_walk(learner, model.next_state, model.terminal, int(model.start),
+                               int(model.max_steps))
         tests_e.append(done)
         tests_l.append(test[0])
         if observer is not None:  # (an observer that says it reads no state gets None)

@@ -30,7 +30,9 @@ class to :mod:`scenarios.api`. Its grid runs go through
 
 from __future__ import annotations
 
+import contextlib
 import inspect
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
@@ -152,15 +154,46 @@ def new_learner(cfg: PlainConfig, geometry: Geometry, rng: np.random.Generator) 
     return type(cfg).learner(int(geometry.n_states), int(geometry.n_actions), rng)
 
 
+class LearnerError(ValueError):
+    """A plain-Python learner of the user's failed: what it was asked, what it answered or
+    raised, and where (a run that fails, reported as one; never our traceback)."""
+
+
+@contextlib.contextmanager
+def learner_calls(learner: Any) -> Iterator[None]:
+    """Calls of ``learner`` in the block: an exception it raises, or ``sys.exit`` it calls,
+    becomes a :class:`LearnerError` naming its class and the file and line it came from (a
+    learner's exit would otherwise end the command as if it had done its work)."""
+    try:
+        yield
+    except (LearnerError, KeyboardInterrupt):
+        raise
+    except SystemExit as exc:
+        raise LearnerError(f"{type(learner).__qualname__} called sys.exit({exc.code!r}) "
+                           f"{_where(exc)}; a learner must not exit") from None
+    except Exception as exc:
+        raise LearnerError(f"{type(learner).__qualname__} raised {type(exc).__name__}: {exc} "
+                           f"{_where(exc)}") from None
+
+
+def _where(exc: BaseException) -> str:
+    """``at FILE:LINE`` of the innermost frame of ``exc``'s traceback."""
+    tb = exc.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    return "" if tb is None else f"at {tb.tb_frame.f_code.co_filename}:{tb.tb_lineno}"
+
+
 def checked_action(learner: Any, s: int, a: Any, n_actions: int, what: str = "act") -> int:
-    """``a`` as an int action, or a ValueError naming the learner, the state and the value."""
+    """``a`` as an int action, or a :class:`LearnerError` naming the learner, the state and
+    the value."""
     try:
         k = int(a)
     except (TypeError, ValueError):
         k = -1
     if not 0 <= k < n_actions or (isinstance(a, float) and a != k):
-        raise ValueError(f"{type(learner).__qualname__}.{what}({s}) returned {a!r}, not an "
-                         f"action in 0..{n_actions - 1}")
+        raise LearnerError(f"{type(learner).__qualname__}.{what}({s}) returned {a!r}, not an "
+                           f"action in 0..{n_actions - 1}")
     return k
 
 
@@ -247,23 +280,26 @@ class PlainBatchAgent:
         return out
 
     def begin_episode(self, active: np.ndarray, s0: np.ndarray) -> None:
-        for i in np.flatnonzero(active):
-            hook = self._starts_hook[i]
-            if hook is not None:
-                hook()
+        with learner_calls(self.learners[0]):
+            for i in np.flatnonzero(active):
+                hook = self._starts_hook[i]
+                if hook is not None:
+                    hook()
 
     def act(self, active: np.ndarray, s: np.ndarray) -> np.ndarray:
         out = self._out
-        for i in np.flatnonzero(active):
-            learner, si = self.learners[i], int(s[i])
-            out[i] = checked_action(learner, si, learner.act(si), self.n_actions)
+        with learner_calls(self.learners[0]):
+            for i in np.flatnonzero(active):
+                learner, si = self.learners[i], int(s[i])
+                out[i] = checked_action(learner, si, learner.act(si), self.n_actions)
         return out
 
     def update(self, active: np.ndarray, s: np.ndarray, a: np.ndarray, r: np.ndarray,
                s2: np.ndarray, terminated: np.ndarray, truncated: np.ndarray) -> None:
-        for i in np.flatnonzero(active):
-            self.learners[i].update(int(s[i]), int(a[i]), float(r[i]), int(s2[i]),
-                                    bool(terminated[i]))
+        with learner_calls(self.learners[0]):
+            for i in np.flatnonzero(active):
+                self.learners[i].update(int(s[i]), int(a[i]), float(r[i]), int(s2[i]),
+                                        bool(terminated[i]))
 
     def end_episode(self, active: np.ndarray) -> None:
         pass

@@ -20,6 +20,7 @@ from typing import Any
 
 from learning.drivers.checkpoint import CheckpointError
 from learning.methods.registry import comparison_methods
+from learning.plain.learner import LearnerError
 from scenarios.cli import (
     bench,
     catalog,
@@ -399,6 +400,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if isinstance(err, CheckpointError):
             print(f"rnhql: error: {err}", file=sys.stderr)
             return 2
+        if isinstance(err, LearnerError):  # the user's own learner failed: the run did
+            print(f"rnhql: the run failed: {err}", file=sys.stderr)
+            return 1
         if isinstance(err, SweepError):
             print(f"rnhql: {err}", file=sys.stderr)
             return 1

@@ -70,10 +70,13 @@ def cell_arg(fn: str, arg: str, value: Any) -> Cell | None:
     if value is None:
         return None
     try:
-        x, y = (int(v) for v in value)
+        x, y = value
     except (TypeError, ValueError):
         raise err(fn, arg, f"is {value!r}, not a cell", f"pass {arg}=(x, y)") from None
-    return x, y
+    if not all(isinstance(v, int | np.integer) and not isinstance(v, bool) for v in (x, y)):
+        raise err(fn, arg, f"is {value!r}: a cell's x and y are whole numbers",
+                  f"pass {arg}=(x, y) with integers, e.g. {arg}=(3, 5)")
+    return int(x), int(y)
 
 
 def rewards_arg(fn: str, rewards: Any) -> str | None:
@@ -193,6 +196,12 @@ def record_arg(fn: str, record: Any, name: str, rest: str) -> str | None:
     if path.suffix != ".rrd":
         raise err(fn, "record", f"{path} does not end in .rrd", "name it e.g. run.rrd")
     check_output(path, "record")
+    folder = path.parent if str(path.parent) else Path(".")
+    while not folder.exists() and folder != folder.parent:  # made when the run records
+        folder = folder.parent
+    if not os.access(folder, os.W_OK):  # now, not as a bare OSError after the training
+        raise err(fn, "record", f"cannot write to {folder}/", "record elsewhere, or make "
+                  "the folder writable")
     return str(path)
 
 
@@ -290,13 +299,15 @@ def policy_table(fn: str, policy: Any, n_states: int) -> np.ndarray:
     if callable(policy) and not isinstance(policy, np.ndarray):
         out = np.empty(n_states, dtype=np.int64)
         for s in range(n_states):
-            a = policy(s)
-            a = np.asarray(a).reshape(-1)[0] if np.ndim(a) else a
-            try:
-                out[s] = int(a)
-            except (TypeError, ValueError):
-                raise err(fn, "policy", f"returned {a!r} for cell {s}, not an action",
-                           "return 0 (up), 1 (down), 2 (left) or 3 (right)") from None
+            got = policy(s)
+            # an integer, or an integer array of one (what SB3's predict gives); a float, a
+            # text, a bool or several actions are refused, not coerced
+            a = np.asarray(got).reshape(-1)[0] if np.ndim(got) and np.size(got) == 1 else got
+            if isinstance(a, bool | np.bool_) or not isinstance(a, int | np.integer) or \
+                    not 0 <= int(a) <= 3:
+                raise err(fn, "policy", f"returned {got!r} for cell {s}, not an action",
+                           "return an int: 0 (up), 1 (down), 2 (left) or 3 (right)")
+            out[s] = int(a)
     else:
         try:
             out = np.asarray(policy)

@@ -187,11 +187,10 @@ def _where(exc: BaseException) -> str:
 def checked_action(learner: Any, s: int, a: Any, n_actions: int, what: str = "act") -> int:
     """``a`` as an int action, or a :class:`LearnerError` naming the learner, the state and
     the value."""
-    try:
-        k = int(a)
-    except (TypeError, ValueError):
-        k = -1
-    if not 0 <= k < n_actions or (isinstance(a, float) and a != k):
+    # an int (numpy's too), nothing coerced: not a float, a text, a bool or an array
+    k = int(a) if isinstance(a, int | np.integer) and not isinstance(a, bool | np.bool_) \
+        else -1
+    if not 0 <= k < n_actions:
         raise LearnerError(f"{type(learner).__qualname__}.{what}({s}) returned {a!r}, not an "
                            f"action in 0..{n_actions - 1}")
     return k

@@ -330,6 +330,8 @@ def parse_fidelity(text: str | None, source: str = "--fidelity") -> Fidelity:
         if not sep or key not in fields:
             raise ScenarioError(source, key or part, "is not a fidelity knob",
                                 f"use {', '.join(fields)} as key=value")
+        if key in changes:  # two values for one knob: which was meant?
+            raise ScenarioError(source, key, "is given twice", f"give {key} once")
         if fields[key].type in (bool, "bool"):
             if value.strip().lower() not in ("true", "false", "1", "0"):
                 raise ScenarioError(source, key, f"expected true or false, got {value!r}",

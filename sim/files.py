@@ -254,12 +254,23 @@ def atomic_write_text(path: str | Path, text: str, follow: bool = True) -> None:
 
 def open_own_file(path: str | Path, flags: int, mode: int = 0o644) -> int:
     """``os.open`` of a file the tool names itself in an output folder, never through a
-    symlink someone planted there (``O_NOFOLLOW``): a link at ``path`` is removed first and
-    the file created afresh. Returns the descriptor."""
+    link someone planted there: a symlink (``O_NOFOLLOW``) or a hard link (a name whose file
+    has other names, ``st_nlink > 1``, would write into another file) at ``path`` is removed
+    first and the file created afresh; one planted after that check is refused. Returns
+    the descriptor."""
     path = Path(path)
-    if path.is_symlink():
-        path.unlink()
-    return os.open(path, flags | os.O_NOFOLLOW, mode)
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        st = None
+    if st is not None and (stat.S_ISLNK(st.st_mode) or st.st_nlink > 1):
+        path.unlink()  # the link's name only: what it points at is left alone
+    fd = os.open(path, flags | os.O_NOFOLLOW, mode)
+    if os.fstat(fd).st_nlink > 1:  # linked between the check and the open
+        os.close(fd)
+        raise OutputError(str(path), "output", "is a hard link to another file (planted "
+                          "in the output folder)", "remove it, or write elsewhere")
+    return fd
 
 
 def read_input(path: Path, error: type[InputError], kind: str, fix: str,

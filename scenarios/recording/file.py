@@ -145,6 +145,10 @@ class RecordingFile:
                                          recording_id=recording_id or str(uuid.uuid4()))
         self.stream.set_log_tick_enabled(False)
         self.stream.set_log_time_enabled(False)
+        # a name planted where the part goes (a symlink, a hard link to another file) is
+        # removed, not written through: the sink then creates the file afresh
+        if self.part.is_symlink() or self.part.exists():
+            self.part.unlink()
         self.stream.save(self.part)
         if recording_name:
             self.stream.send_recording_name(recording_name)

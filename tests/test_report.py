@@ -55,3 +55,32 @@ def test_report_lists_every_docs_figure_with_its_artifacts(capsys):
 ])
 def test_an_artifacts_command_runs_with_this_interpreter(command, head):
     assert report.argv_of(command)[:len(head)] == head
+
+
+def test_a_damaged_artifact_is_one_row_and_exit_1_never_a_traceback(tmp_path, monkeypatch,
+                                                                   capsys):
+    """Bad JSON, a missing format or behaviour, a folder named *.json, wall_s a string."""
+    import json as _json
+
+    from scenarios.artifacts import RESULTS_DIR, ArtifactError, load_artifact
+    from scenarios.cli import main as cli_main
+    from scenarios.cli import report
+
+    good = _json.loads((RESULTS_DIR / "oracle.paper-50.json").read_text())
+    (tmp_path / "bad-json.x.json").write_text("{bad")
+    (tmp_path / "folder.x.json").mkdir()
+    for name, damage in (("no-format.x", lambda d: d.pop("format")),
+                         ("no-behaviour.x", lambda d: d.pop("behaviour")),
+                         ("wall-text.x", lambda d: d.update(wall_s="x"))):
+        doc = _json.loads(_json.dumps(good))
+        damage(doc)
+        (tmp_path / f"{name}.json").write_text(_json.dumps(doc))
+    names = ["bad-json.x", "folder.x", "no-format.x", "no-behaviour.x", "wall-text.x"]
+    for name in names:
+        with pytest.raises(ArtifactError, match=name):
+            load_artifact(name, tmp_path)
+    monkeypatch.setattr(report, "artifact_names", lambda: names)
+    monkeypatch.setattr(report, "load_artifact", lambda n: load_artifact(n, tmp_path))
+    assert cli_main(["report"]) == 1
+    out = capsys.readouterr()
+    assert out.out.count("DAMAGED") == 5 and "Traceback" not in out.err

@@ -310,7 +310,31 @@ def load_artifact(name: str, directory: Path = RESULTS_DIR) -> dict[str, Any]:
         raise ArtifactError(f"{path}: unreadable ({exc}); re-run the study") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise ArtifactError(f"{path}: not an {FORMAT} file; re-run the study")
+    problem = _malformed(doc)
+    if problem is not None:
+        raise ArtifactError(f"{path}: {problem}; re-run the study")
     return doc
+
+
+def _malformed(doc: dict[str, Any]) -> str | None:
+    """What is wrong with an artifact's provenance fields (None: nothing)."""
+    for key in ("name", "command", "date", "code_version"):
+        if not isinstance(doc.get(key), str):
+            return f"field {key!r} is {doc.get(key)!r}, not text"
+    behaviour = doc.get("behaviour")
+    if not isinstance(behaviour, dict) or not all(
+            isinstance(v, str | dict) for v in behaviour.values()):
+        return f"field 'behaviour' is {behaviour!r}, not the behaviour digests"
+    wall = doc.get("wall_s")
+    if wall is not None and (isinstance(wall, bool) or not isinstance(wall, int | float)):
+        return f"field 'wall_s' is {wall!r}, not a number of seconds"
+    study = doc.get("study")
+    if study is not None and not (isinstance(study, dict) and isinstance(study.get("path"), str)
+                                  and isinstance(study.get("with", {}), dict)):
+        return f"field 'study' is {study!r}, not a study's path and hash"
+    if "data" not in doc:
+        return "field 'data' is missing"
+    return None
 
 
 def stale_parts(doc: dict[str, Any], now: dict[str, str] | None = None) -> list[str]:

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from scenarios.artifacts import (
     ROOT,
+    ArtifactError,
     artifact_names,
     behaviour_digests,
     generated_pages,
@@ -94,10 +95,15 @@ def _redraw_figures(redraw) -> bool:
 def cmd_report(args: argparse.Namespace) -> int:
     require_checkout("rnhql report")  # the artifacts live in the source tree, not a wheel
     now = behaviour_digests()
-    stale = []
+    stale, damaged = [], []
     print("artifact | measured | took | state")
     for name in artifact_names():
-        doc = load_artifact(name)
+        try:
+            doc = load_artifact(name)
+        except ArtifactError as exc:  # one row, the rest still listed
+            print(f"{name} | — | — | DAMAGED: {exc}")
+            damaged.append(name)
+            continue
         parts = stale_parts(doc, now)
         state = f"STALE ({', '.join(parts)} changed)" if parts else "fresh"
         print(f"{name} | {doc['date']} at {doc['code_version']} | "
@@ -108,7 +114,7 @@ def cmd_report(args: argparse.Namespace) -> int:
     from scenarios.artifacts.figures import FIGURES, redraw
 
     print("\nfigure | drawn from | state")
-    names = set(artifact_names())
+    names = set(artifact_names()) - set(damaged)
     for fig in FIGURES:
         missing = [a for a in fig.artifacts if a not in names]
         stale_of = [a for a in fig.artifacts if a in names and stale_parts(load_artifact(a), now)]
@@ -122,6 +128,10 @@ def cmd_report(args: argparse.Namespace) -> int:
         print(f"\ntyped by hand ({len(hand)}; re-run with --artifact and render them):")
         for page, command in hand:
             print(f"  {page}: {command}")
+    if damaged:
+        print(f"\n{len(damaged)} damaged: re-run the study that wrote each (its name says "
+              "which), or restore the file from git", file=sys.stderr)
+        return 1
     if not args.refresh:
         if stale:
             print(f"\n{len(stale)} stale; `rnhql report --refresh` re-runs them")

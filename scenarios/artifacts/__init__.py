@@ -326,8 +326,9 @@ def _malformed(doc: dict[str, Any]) -> str | None:
             isinstance(v, str | dict) for v in behaviour.values()):
         return f"field 'behaviour' is {behaviour!r}, not the behaviour digests"
     wall = doc.get("wall_s")
-    if wall is not None and (isinstance(wall, bool) or not isinstance(wall, int | float)):
-        return f"field 'wall_s' is {wall!r}, not a number of seconds"
+    if wall is not None and (isinstance(wall, bool) or not isinstance(wall, int | float)
+                             or not 0 <= wall < 1e8):  # (three years: not a study's time)
+        return f"field 'wall_s' is {wall!r}, not a number of seconds a study took"
     study = doc.get("study")
     if study is not None and not (isinstance(study, dict) and isinstance(study.get("path"), str)
                                   and isinstance(study.get("with", {}), dict)):

@@ -76,6 +76,9 @@ def test_config_from_fields_drops_the_switches_at_rnh_ql_plus_values_only():
 def test_setting_a_switch_on_rnh_ql_plus_points_to_the_ablation():
     from scenarios.runs.spec import ExperimentError, make_config
 
-    with pytest.raises(ExperimentError, match=r"--method rnh-ql\+ablation, which has v_target"):
+    with pytest.raises(ExperimentError, match=r"method='rnh-ql\+ablation', which has v_target"):
         make_config("rnh-ql+", (("v_target", 1.0),))
+    from scenarios.cli import main  # the command says it in its flags
+
+    assert main(["train", "paper-40", "--set", "v_target=1", "--episodes", "2"]) == 2
     assert make_config("rnh-ql+ablation", (("v_target", 1.0),)).v_target == 1

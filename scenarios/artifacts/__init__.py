@@ -424,6 +424,15 @@ def render_text(name: str, text: Any) -> None:
     cog_out(f"{head}{text(doc['data']).rstrip()}\n\n{parts[-1]}\n")
 
 
+def render_text_rows(names: list[str], text: Any) -> None:
+    """For a Cog block: ``text([data, ...])`` of several artifacts (a sentence over them),
+    a stale one's banner above it; their provenance is the table's above it."""
+    docs = [load_artifact(n) for n in names]
+    now = behaviour_digests()
+    heads = [provenance(d, now).split("\n\n")[0] + "\n\n" for d in docs if stale_parts(d, now)]
+    cog_out("".join(heads) + text([d["data"] for d in docs]).rstrip() + "\n")
+
+
 def render_wall(name: str, what: str) -> None:
     """For a Cog block: how long the study behind artifact ``name`` took (its ``wall_s``, the
     machine's cores and load), in a sentence starting with ``what``."""

@@ -88,3 +88,22 @@ def heldout_winners(ds: list[dict[str, Any]]) -> str:
             lines.append(f"| {size}² | {starts[0].lower()}{starts[1:]} | " + " | ".join(
                 won.get(k, "–") for k in kinds) + f" | {first} {_est(r['iqm'][first], 2)} |")
     return "\n".join(lines) + "\n"
+
+
+def heldout_summary(ds: list[dict[str, Any]]) -> str:
+    """The held-out rows in words, for the prose beside the table (rendered, not typed):
+    per size and protocol, who ranks first by IQM and who wins how many maps, which."""
+    out = []
+    for d in (d for d in ds if "ranking" in d):
+        size = d["columns"][0].split(" ")[0].rsplit("-", 1)[1]
+        for proto, r in d["ranking"]["protocols"].items():
+            won: dict[str, list[str]] = {}
+            for c in r["maps"]:
+                w = d["ranking"]["winners"][c]
+                won.setdefault(w["method"], []).append(c.split(" ")[0].rsplit("-", 1)[0])
+            wins = "; ".join(f"`{m}` wins {len(ks)} of {len(r['maps'])} ({', '.join(ks)})"
+                             for m, ks in sorted(won.items(), key=lambda x: -len(x[1])))
+            starts = _protocol(proto)
+            out.append(f"**{size}², {starts[0].lower()}{starts[1:]}**: `{r['order'][0]}` ranks "
+                       f"first by IQM; {wins}.")
+    return " ".join(out) + "\n"

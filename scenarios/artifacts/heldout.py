@@ -107,3 +107,46 @@ def heldout_summary(ds: list[dict[str, Any]]) -> str:
             out.append(f"**{size}², {starts[0].lower()}{starts[1:]}**: `{r['order'][0]}` ranks "
                        f"first by IQM; {wins}.")
     return " ".join(out) + "\n"
+
+
+REFERENCES = ("fsa-replan", "r-max", "lrta-star", "abstraction-ql")  # docs/methods.md's
+LEARNER = "rnh-ql+explore"  # the tool's best learner, judged against the issue's targets
+
+
+def _median(eps: list[Any]) -> float:
+    """The median of per-seed episodes, a miss counting as never (inf)."""
+    s = sorted(float("inf") if e is None else float(e) for e in eps)
+    mid = len(s) // 2
+    return s[mid] if len(s) % 2 else (s[mid - 1] + s[mid]) / 2
+
+
+def _episodes(v: float) -> str:
+    return "never" if v == float("inf") else f"{v:.0f}"
+
+
+def heldout_verdicts(d: dict[str, Any]) -> str:
+    """The judging targets, checked from the artifact: ``rnh-ql+explore`` optimal in at
+    least 9 of 10 seeds on every map, and a median no more than 1.2 x the best reference's
+    + 10 episodes (the references it ran), map by map, met or missed with the figures."""
+    runs = d["runs"].get(LEARNER)
+    if runs is None:
+        return f"({LEARNER} was not run here.)\n"
+    refs = [m for m in REFERENCES if m in d["runs"]]
+    cols = list(runs)
+    reliable = [c for c in cols if sum(e is not None for e in runs[c]) >= 0.9 * len(runs[c])]
+    missed_rel = [c.split(" (")[0] for c in cols if c not in reliable]
+    met, missed = [], []
+    for c in cols:
+        mine = _median(runs[c])
+        best_ref, best = min(((m, _median(d["runs"][m][c])) for m in refs if c in d["runs"][m]),
+                             key=lambda x: x[1], default=(None, float("inf")))
+        target = 1.2 * best + 10
+        line = (f"{c.split(' (')[0]}: {_episodes(mine)} against {best_ref}'s "
+                f"{_episodes(best)} (target {_episodes(target)})")
+        (met if mine <= target else missed).append(line)
+    rel = ("met on every map" if not missed_rel else
+           f"missed on {len(missed_rel)} of {len(cols)} ({', '.join(missed_rel)})")
+    return (f"**Reliability ({LEARNER} optimal in ≥ 9 of 10 seeds): {rel}.** "
+            f"**Speed against the references run here ({', '.join(refs)}): met on "
+            f"{len(met)} of {len(cols)} maps**" + (f"; missed on {'; '.join(missed)}"
+                                                    if missed else "") + ".\n")

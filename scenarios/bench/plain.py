@@ -26,11 +26,13 @@ from typing import Any
 
 import numpy as np
 
-from learning.drivers.plain_train import train_grid
+from learning.drivers.plain_train import train_plain
+from learning.drivers.train import train_tabular
+from learning.plain.learner import is_plain
 from scenarios.artifacts import write_artifact
 from scenarios.runs.spec import load, make_config
-from scenarios.script_args import arg, artifact_arg, parse, study_command
-from scenarios.sweep.execute import sweep
+from scenarios.script_args import arg, artifact_arg, parse
+from scenarios.sweep.backends import run_local
 from scenarios.sweep.run import make_specs
 
 SCENARIO = "paper-50"
@@ -48,7 +50,7 @@ def grid_steps_per_s(method: str, episodes: int, repeats: int) -> float:
     """Best-of-``repeats`` env steps/s of a fresh learner trained ``episodes`` episodes."""
     _, model = load(SCENARIO, rewards="goal-only")
     cfg = make_config(method)
-    train = train_grid
+    train = train_plain if is_plain(cfg) else train_tabular
     train(cfg, model, 1, np.random.default_rng(0))  # compile / import outside the clock
     best = 0.0
     for r in range(repeats):
@@ -63,7 +65,7 @@ def physics_rates(seeds: int, episodes: int, with_port: bool) -> dict[str, float
     methods = ["st-ql", PORT] if with_port else ["st-ql"]
     specs = make_specs(SCENARIO, methods, list(range(seeds)), episodes, ["physics"],
                        rewards="goal-only")
-    records = sweep(specs, jobs=1, progress=False)["runs"]
+    records = run_local(specs, jobs=1)
     out: dict[str, float] = {}
     for m in methods:
         recs = [r for r in records if r["method"] == m]
@@ -102,8 +104,11 @@ def main(argv: list[str] | None = None) -> int:
     data = measure(a.episodes, a.repeats, a.seeds, a.physics_episodes)
     print(json.dumps(data, indent=1))
     if a.artifact is not None:
-        write_artifact(f"plain-learner.{a.artifact}", study_command(__spec__.name, Args, a),
-                       ["grid", "physics-exact"], data, study=__file__)
+        cmd = (f"python -m scenarios.bench.plain --episodes {a.episodes} --repeats {a.repeats} "
+               f"--seeds {a.seeds} --physics-episodes {a.physics_episodes} "
+               f"--artifact {a.artifact}")
+        write_artifact(f"plain-learner.{a.artifact}", cmd, ["grid", "physics-exact"], data,
+                       study=__file__)
     return 0
 
 

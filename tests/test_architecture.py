@@ -20,8 +20,8 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 PACKAGES = ("sim", "learning", "scenarios")
-SCENARIO_RANK = {"artifacts": 0, "figures": 1, "recording": 2, "runs": 3, "sweep": 4, "studies": 5, "bench": 6,
-                 "cli": 7}
+SCENARIO_RANK = {"artifacts": 0, "figures": 1, "recording": 2, "runs": 3, "sweep": 4,
+                 "studies": 5, "bench": 6, "cli": 7}
 FORBIDDEN = {
     "sim": ("learning", "scenarios", "rerun", "matplotlib"),
     "learning": ("sim", "scenarios", "rerun", "matplotlib", "pymunk"),

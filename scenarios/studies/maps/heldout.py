@@ -41,15 +41,16 @@ import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
+from shlex import quote
 from typing import Any
 
 from scenarios.artifacts import check_artifact_name, write_artifact
 from scenarios.artifacts.heldout import heldout
 from scenarios.runs.spec import load
-from scenarios.script_args import arg, jobs_arg, parse, parser_of, study_command
+from scenarios.script_args import arg, parse, parser_of
 from scenarios.studies.maps.ranking import ranking
-from scenarios.sweep.execute import sweep
-from scenarios.sweep.run import make_specs
+from scenarios.sweep.backends import Progress, run_local
+from scenarios.sweep.run import make_specs, run_sweep
 from sim.files import atomic_write_text
 from sim.grid.planning import far_start_goal
 from sim.maps.generators import KINDS, generate
@@ -76,7 +77,7 @@ class Args:
     braid: float = arg(0.02, "share of a generated maze's inner walls knocked out")
     suite_episodes: int = arg(3000, "episodes on a built-in scenario (the suite's budget)")
     rewards: str = arg("goal-only", "reward scheme")
-    jobs: int | None = jobs_arg()
+    jobs: int = arg(1, "worker processes")
     resume: bool = arg(False, "skip runs already finished in --out")
     artifact: str | None = arg(None, "also write docs/results/heldout.NAME.json (a docs "
                                      "table, rendered by scenarios.artifacts)", metavar="NAME")
@@ -171,8 +172,8 @@ def main(argv: list[str] | None = None) -> int:
                                rewards=args.rewards, s_starts=share)
             print(f"{col}: {label}: {len(specs)} runs", file=sys.stderr)
             tag = re.sub(r"[^A-Za-z0-9+.=-]", "_", label)
-            res = sweep(specs, out / stem / tag, resume=args.resume, figures=False,
-                        jobs=args.jobs)
+            res = run_sweep(specs, out / stem / tag, run_local, resume=args.resume,
+                            figures=False, jobs=args.jobs, progress=Progress(len(specs)))
             rows.setdefault(label, {})[col] = cell(res["summary"][m]["grid"], args.seeds)
             done = sorted((r for r in res["runs"] if r["method"] == m and r["world"] == "grid"),
                           key=lambda r: r["seed"])
@@ -187,7 +188,10 @@ def main(argv: list[str] | None = None) -> int:
     text = heldout(data)
     atomic_write_text(out / "heldout.md", text)
     if args.artifact:
-        write_artifact(f"heldout.{args.artifact}", study_command(__spec__.name, Args, args),
+        command = "python -m scenarios.studies.maps.heldout " + " ".join(
+            f"--{k.replace('_', '-')} {quote(str(v))}" for k, v in vars(args).items()
+            if v not in (None, False) and k not in ("artifact", "resume", "jobs"))
+        write_artifact(f"heldout.{args.artifact}", f"{command} --artifact {args.artifact}",
                        ["grid"], data, study=__file__)
     print(text)
     return 0

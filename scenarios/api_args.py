@@ -16,6 +16,7 @@ import numpy as np
 from learning.config import MethodConfig
 from learning.methods.registry import METHODS, comparison_methods
 from learning.plain.learner import located_name, remember
+from scenarios.memory_limit import recording_refused
 from scenarios.runs.spec import WORLDS, load, method_class, physics_budget
 from scenarios.sweep.outdir import check_output_file
 from sim.env_args import DEFAULT_REWARDS  # the one default (the envs', the command's, ours):
@@ -196,6 +197,9 @@ def record_arg(fn: str, record: Any, name: str, rest: str) -> str | None:
     if path.suffix != ".rrd":
         raise err(fn, "record", f"{path} does not end in .rrd", "name it e.g. run.rrd")
     check_output(path, "record")
+    refused = recording_refused()
+    if refused is not None:
+        raise err(fn, "record", *refused)
     folder = path.parent if str(path.parent) else Path(".")
     while not folder.exists() and folder != folder.parent:  # made when the run records
         folder = folder.parent

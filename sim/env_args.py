@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from typing import Any
 
 import numpy as np
@@ -65,12 +66,22 @@ def _dataclass_of(cls: type, value: Any, fld: str) -> Any:
             from None
 
 
+def scenario_source(value: Any) -> Any:
+    """``value`` with a path object (``pathlib.Path``, any ``os.PathLike``) as the ``str``
+    path it names; anything else as given (a name, a Scenario, a dict)."""
+    if isinstance(value, os.PathLike):
+        path = os.fspath(value)
+        return path if isinstance(path, str) else value
+    return value
+
+
 def scenario_arg(value: Any) -> Scenario:
     """A built-in name or ``.toml`` path (loaded and validated), a :class:`Scenario`, or a
     dict of a Scenario's fields (validated): the scenario an env is built on."""
     from sim.feasibility import validate
     from sim.scenario_io import resolve_scenario
 
+    value = scenario_source(value)
     if isinstance(value, str):
         return resolve_scenario(value)
     if isinstance(value, dict):
@@ -159,24 +170,27 @@ class SpecOwnLimit:
     def spec(self, value: Any) -> None:
         limit = getattr(self, "steps_per_episode", None)
         if value is not None and value.max_episode_steps is None and limit is not None:
-            import dataclasses
-
             value = dataclasses.replace(value, max_episode_steps=int(limit))
+        if value is not None and isinstance(value.kwargs.get("scenario"), os.PathLike):
+            # a Path as the str it names, so the spec's JSON round trip rebuilds the env
+            value = dataclasses.replace(value, kwargs={
+                **value.kwargs, "scenario": scenario_source(value.kwargs["scenario"])})
         self._spec = value
 
 
 MAX_NUM_ENVS = 4096  # robots in one vector env: 100,000 took 24 GB and was killed
 
 
-def check_num_envs(num_envs: object) -> None:
-    """A vector env's robot count, refused beyond :data:`MAX_NUM_ENVS` (each robot holds its
-    own state in one Space)."""
-    if not (isinstance(num_envs, int) and not isinstance(num_envs, bool)
+def check_num_envs(num_envs: object) -> int:
+    """A vector env's robot count (an int or a numpy integer) as an int, refused beyond
+    :data:`MAX_NUM_ENVS` (each robot holds its own state in one Space)."""
+    if not (isinstance(num_envs, int | np.integer) and not isinstance(num_envs, bool)
             and 1 <= num_envs <= MAX_NUM_ENVS):
         raise ScenarioError(SOURCE, "num_envs", f"must be an int in 1..{MAX_NUM_ENVS:,} "
                             f"(robots in one Space; each holds its own state), got "
                             f"{num_envs!r}", "use fewer envs per vector env, or "
                             "several vector envs")
+    return int(num_envs)
 
 
 def episode_limit(value: Any, default: int, fld: str = "steps_per_episode") -> int:
@@ -189,12 +203,40 @@ def episode_limit(value: Any, default: int, fld: str = "steps_per_episode") -> i
     return int(value)
 
 
+def finite_real(value: Any, fld: str, fix: str) -> float:
+    """A finite real number as a float: an int, a float or a numpy integer / floating
+    scalar. A bool, a string (``"1.0"``), an array or a non-finite value is an error naming
+    ``fld``, not a number ``float()`` made of it."""
+    if not (isinstance(value, int | float | np.integer | np.floating)
+            and not isinstance(value, bool)):
+        raise ValueError(f"{fld} must be a real number (int or float), got {value!r} "
+                         f"({type(value).__name__}); {fix}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ValueError(f"{fld} must be finite, got {value!r}; {fix}")
+    return v
+
+
+# numpy dtype kinds an action array may have: signed, unsigned integers (and floats for a
+# Box). Never object (numpy would convert each element: "0.5", True and 1.7 alike), bool,
+# complex or text; gymnasium's own spaces refuse those arrays too.
+INTEGER_KINDS = "iu"
+REAL_KINDS = "iuf"
+
+
+def _action_array(value: Any, what: str) -> np.ndarray:
+    try:
+        return np.asarray(value)
+    except (TypeError, ValueError):  # a ragged list
+        raise InvalidAction(f"{what} {value!r} is not an array of numbers") from None
+
+
 def discrete_action(action: Any, n: int) -> int:
     """An action of ``Discrete(n)`` as a Python int: an int, a numpy integer, or an integer
     array holding one value (``model.predict`` returns a 0-d one)."""
     a = action
     if isinstance(a, np.ndarray):
-        if a.size != 1 or not np.issubdtype(a.dtype, np.integer):
+        if a.size != 1 or a.dtype.kind not in INTEGER_KINDS:
             raise InvalidAction(f"action {a!r} is not one integer in 0..{n - 1}")
         a = a.reshape(())[()]
     if not (isinstance(a, int | np.integer) and not isinstance(a, bool | np.bool_)):
@@ -206,19 +248,47 @@ def discrete_action(action: Any, n: int) -> int:
     return int(a)
 
 
+def discrete_actions(actions: Any, n: int, num_envs: int) -> np.ndarray:
+    """A vector env's batch of ``Discrete(n)`` actions as int64[num_envs] (a copy): an
+    integer array (any integer dtype; ``num_envs`` values, reshaped) or a list of ints.
+    A float, bool or object array is refused as the single env refuses a float or a bool:
+    a cast would drive 1.7 as 1."""
+    a = _action_array(actions, "actions")
+    if a.size != num_envs or a.dtype.kind not in INTEGER_KINDS:
+        raise InvalidAction(f"actions must be {num_envs} integers in 0..{n - 1} (0 up, 1 down, "
+                            f"2 left, 3 right), one per sub-env, got {a.tolist()!r} of dtype "
+                            f"{a.dtype}; pass an integer array, e.g. np.array(actions, "
+                            "dtype=np.int64)")
+    a = a.astype(np.int64).reshape(num_envs)
+    if ((a < 0) | (a >= n)).any():
+        raise InvalidAction(f"actions must be in 0..{n - 1} (0 up, 1 down, 2 left, 3 right), "
+                            f"got {a.tolist()}")
+    return a
+
+
+def real_actions(actions: Any, shape: tuple[int, ...], what: str = "action") -> np.ndarray:
+    """``Box`` actions of ``shape`` as float64: an array of any real dtype (float64 is what
+    numpy and most clients hand over, float32 the space's) or a list of numbers; one of the
+    same size is reshaped. An object, bool or text array is refused, not converted."""
+    a = _action_array(actions, what)
+    if a.dtype.kind not in REAL_KINDS:
+        raise InvalidAction(f"{what} must be numbers (an int or float array), got "
+                            f"{a.tolist()!r} of dtype {a.dtype}; pass a float array, e.g. "
+                            "np.array([0.5, 0.5], dtype=np.float32)")
+    if a.shape != shape:
+        if a.size != math.prod(shape):
+            raise InvalidAction(f"{what} has shape {a.shape}, expected {shape} "
+                                "(left, right wheel speed [m/s])")
+        a = a.reshape(shape)
+    return a.astype(np.float64, copy=False)
+
+
 def box_action(action: Any, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """A ``Box`` action as float64, clipped to ``[low, high]`` (a wheel cannot turn faster
     than its motor: a command beyond the limit drives at the limit, as on a robot). Any
-    real dtype is accepted; a wrong shape or a non-finite value is an error."""
-    try:
-        a = np.asarray(action, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InvalidAction(f"action {action!r} is not {low.shape[0]} numbers") from None
-    if a.shape != low.shape:
-        if a.size != low.size:
-            raise InvalidAction(f"action has shape {a.shape}, expected {low.shape} "
-                                "(left, right wheel speed [m/s])")
-        a = a.reshape(low.shape)
+    real dtype is accepted (:func:`real_actions`); a wrong shape, an object array or a
+    non-finite value is an error."""
+    a = real_actions(action, low.shape)
     if not np.isfinite(a).all():
         raise InvalidAction(f"action {a.tolist()} is not finite")
     return np.clip(a, low, high)

@@ -135,17 +135,38 @@ def test_out_in_use_by_a_live_sweep_is_refused_and_a_stale_lock_taken_over(tmp_p
 
     out = tmp_path / "o"
     out.mkdir()
-    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    lock = out / LOCK_NAME
+    # a live holder of the kernel lock, as a running sweep holds it
+    holder = subprocess.Popen([sys.executable, "-c", (
+        "import fcntl, os, sys, time\n"
+        f"fd = os.open({str(lock)!r}, os.O_RDWR | os.O_CREAT)\n"
+        "fcntl.flock(fd, fcntl.LOCK_EX)\n"
+        "os.pwrite(fd, f'{os.getpid()}\\n'.encode(), 0)\n"
+        "print('held', flush=True)\n"
+        "time.sleep(60)\n")], stdout=subprocess.PIPE, text=True)
+    args = ["compare", "paper-40", "--methods", "st-ql", "--seeds", "1", "--episodes",
+            "10", "--out", str(out)]
     try:
-        (out / LOCK_NAME).write_text(f"{holder.pid}\n")
-        args = ["compare", "paper-40", "--methods", "st-ql", "--seeds", "1", "--episodes",
-                "10", "--out", str(out)]
+        assert holder.stdout.readline().strip() == "held"
         assert main(args) == 2
         assert f"in use by another sweep (pid {holder.pid})" in capsys.readouterr().err
     finally:
         holder.kill()
         holder.wait()
     assert main(args) == 0  # its owner is gone: the lock is stale
+    assert not lock.exists()
+
+
+def test_a_lock_file_naming_a_live_process_that_holds_no_lock_does_not_block(tmp_path):
+    """Only the kernel lock decides: a lock file naming pid 1 (planted, or left by a
+    sweep whose pid was reused) must not block a shared folder forever."""
+    from scenarios.sweep.outdir import LOCK_NAME
+
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / LOCK_NAME).write_text("1\n")
+    assert main(["compare", "paper-40", "--methods", "st-ql", "--seeds", "1", "--episodes",
+                 "10", "--out", str(out)]) == 0
     assert not (out / LOCK_NAME).exists()
 
 

@@ -29,6 +29,12 @@ class _StoppedWhileStarting(Exception):
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from scenarios.memory_limit import prepare
+
+    too_small = prepare()  # before numpy loads (its BLAS threads)
+    if too_small is not None:
+        print(too_small, file=sys.stderr)
+        return 1
     try:
         run = _import_app()
         code = run(argv)

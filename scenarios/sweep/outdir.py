@@ -21,6 +21,7 @@ import re
 from collections.abc import Iterator
 from pathlib import Path
 
+from scenarios.memory_limit import recording_refused
 from scenarios.runs.spec import ExperimentError
 from sim.errors import InputError
 from sim.files import check_output, node_kind, open_own_file
@@ -48,23 +49,6 @@ def check_out_dir(out_dir: Path, flag: str = "--out") -> Path:
     return out_dir
 
 
-PID_MAX = 4_194_304  # Linux's largest pid (pid_max's ceiling); other systems are lower
-
-
-def _alive(pid: int) -> bool:
-    """Whether ``pid`` is a live process. Not a pid at all (0, negative: a process *group*
-    to ``kill``; beyond any pid) counts as gone: a lock holding it is junk, not an owner."""
-    if not 0 < pid <= PID_MAX:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # someone else's live process
-        return True
-    return True
-
-
 def _owner(fd: int) -> int:
     """The pid a lock file names (0: none or junk)."""
     try:
@@ -82,9 +66,9 @@ def sweep_lock(out_dir: Path, flag: str = "--out") -> Iterator[None]:
     one process can hold it at any instant, and the kernel releases it when its process
     dies however it dies, so a stale lock is simply taken (no read-then-remove race: the
     old takeover let two processes in at once in 53 of 200 synchronised trials). The file
-    names the holder's pid for the message; a file naming another live process whose
-    ``flock`` is not held (a sweep of an older rnhql) is respected too. A link planted
-    under the lock's name is removed, never followed.
+    names the holder's pid for the message only: the ``flock`` alone decides, so a file
+    naming some live process that holds no lock (pid 1, planted or left over) does not
+    block the folder. A link planted under the lock's name is removed, never followed.
     """
     # POSIX only: the package still imports where fcntl is missing
     import fcntl
@@ -106,7 +90,6 @@ def sweep_lock(out_dir: Path, flag: str = "--out") -> Iterator[None]:
             raise OutDirError(str(out_dir), flag, "is in use by another sweep"
                               + (f" (pid {owner})" if owner else ""),
                               "wait for it to finish or pick another directory") from None
-        owner = _owner(fd)
         try:
             same = os.fstat(fd).st_ino == os.stat(lock).st_ino
         except FileNotFoundError:  # its holder removed it as we opened it: try again
@@ -114,10 +97,6 @@ def sweep_lock(out_dir: Path, flag: str = "--out") -> Iterator[None]:
         if not same:
             os.close(fd)
             continue
-        if owner and owner != os.getpid() and _alive(owner):
-            os.close(fd)
-            raise OutDirError(str(out_dir), flag, f"is in use by another sweep (pid {owner})",
-                              "wait for it to finish or pick another directory")
         break
     else:
         raise OutDirError(str(out_dir), flag, "lock file keeps changing",
@@ -176,6 +155,9 @@ def record_path(args: argparse.Namespace, scenario: str, rest: str) -> str | Non
                               f"{len(path.name.encode())} bytes, more than a file system takes",
                               "name the recording e.g. run.rrd")
     check_output(path, "--record")  # a folder under the name: refused before any work
+    refused = recording_refused()
+    if refused is not None:
+        raise ExperimentError("command line", "--record", *refused)
     if node_kind(path) in ("device", "fifo"):
         return str(path)  # written through when the recording is finished (sim.files)
     try:

@@ -44,6 +44,7 @@ from scenarios.sweep.recording import (
 from scenarios.sweep.resume_state import (
     PARTIAL,
     Finished,
+    ResumeStateError,
     check_out_files,
     finished_compare,
     read_partial,
@@ -306,6 +307,24 @@ def _disk_full(err: OSError, out_dir: Path, specs: Sequence[RunSpec],
                            len(specs) if all_done else finished, all_done)
 
 
+def _check_kept_runs(specs: Sequence[RunSpec], done: dict[str, dict[str, Any]],
+                     out_dir: Path) -> None:
+    """A kept run says what its key says: its ``method``, ``world`` and ``seed`` (where the
+    record holds them) are the spec's. An edited name would otherwise be trusted by
+    ``--resume`` and shown in the summary and figures as a method that never ran."""
+    for spec in specs:
+        rec = done.get(spec.key)
+        if rec is None:
+            continue
+        for name in ("method", "world", "seed"):
+            if name in rec and rec[name] != getattr(spec, name):
+                raise ResumeStateError(
+                    str(out_dir), "--resume", f"holds the run {spec.key} with {name} "
+                    f"{rec[name]!r}, but that run's {name} is {getattr(spec, name)!r} (the "
+                    "file was edited)", "remove that run from results.json or "
+                    "runs.partial.jsonl (it is run again), or use a new --out")
+
+
 def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
                execute: Callable[..., list[dict[str, Any]]], resume: bool, files: SweepFiles,
                **execute_kwargs: Any) -> dict[str, Any]:
@@ -317,6 +336,7 @@ def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
                           f"holds {len(foreign)} finished run(s) of another sweep (e.g. "
                           f"{foreign[0]})", "resume with the same scenario, methods, seeds, "
                           "episodes and settings, use a new --out, or drop --resume")
+    _check_kept_runs(specs, done, out_dir)
     if not resume:
         (out_dir / PARTIAL).unlink(missing_ok=True)
     todo = [s for s in specs if s.key not in done]

@@ -9,16 +9,32 @@ import numpy as np
 from gymnasium import spaces
 
 from sim.env_args import (
+    INTEGER_KINDS,
     SCENARIO_REWARDS,
     SpecOwnLimit,
     check_num_envs,
     discrete_action,
+    discrete_actions,
     env_scenario,
     episode_limit,
 )
 from sim.grid.model import build_model
 from sim.render import AGENT, PATH, MapCanvas
 from sim.scenario import Rewards, Scenario
+
+
+def start_state(value: Any, model: Any, fld: str) -> int:
+    """A start state: an integer (int or numpy integer, not a bool) naming a free state
+    that reaches the goal. The one rule for ``start=``, ``options["start"]`` and the
+    vector envs' ``options["starts"]``."""
+    if not isinstance(value, int | np.integer) or isinstance(value, bool):
+        raise ValueError(f"{fld} must be 'S', 'random' or a state index (an int), got "
+                         f"{value!r}")
+    s = int(value)
+    if not (0 <= s < model.n_states) or model.distance_to_goal[s] < 0:
+        raise ValueError(f"{fld} = {s} is not a free state that reaches the goal; pick one "
+                         "of env.unwrapped.model.start_states")
+    return s
 
 
 def check_start(start: Any, model: Any) -> str | int:
@@ -28,12 +44,7 @@ def check_start(start: Any, model: Any) -> str | int:
         if start not in ("S", "random"):
             raise ValueError(f"start must be 'S', 'random' or a state index, got {start!r}")
         return start
-    if not isinstance(start, int | np.integer) or isinstance(start, bool):
-        raise ValueError(f"start must be 'S', 'random' or a state index, got {start!r}")
-    s = int(start)
-    if not (0 <= s < model.n_states) or model.distance_to_goal[s] < 0:
-        raise ValueError(f"start = {s} is not a free state that reaches the goal")
-    return s
+    return start_state(start, model, "start")
 
 
 def start_state_from_options(options: dict[str, Any] | None, model: Any,
@@ -53,10 +64,26 @@ def start_state_from_options(options: dict[str, Any] | None, model: Any,
         if start == "random":
             return int(model.start_states[np_random.integers(len(model.start_states))])
         raise ValueError(f"options['start'] must be 'S', 'random' or a state index, got {start!r}")
-    s = int(start)
-    if not (0 <= s < model.n_states) or model.distance_to_goal[s] < 0:
-        raise ValueError(f"options['start'] = {s} is not a free state that reaches the goal")
-    return s
+    return start_state(start, model, "options['start']")
+
+
+def starts_option(starts: Any, mask: np.ndarray, model: Any) -> np.ndarray:
+    """A vector env's ``reset(options={"starts": ...})``: int64[num_envs], a start state per
+    sub-env (``len(mask)`` integers; floats are refused, not truncated), each entry ``mask``
+    resets a free state that reaches the goal (:func:`start_state`; the others are not read).
+    """
+    n = len(mask)
+    try:
+        a = np.asarray(starts)
+    except (TypeError, ValueError):  # a ragged list
+        a = np.asarray(None)
+    if a.dtype.kind not in INTEGER_KINDS or a.shape != (n,):
+        raise ValueError(f"options['starts'] must be {n} integer states (int[{n}], one per "
+                         f"sub-env), got {starts!r}; pass e.g. np.full({n}, "
+                         "env.unwrapped.model.start, dtype=np.int64)")
+    for i in np.flatnonzero(mask):
+        start_state(a[i], model, f"options['starts'][{i}]")
+    return a.astype(np.int64)
 
 
 class GridRouteEnv(SpecOwnLimit, gym.Env):
@@ -173,11 +200,20 @@ class GridRouteEnv(SpecOwnLimit, gym.Env):
         return img
 
 
+class GridVectorEnv(gym.vector.SyncVectorEnv):
+    """N :class:`GridRouteEnv` stepped in turn (gymnasium's ``SyncVectorEnv``), whose batch
+    of actions is checked as the physics vector envs check theirs
+    (:func:`sim.env_args.discrete_actions`: integers, not floats or objects cast to them)."""
+
+    def step(self, actions: Any) -> tuple[Any, ...]:
+        return super().step(discrete_actions(actions, 4, self.num_envs))
+
+
 def grid_vector_env(num_envs: int, **kwargs: Any) -> gym.vector.SyncVectorEnv:
     """``gymnasium.make_vec("rnhql/GridRoute-v0", num_envs=N)``: N grid envs stepped in turn,
     N bounded as the physics vector envs bound theirs (100,000 copies once ran out of
     memory instead of refusing)."""
-    check_num_envs(num_envs)
+    num_envs = check_num_envs(num_envs)
     vector = {k: kwargs.pop(k) for k in ("autoreset_mode", "copy", "observation_mode")
               if k in kwargs}
-    return gym.vector.SyncVectorEnv([lambda: GridRouteEnv(**kwargs)] * num_envs, **vector)
+    return GridVectorEnv([lambda: GridRouteEnv(**kwargs)] * num_envs, **vector)

@@ -19,6 +19,7 @@ from sim.env_args import (
     env_scenario,
     episode_limit,
     fidelity_arg,
+    finite_real,
 )
 from sim.grid import build_model
 from sim.grid.discretiser import Discretiser
@@ -170,9 +171,8 @@ class DiffDriveEnv(SpecOwnLimit, gym.Env):
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
         s = start_state_from_options(options, self.model, self.np_random, self.start)
-        heading = float((options or {}).get("heading", 0.0))
-        if not math.isfinite(heading):
-            raise ValueError(f"options['heading'] must be finite, got {heading!r}")
+        heading = finite_real((options or {}).get("heading", 0.0), "options['heading']",
+                              "pass the start heading in radians, e.g. {'heading': 1.5708}")
         x, y = self.disc.state_centre(s)
         if self.world is None:
             self.world = PhysicsWorld(self.scenario, self.config, (x, y, heading),

@@ -45,8 +45,17 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from sim.env_args import SCENARIO_REWARDS, check_num_envs, config_arg, env_scenario, episode_limit
-from sim.grid.env import start_state_from_options
+from sim.env_args import (
+    INTEGER_KINDS,
+    SCENARIO_REWARDS,
+    check_num_envs,
+    config_arg,
+    discrete_actions,
+    env_scenario,
+    episode_limit,
+    real_actions,
+)
+from sim.grid.env import start_state_from_options, starts_option
 from sim.physics.envs.diffdrive import DIFFDRIVE_CONFIG, DiffDriveEnv, diffdrive_periods
 from sim.physics.envs.route import PhysicsRouteEnv
 from sim.physics.fidelity import Fidelity
@@ -116,15 +125,36 @@ def sub_env_seeds(seed: int | list[int | None] | None, n: int) -> list[int | Non
     return seeds
 
 
+def reset_mask_option(options: dict[str, Any], n: int) -> np.ndarray:
+    """Pop ``reset(options={"reset_mask": m})``: bool[n], the sub-envs to reset (every one
+    without the option). ``m`` holds exactly ``n`` booleans (or 0/1 integers); a shorter
+    or longer mask (numpy would broadcast it), a float or a 2 (which a cast calls True) is
+    an error."""
+    if "reset_mask" not in options:
+        return np.ones(n, bool)
+    value = options.pop("reset_mask")
+    try:
+        m = np.asarray(value)
+    except (TypeError, ValueError):  # a ragged list
+        m = np.asarray(None)
+    if not (m.shape == (n,) and (m.dtype == bool or (m.dtype.kind in INTEGER_KINDS
+                                                     and ((m == 0) | (m == 1)).all()))):
+        raise ValueError(f"options['reset_mask'] must be {n} booleans (bool[{n}], or 0/1 "
+                         f"integers), one per sub-env, got {value!r}; pass e.g. "
+                         f"np.ones({n}, dtype=bool)")
+    return m.astype(bool)
+
+
 def _vector_setup(env: Any, num_envs: int, render_mode: str | None,
-                  autoreset_mode: AutoresetMode | str) -> None:
-    """What both vector envs check and set first: no rendering, a bounded batch, the
-    autoreset mode in the env's metadata."""
+                  autoreset_mode: AutoresetMode | str) -> int:
+    """What both vector envs check and set first: no rendering, a bounded batch (returned
+    as an int), the autoreset mode in the env's metadata."""
     if render_mode is not None:
         raise ValueError(f"{type(env).__name__} does not render; use the single env")
-    check_num_envs(num_envs)
+    num_envs = check_num_envs(num_envs)
     env.metadata = {**type(env).metadata, "autoreset_mode": autoreset_mode_arg(autoreset_mode)}
     env.num_envs = num_envs
+    return num_envs
 
 
 class PhysicsRouteVectorEnv(VectorEnv):
@@ -169,7 +199,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
                  trajectories: bool = False, rewards: str | Rewards = SCENARIO_REWARDS,
                  steps_per_episode: int | None = None, start: str | int = "S",
                  contact_records: bool = True) -> None:
-        _vector_setup(self, num_envs, render_mode, autoreset_mode)
+        num_envs = _vector_setup(self, num_envs, render_mode, autoreset_mode)
         # the single env's arguments, resolved as it resolves them (it builds no world
         # until reset): sub-env i is PhysicsRouteEnv with the same kwargs
         proto = PhysicsRouteEnv(scenario, config=config, fidelity=fidelity, rewards=rewards,
@@ -214,10 +244,8 @@ class PhysicsRouteVectorEnv(VectorEnv):
 
     def _reset_one(self, i: int, options: dict[str, Any] | None,
                    starts: np.ndarray | None = None) -> None:
-        if starts is not None:
+        if starts is not None:  # checked by starts_option
             s = int(starts[i])
-            if not (0 <= s < self.model.n_states):
-                raise ValueError(f"options['starts'][{i}] = {s} is not a state")
         else:
             s = start_state_from_options(options, self.model, self._rngs[i], self.start)
         x, y = self.batch.disc.state_centre(s)
@@ -231,10 +259,10 @@ class PhysicsRouteVectorEnv(VectorEnv):
         """Reset every sub-env (or those in ``options["reset_mask"]``)."""
         seeds = sub_env_seeds(seed, self.num_envs)
         opts = dict(options or {})
-        mask = np.asarray(opts.pop("reset_mask", np.ones(self.num_envs, bool)), dtype=bool)
+        mask = reset_mask_option(opts, self.num_envs)
         starts = opts.pop("starts", None)
         if starts is not None:
-            starts = np.asarray(starts, dtype=np.int64).reshape(self.num_envs)
+            starts = starts_option(starts, mask, self.model)
         for i in np.flatnonzero(mask):
             if seeds[i] is not None:
                 self._rngs[i] = seeding.np_random(seeds[i])[0]
@@ -246,13 +274,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                                           dict[str, Any]]:
-        acts = np.asarray(actions)
-        if acts.size != self.num_envs or not (np.issubdtype(acts.dtype, np.integer)
-                                              or acts.dtype == object):
-            raise ValueError(f"actions must be {self.num_envs} integers in 0..3, got {acts!r}")
-        acts = acts.astype(np.int64).reshape(self.num_envs)
-        if ((acts < 0) | (acts > 3)).any():
-            raise ValueError(f"actions must be in 0..3, got {acts.tolist()}")
+        acts = discrete_actions(actions, 4, self.num_envs)
         mode = self.autoreset_mode
         if mode == AutoresetMode.NEXT_STEP:
             resetting = self._needs_reset.copy()
@@ -353,7 +375,7 @@ class DiffDriveVectorEnv(VectorEnv):
                  fidelity: Fidelity | str | None = None,
                  rewards: str | Rewards = SCENARIO_REWARDS,
                  steps_per_episode: int | None = None, start: str | int = "S") -> None:
-        _vector_setup(self, num_envs, render_mode, autoreset_mode)
+        num_envs = _vector_setup(self, num_envs, render_mode, autoreset_mode)
         sc = env_scenario(scenario, rewards)
         self.config = config_arg(config, DIFFDRIVE_CONFIG)
         self.shared = SharedSpace(sc, self.config)
@@ -393,7 +415,7 @@ class DiffDriveVectorEnv(VectorEnv):
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
         seeds = sub_env_seeds(seed, self.num_envs)
         opts = dict(options or {})
-        mask = np.asarray(opts.pop("reset_mask", np.ones(self.num_envs, bool)), dtype=bool)
+        mask = reset_mask_option(opts, self.num_envs)
         infos: list[Any] = [None] * self.num_envs
         for i in np.flatnonzero(mask):
             infos[i] = self._reset_one(int(i), seeds[i], opts or None)
@@ -401,10 +423,7 @@ class DiffDriveVectorEnv(VectorEnv):
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                                           dict[str, Any]]:
-        acts = np.asarray(actions, dtype=np.float64)
-        if acts.size != 2 * self.num_envs:
-            raise ValueError(f"actions must have shape ({self.num_envs}, 2), got {acts.shape}")
-        acts = acts.reshape(self.num_envs, 2)
+        acts = real_actions(actions, (self.num_envs, 2), "actions")
         mode = self.autoreset_mode
         infos: list[Any] = [None] * self.num_envs
         if mode == AutoresetMode.NEXT_STEP:

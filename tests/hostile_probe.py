@@ -2,8 +2,10 @@
 
 Why: the unit tests pin the cases someone thought of; this draws new ones of the same
 kinds (mutated scenario TOML, ``.map`` and ``.scen`` files, tampered checkpoints, damaged
-resume state, outputs aimed at devices, FIFOs, symlinks and folders, unchecked numbers,
-full disks, signals) from a seed, runs each as a real process, and sorts the outcome:
+resume state, outputs aimed at devices, FIFOs, symlinks, hard links and folders,
+unchecked numbers, full disks, signals, learner modules of the user's that misbehave, env
+options and actions a cast would change, runs edited behind ``--resume``, a lock naming a
+stranger's pid, address-space limits) from a seed, runs each as a real process, and sorts the outcome:
 
 - clean: the expected result (a valid run, or one ``rnhql: error: ... Fix: ...`` line with
   the expected exit status) and nothing lost or replaced;
@@ -21,6 +23,7 @@ from __future__ import annotations
 import argparse
 import collections
 import contextlib
+import functools
 import os
 import random
 import shutil
@@ -55,6 +58,7 @@ class Case:
     env: dict[str, str] = field(default_factory=dict)
     note: str = ""
     python: str | None = None  # run this snippet (python -c) instead of the command
+    limit_bytes: int | None = None  # an address-space limit (ulimit -v) for the process
 
 
 def _write(name: str, data: bytes | str) -> Callable[[Path], None]:
@@ -605,10 +609,15 @@ def link_case(rng: random.Random) -> Case:
     def setup(d: Path) -> None:
         (d / VICTIM).write_text("keep me")
         (d / "out").mkdir()
-        (d / "out" / name).symlink_to(d / VICTIM)
+        if hard:
+            os.link(d / VICTIM, d / "out" / name)
+        else:
+            (d / "out" / name).symlink_to(d / VICTIM)
 
+    hard = rng.random() < 0.5  # a hard link: the same file under a second name
     argv = [*SWEEP, *(["--resume"] if rng.random() < 0.3 else [])]
-    return Case(f"link:{name}", argv, "ok|error2", setup, _victim_untouched)
+    return Case(f"{'hardlink' if hard else 'link'}:{name}", argv, "ok|error2", setup,
+                _victim_untouched)
 
 
 def view_case(rng: random.Random) -> Case:
@@ -660,6 +669,19 @@ GYM_SNIPPETS = {
     "substeps-huge": "PhysicsConfig(substeps=10**7).validate()",
     "dt-tiny": "PhysicsConfig(dt_s=1e-9).validate()",
     "num-envs-huge": "gym.make_vec('rnhql/GridRoute-v0', num_envs=100000)",
+    # values a cast would have made something else of (round four)
+    "heading-text": "gym.make('rnhql/DiffDrive-v0', scenario='paper-40').unwrapped.reset("
+                    "options={'heading': '1.0'})",
+    "heading-bool": "gym.make('rnhql/DiffDrive-v0', scenario='paper-40').unwrapped.reset("
+                    "options={'heading': True})",
+    "actions-object": "(lambda v: (v.reset(), v.step(np.array([0.5, 1.5], dtype=object))))("
+                      "gym.make_vec('rnhql/GridRoute-v0', num_envs=2))",
+    "starts-float": "gym.make_vec('rnhql/PhysicsRoute-v0', num_envs=2, vectorization_mode="
+                    "'vector_entry_point', scenario='paper-40').reset(options={'starts': "
+                    "[3.7, 5.0]})",
+    "reset-mask-short": "gym.make_vec('rnhql/PhysicsRoute-v0', num_envs=3, vectorization_mode="
+                        "'vector_entry_point', scenario='paper-40').reset(options={"
+                        "'reset_mask': [True]})",
 }
 
 
@@ -670,6 +692,7 @@ def gym_case(rng: random.Random) -> Case:
     code = (
         "import dataclasses, sys\n"
         "import gymnasium as gym\n"
+        "import numpy as np\n"
         "import sim\n"
         "from sim.errors import InputError\n"
         "from sim.physics.static import PhysicsConfig\n"
@@ -681,7 +704,10 @@ def gym_case(rng: random.Random) -> Case:
         f"    {GYM_SNIPPETS[kind]}\n"
         "except InputError as err:\n"
         "    print(f'rnhql: error: {err}', file=sys.stderr)\n"
-        "    sys.exit(2)\n")
+        "    sys.exit(2)\n"
+        "except ValueError as err:  # an env's option or action: a ValueError naming it\n"
+        "    print(f'rnhql: error: {err}', file=sys.stderr)\n"
+        "    sys.exit(2 if ('; ' in str(err) or 'must be' in str(err)) else 3)\n")
     return Case(f"gym:{kind}", [], "error2", python=code)
 
 
@@ -703,11 +729,82 @@ def results_case(rng: random.Random) -> Case:
     return Case(f"resume2:{kind}", [*SWEEP, "--resume"], "ok|error2", setup, _no_nan("out"))
 
 
+USER_MODULES = {
+    "syntax-error": ("def oops(:\n", "error2"),
+    "raises-at-import": ("raise RuntimeError('no')\n", "error2"),
+    "exits-at-import": ("import sys\nsys.exit(0)\n", "error2"),
+    "exits-in-act": (None, "error1"),
+    "returns-4": (None, "error1"),
+    "returns-float": (None, "error1"),
+}
+
+
+def user_module_case(rng: random.Random) -> Case:
+    """A learner module of the user's that misbehaves (``--method mod:Class``): one line
+    naming it, exit 2 for a module that cannot be loaded, exit 1 for a run that failed."""
+    kind = rng.choice([*sorted(USER_MODULES), "dotted-name", "path-name"])
+    body, expect = USER_MODULES.get(kind, (None, "error2"))
+    act = {"exits-in-act": "        import sys; sys.exit(0)",
+           "returns-4": "        return 4",
+           "returns-float": "        return 1.7"}.get(kind, "        return 0")
+    learner = ("class L:\n"
+               "    def __init__(self, n_states, n_actions, rng):\n"
+               "        self.n = n_actions\n"
+               "    def act(self, s):\n" + act + "\n"
+               "    def update(self, s, a, r, s2, terminal):\n"
+               "        pass\n"
+               "    def greedy(self, s):\n"
+               "        return 0\n")
+    name = {"dotted-name": "..mymod:L", "path-name": "./mymod.py:L"}.get(kind, "mymod:L")
+    return Case(f"user-module:{kind}", ["train", "paper-40", "--method", name, "--episodes",
+                                         "3"], expect,
+                _write("mymod.py", body if body is not None else learner))
+
+
+def lock_pid_case(rng: random.Random) -> Case:
+    """A lock file naming a live process that holds no lock (pid 1): the folder is free."""
+    def setup(d: Path) -> None:
+        (d / "out").mkdir()
+        (d / "out" / ".rnhql-sweep.lock").write_text(f"{rng.choice([1, os.getpid()])}\n")
+
+    return Case("lock:live-pid", SWEEP, "ok", setup)
+
+
+def edited_run_case(rng: random.Random) -> Case:
+    """A finished sweep whose results.json names another method, world or seed for a run:
+    ``--resume`` refuses it rather than show a run that never happened."""
+    field_, value = rng.choice([("method", "fake-method"), ("seed", 99), ("world", "physics")])
+
+    def setup(d: Path) -> None:
+        subprocess.run([PY, "-m", "scenarios.cli", *SWEEP], cwd=d, capture_output=True,
+                       env=_env({}))
+        results = d / "out" / "results.json"
+        import json
+
+        doc = json.loads(results.read_text())
+        doc["runs"][0][field_] = value
+        results.write_text(json.dumps(doc))
+
+    return Case(f"resume-edited:{field_}", [*SWEEP, "--resume"], "error2", setup)
+
+
+def address_space_case(rng: random.Random) -> Case:
+    """An address-space limit (``ulimit -v``): too small to compile is one line, a
+    recording below Rerun's need is refused before training, a run above the floor ends."""
+    kind, limit_mb, argv, expect = rng.choice([
+        ("tiny", 300, ["train", "paper-40", *TRAIN], "error1"),
+        ("record", 2000, ["train", "paper-40", *TRAIN, "--record", "x.rrd"], "error2"),
+        ("enough", 1200, ["train", "paper-40", *TRAIN], "ok"),
+    ])
+    return Case(f"ulimit:{kind}", argv, expect, limit_bytes=limit_mb * 1024 * 1024)
+
+
 GENERATORS = [(toml_case, 4), (map_case, 2), (scen_case, 2), (checkpoint_case, 3),
               (resume_case, 3), (path_case, 3), (empty_case, 1), (number_case, 2),
               (cache_case, 1), (signal_case, 1), (env_case, 1), (full_disk_case, 1),
               (link_case, 2), (view_case, 2), (numba_full_case, 1), (obstacles_case, 1),
-              (gym_case, 2), (results_case, 1)]
+              (gym_case, 2), (results_case, 1), (user_module_case, 2), (lock_pid_case, 1),
+              (edited_run_case, 1), (address_space_case, 1)]
 
 
 def _env(extra: dict[str, str]) -> dict[str, str]:
@@ -717,11 +814,15 @@ def _env(extra: dict[str, str]) -> dict[str, str]:
     return env
 
 
-def _terminal_signals() -> None:
+def _terminal_signals(limit_bytes: int | None = None) -> None:
     """In the case's process: SIGINT and SIGHUP as a terminal session has them, whatever
     the probe inherited (started with nohup, or in the background, they are ignored)."""
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    if limit_bytes is not None:
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_AS, (limit_bytes, limit_bytes))
 
 
 def run_case(case: Case, work: Path, timeout: float) -> tuple[str, str]:
@@ -749,7 +850,8 @@ def run_case(case: Case, work: Path, timeout: float) -> tuple[str, str]:
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                 encoding="utf-8", errors="replace", env=env,
                                 start_new_session=True,  # (a PNG may go to stdout)
-                                preexec_fn=_terminal_signals)
+                                preexec_fn=functools.partial(_terminal_signals,
+                                                             case.limit_bytes))
         try:
             if case.send is not None:
                 time.sleep(case.send[1])
@@ -781,6 +883,10 @@ def _classify(case: Case, rc: int, out: str, err: str, d: Path) -> tuple[str, st
     if problem:
         return "silent", problem
     errors = [ln for ln in err.splitlines() if ln.startswith("rnhql: error")]
+    failed = [ln for ln in err.splitlines() if ln.startswith("rnhql: the run failed: ")]
+    if rc == 1 and not errors and len(failed) == 1:  # a user's learner failed: named, once
+        return ("clean", "") if case.expect in ("error1", "ok|error1") else (
+            "wrong exit", f"a failed run where {case.expect} was expected: {failed[0][:160]}")
     if case.note == "notice" and "compiling the numba kernels" in err:
         # the second of two runs with the same cache must not announce a compilation
         return "silent", "the compile notice printed on a cached run"

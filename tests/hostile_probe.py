@@ -5,7 +5,8 @@ kinds (mutated scenario TOML, ``.map`` and ``.scen`` files, tampered checkpoints
 resume state, outputs aimed at devices, FIFOs, symlinks, hard links and folders,
 unchecked numbers, full disks, signals, learner modules of the user's that misbehave, env
 options and actions a cast would change, runs edited behind ``--resume``, a lock naming a
-stranger's pid, address-space limits) from a seed, runs each as a real process, and sorts the outcome:
+stranger's pid, address-space limits) from a seed, runs each as a real process, and sorts
+the outcome:
 
 - clean: the expected result (a valid run, or one ``rnhql: error: ... Fix: ...`` line with
   the expected exit status) and nothing lost or replaced;

@@ -21,6 +21,7 @@ import sys
 from pathlib import Path
 
 from scenarios.artifacts import (
+    RESULTS_DIR,
     ROOT,
     ArtifactError,
     artifact_names,
@@ -31,6 +32,7 @@ from scenarios.artifacts import (
     require_checkout,
     stale_parts,
 )
+from scenarios.artifacts.prose import unbacked_in_docs
 
 
 def _took(wall_s: float | None) -> str:
@@ -123,6 +125,12 @@ def cmd_report(args: argparse.Namespace) -> int:
         print(f"{fig.path} | {', '.join(fig.artifacts)} | {state}")
     if getattr(args, "figures", False) and not _redraw_figures(redraw):
         return 1
+    unbacked = unbacked_in_docs(ROOT, RESULTS_DIR)
+    if unbacked:
+        print(f"\nfigures in prose that their artifact does not hold ({len(unbacked)}; render "
+              "them from it, or correct the sentence):")
+        for u in unbacked:
+            print(f"  {u}")
     hand = legacy_tables()
     if hand:
         print(f"\ntyped by hand ({len(hand)}; re-run with --artifact and render them):")

@@ -5,7 +5,9 @@
 ``integers(0, len(starts))``, as the kernels draw them), the same time limit and
 bootstrapping rule, the same greedy test from S every ``test_every`` episodes, and the
 same :class:`learning.drivers.train.TrainResult`. Only the speed differs: each step is two Python
-calls into the learner (``rnhql bench`` style figures: ``scenarios/bench/plain.py``).
+calls into the learner (``rnhql bench`` style figures: ``scenarios/bench/plain.py``), unless
+the learner is a numba ``@jitclass``: its episodes then run in one compiled loop
+(:mod:`learning.plain.compiled`).
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from learning.drivers.train import (
     train_tabular,
 )
 from learning.geometry import TabularMDP, geometry_of
+from learning.plain.compiled import is_jit_learner
+from learning.plain.compiled import run_episodes as compiled_episodes
 from learning.plain.learner import (
     PlainAgent,
     PlainConfig,
@@ -98,6 +102,7 @@ def train_plain(cfg: PlainConfig, model: TabularMDP, n_episodes: int, rng: np.ra
     tests_l: list[int] = []
     done = env_steps = 0
     n_states, n_actions = geom.n_states, geom.n_actions
+    compiled = is_jit_learner(learner)  # a @jitclass: its episodes run in a compiled loop
     while done < n_episodes:
         n = min(test_every - done % test_every, n_episodes - done)
         trace = NO_TRACE
@@ -105,7 +110,14 @@ def train_plain(cfg: PlainConfig, model: TabularMDP, n_episodes: int, rng: np.ra
             trace = np.full((n, int(model.max_steps) + 1), -1, dtype=np.int32)
         t0 = time.perf_counter()
         with learner_calls(learner):  # its failure is the run's, said in one line
-            env_steps += _episodes(learner, model, n, start_rng, arrays, done, trace)
+            if compiled:
+                steps, bad_s, bad_a = compiled_episodes(learner, model, n, start_rng,
+                                                        arrays, done, trace)
+                if bad_s >= 0:
+                    checked_action(learner, bad_s, bad_a, n_actions)  # raises, naming it
+                env_steps += steps
+            else:
+                env_steps += _episodes(learner, model, n, start_rng, arrays, done, trace)
         arrays["wall_time_s"][done:done + n] = (time.perf_counter() - t0) / n
         done += n
         with learner_calls(learner):

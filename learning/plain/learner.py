@@ -40,6 +40,8 @@ import numpy as np
 
 from learning.config import MethodConfig
 from learning.geometry import Geometry
+from learning.plain import compiled
+from learning.plain.compiled import is_jit_learner
 from learning.plain.policy import State, policy_state
 
 PAPER_EPS = 0.1  # the paper's epsilon, for the epsilon-greedy test of a learner without one
@@ -198,6 +200,11 @@ def checked_action(learner: Any, s: int, a: Any, n_actions: int, what: str = "ac
 
 def greedy_table(learner: Any, n_states: int, n_actions: int) -> np.ndarray:
     """int64[nS]: the learner's greedy action in every state."""
+    if is_jit_learner(learner):  # a @jitclass: read in compiled code, checked all the same
+        out, bad_s, bad_a = compiled.greedy_table(learner, n_states, n_actions)
+        if bad_s >= 0:
+            checked_action(learner, bad_s, bad_a, n_actions, "greedy")  # raises, naming it
+        return out
     out = np.empty(n_states, dtype=np.int64)
     greedy = learner.greedy
     for s in range(n_states):
@@ -220,6 +227,12 @@ def greedy_walk(learner: Any, next_state: np.ndarray, terminal: np.ndarray, star
     """The greedy test from ``start``, asking the learner only along the route: (length or
     -1, states). Stops on a revisit as :func:`learning.compiled.kernels.greedy_route` does."""
     n_actions = next_state.shape[1]
+    if is_jit_learner(learner):  # a @jitclass: walked in compiled code
+        length, states, bad_s, bad_a = compiled.greedy_walk(learner, next_state, terminal,
+                                                            start, max_steps)
+        if bad_s >= 0:
+            checked_action(learner, bad_s, bad_a, n_actions, "greedy")
+        return length, states
     s = int(start)
     route, seen = [s], {s}
     for t in range(max_steps):

@@ -96,29 +96,42 @@ def optimum(d: dict[str, Any]) -> str:
 
 @renderer("plain-learner", timed=True)
 def plain_learner(d: dict[str, Any]) -> str:
-    """A plain-Python learner's cost per step, and the compiled runs' pace beside it."""
+    """A plain learner's cost per step (Python, and a numba ``@jitclass`` where measured),
+    and the compiled runs' pace beside it."""
     g, ph = d["grid"], d["physics"]
-    return (f"On `{d['scenario']}` (goal-only): the Python port of ST-QL against the compiled "
-            f"`st-ql`, {d['episodes']} episodes from scratch, best of {d['repeats']}; physics "
-            f"at `exact`, {ph['seeds']} runs of {ph['episodes']} episodes per method, one "
-            "worker, primitives per second of each run's own training time.\n\n"
-            "| | compiled `st-ql` | Python port | compiled `st-ql` in a sweep with the port |\n"
-            "|---|---|---|---|\n"
+    jit = "jitclass port" in g
+    head = "| | compiled `st-ql` | Python port |" + (" `@jitclass` port |" if jit else "") + \
+        " compiled `st-ql` in a sweep with the port(s) |\n"
+    return (f"On `{d['scenario']}` (goal-only): ports of ST-QL to the plain-learner protocol "
+            f"against the compiled `st-ql`, {d['episodes']} episodes from scratch, best of "
+            f"{d['repeats']}; physics at `exact`, {ph['seeds']} runs of {ph['episodes']} "
+            "episodes per method, one worker, primitives per second of each run's own "
+            "training time.\n\n" + head + "|---|---|---|" + ("---|" if jit else "") + "---|\n"
             f"| grid env steps/s | {g['st-ql']:,.0f} | {g['python port']:,.0f} "
-            f"({g['slowdown']:.0f}x slower) | |\n"
-            f"| physics primitives/s | {ph['st-ql alone']:,.0f} | {ph['python port']:,.0f} | "
-            f"{ph['st-ql beside the port']:,.0f} |\n")
+            f"({g['slowdown']:.0f}x slower) |"
+            + (f" {g['jitclass port']:,.0f} ({g['jitclass port'] / g['st-ql']:.0%}) |" if jit
+               else "") + " |\n"
+            f"| physics primitives/s | {ph['st-ql alone']:,.0f} | {ph['python port']:,.0f} |"
+            + (f" {ph['jitclass port']:,.0f} ({ph['jitclass port'] / ph['st-ql alone']:.0%}) |"
+               if jit else "") + f" {ph['st-ql beside the port']:,.0f} |\n")
 
 
 def plain_learner_sentence(d: dict[str, Any]) -> str:
-    """How much slower the Python port is than the compiled learner, in each world."""
+    """How much slower the ports are than the compiled learner, in each world."""
     g, ph = d["grid"], d["physics"]
-    return (f"On the grid the port is {g['slowdown']:.0f}x slower than the fused kernel (two "
-            "Python calls and numpy's small-array overhead per step); in physics at `exact` "
-            f"it is {ph['st-ql alone'] / ph['python port']:.0f}x slower "
+    text = (f"On the grid the Python port is {g['slowdown']:.0f}x slower than the fused kernel "
+            "(two Python calls and numpy's small-array overhead per step); in physics at "
+            f"`exact` it is {ph['st-ql alone'] / ph['python port']:.0f}x slower "
             f"({ph['python port']:,.0f} primitives/s against {ph['st-ql alone']:,.0f}): the "
             "compiled learner trains inside the fused physics step, while the port is called "
-            "once per robot per primitive.\n")
+            "once per robot per primitive.")
+    if "jitclass port" in g:
+        text += (f" Written as a `@jitclass`, the port runs the grid at "
+                 f"{g['jitclass port'] / g['st-ql']:.0%} of the compiled `st-ql` (its episodes "
+                 "in one compiled loop), but in physics it is still called once per robot per "
+                 f"primitive from Python: {ph['jitclass port']:,.0f} primitives/s, "
+                 f"{ph['jitclass port'] / ph['st-ql alone']:.0%} of the compiled learner's.")
+    return text + "\n"
 
 
 @renderer("memory", timed=True)

@@ -5,12 +5,14 @@ Run: ``python -m scenarios.bench.plain [--artifact bench]`` (prints JSON; with
 docs/python-api.md renders). On ``paper-50``, goal-only rewards:
 
 * grid: env steps/s of the Python port of ST-QL (``tests/plain_learners/st_ql.py``, the
-  learner every per-run figure of ``st-ql`` is tested against) through
-  :func:`learning.drivers.plain_train.train_plain`, and of the compiled ``st-ql`` through the fused
-  kernel, the same ``--episodes`` from scratch, best of ``--repeats``;
+  learner every per-run figure of ``st-ql`` is tested against), of the same port written
+  as a numba ``@jitclass`` (``tests/plain_learners/st_ql_jit.py``, run in a compiled loop)
+  and of the compiled ``st-ql`` through the fused kernel, each through
+  :func:`learning.drivers.plain_train.train_grid`, the same ``--episodes`` from scratch,
+  best of ``--repeats``;
 * physics at ``exact``: a sweep of ``--seeds`` compiled ``st-ql`` runs alone, then the
-  same sweep with as many runs of the Python port beside them (one worker): the compiled
-  runs' primitives per second of their own training time in both, and the port's.
+  same sweep with as many runs of each port beside them (one worker): the compiled
+  runs' primitives per second of their own training time in both, and the ports'.
   A sweep batches Python learners apart from compiled ones
   (:func:`scenarios.runs.physics_batch.plan_tasks`), so the compiled runs keep their pace.
 """
@@ -26,9 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from learning.drivers.plain_train import train_plain
-from learning.drivers.train import train_tabular
-from learning.plain.learner import is_plain
+from learning.drivers.plain_train import train_grid
 from scenarios.artifacts import write_artifact
 from scenarios.runs.spec import load, make_config
 from scenarios.script_args import arg, artifact_arg, parse
@@ -37,6 +37,7 @@ from scenarios.sweep.run import make_specs
 
 SCENARIO = "paper-50"
 PORT = "tests.plain_learners.st_ql:STQLPort"
+JIT_PORT = "tests.plain_learners.st_ql_jit:STQLJit"
 
 
 def _port_importable() -> None:
@@ -50,19 +51,18 @@ def grid_steps_per_s(method: str, episodes: int, repeats: int) -> float:
     """Best-of-``repeats`` env steps/s of a fresh learner trained ``episodes`` episodes."""
     _, model = load(SCENARIO, rewards="goal-only")
     cfg = make_config(method)
-    train = train_plain if is_plain(cfg) else train_tabular
-    train(cfg, model, 1, np.random.default_rng(0))  # compile / import outside the clock
+    train_grid(cfg, model, 1, np.random.default_rng(0))  # compile / import outside the clock
     best = 0.0
     for r in range(repeats):
         t0 = time.perf_counter()
-        res = train(cfg, model, episodes, np.random.default_rng(r))
+        res = train_grid(cfg, model, episodes, np.random.default_rng(r))
         best = max(best, res.env_steps / (time.perf_counter() - t0))
     return best
 
 
 def physics_rates(seeds: int, episodes: int, with_port: bool) -> dict[str, float]:
     """Primitives per second of each method's own training time in a physics sweep."""
-    methods = ["st-ql", PORT] if with_port else ["st-ql"]
+    methods = ["st-ql", PORT, JIT_PORT] if with_port else ["st-ql"]
     specs = make_specs(SCENARIO, methods, list(range(seeds)), episodes, ["physics"],
                        rewards="goal-only")
     records = run_local(specs, jobs=1)
@@ -78,15 +78,17 @@ def measure(episodes: int, repeats: int, seeds: int, physics_episodes: int) -> d
     _port_importable()
     compiled = grid_steps_per_s("st-ql", episodes, repeats)
     port = grid_steps_per_s(PORT, episodes, repeats)
+    jit_port = grid_steps_per_s(JIT_PORT, episodes, repeats)
     physics_rates(2, 2, True)  # warm: compile, build the physics model
     alone = physics_rates(seeds, physics_episodes, False)
     beside = physics_rates(seeds, physics_episodes, True)
     return {
         "scenario": SCENARIO, "episodes": episodes, "repeats": repeats,
-        "grid": {"st-ql": compiled, "python port": port, "slowdown": compiled / port},
+        "grid": {"st-ql": compiled, "python port": port, "slowdown": compiled / port,
+                 "jitclass port": jit_port},
         "physics": {"seeds": seeds, "episodes": physics_episodes,
                     "st-ql alone": alone["st-ql"], "st-ql beside the port": beside["st-ql"],
-                    "python port": beside[PORT]},
+                    "python port": beside[PORT], "jitclass port": beside[JIT_PORT]},
     }
 
 

@@ -41,6 +41,13 @@ import numpy as np
 from learning.config import MethodConfig
 from learning.geometry import Geometry
 from learning.plain import compiled
+from learning.plain.batched import (
+    LearnerAnswerError,
+    OneRun,
+    actions_of,
+    check_batched,
+    is_batched,
+)
 from learning.plain.compiled import is_jit_learner
 from learning.plain.policy import State, policy_state
 
@@ -107,6 +114,9 @@ def check_learner(cls: Any, where: str | None = None) -> None:
     if not isinstance(cls, type):
         raise ValueError(f"{label} is not a class: a plain learner is a class built as "
                          "Cls(n_states, n_actions, rng) with act, update and greedy")
+    if is_batched(cls):
+        check_batched(cls, label)
+        return
     missing = [m for m in ("act", "update", "greedy") if not callable(getattr(cls, m, None))]
     if missing:
         raise ValueError(f"{label} has no {', '.join(missing)}: a plain learner defines "
@@ -153,7 +163,17 @@ def is_plain(cfg: Any) -> bool:
 
 
 def new_learner(cfg: PlainConfig, geometry: Geometry, rng: np.random.Generator) -> Any:
-    return type(cfg).learner(int(geometry.n_states), int(geometry.n_actions), rng)
+    """One run's learner (a batched learner's batch of one, seen as one run)."""
+    cls, n_states, n_actions = type(cfg).learner, int(geometry.n_states), \
+        int(geometry.n_actions)
+    if is_batched(cls):
+        return OneRun(cls(n_states, n_actions, [rng]), 0, n_actions)
+    return cls(n_states, n_actions, rng)
+
+
+def learner_label(learner: Any) -> str:
+    """The learner's class as messages name it (a batched learner's run: its class)."""
+    return getattr(learner, "label", None) or type(learner).__qualname__
 
 
 class LearnerError(ValueError):
@@ -170,11 +190,13 @@ def learner_calls(learner: Any) -> Iterator[None]:
         yield
     except (LearnerError, KeyboardInterrupt):
         raise
+    except LearnerAnswerError as exc:  # a batched learner's answer, checked by actions_of
+        raise LearnerError(f"{learner_label(learner)}.act_batch {exc}") from None
     except SystemExit as exc:
-        raise LearnerError(f"{type(learner).__qualname__} called sys.exit({exc.code!r}) "
+        raise LearnerError(f"{learner_label(learner)} called sys.exit({exc.code!r}) "
                            f"{_where(exc)}; a learner must not exit") from None
     except Exception as exc:
-        raise LearnerError(f"{type(learner).__qualname__} raised {type(exc).__name__}: {exc} "
+        raise LearnerError(f"{learner_label(learner)} raised {type(exc).__name__}: {exc} "
                            f"{_where(exc)}") from None
 
 
@@ -193,7 +215,7 @@ def checked_action(learner: Any, s: int, a: Any, n_actions: int, what: str = "ac
     k = int(a) if isinstance(a, int | np.integer) and not isinstance(a, bool | np.bool_) \
         else -1
     if not 0 <= k < n_actions:
-        raise LearnerError(f"{type(learner).__qualname__}.{what}({s}) returned {a!r}, not an "
+        raise LearnerError(f"{learner_label(learner)}.{what}({s}) returned {a!r}, not an "
                            f"action in 0..{n_actions - 1}")
     return k
 
@@ -260,16 +282,27 @@ class PlainAgent:
 class PlainBatchAgent:
     """N plain learners in the physics loop, with :class:`learning.drivers.batch_agent.BatchAgent`'s
     calls: each learner draws from its own stream, and each run's starts from its own start
-    stream, in the order the compiled agents draw them."""
+    stream, in the order the compiled agents draw them. A batched learner
+    (:mod:`learning.plain.batched`) is built once for the N runs and called once per step."""
 
     def __init__(self, cfg: PlainConfig, geometry: Geometry, rngs: list[np.random.Generator],
                  start_rngs: list[np.random.Generator], learners: list | None = None) -> None:
         self.cfg, self.geometry = cfg, geometry
         self.n_states, self.n_actions = int(geometry.n_states), int(geometry.n_actions)
-        # a warm start continues the learner object itself (its state is its own)
-        given = list(learners) if learners is not None else [None] * len(rngs)
-        self.learners = [new_learner(cfg, geometry, r) if x is None else x
-                         for r, x in zip(rngs, given, strict=True)]
+        cls = type(cfg).learner
+        self.batch = None
+        if is_batched(cls):
+            if learners is not None and any(x is not None for x in learners):
+                raise ValueError(f"{cfg.cli} is a batched learner: a warm start carries one "
+                                 "run's learner, which it cannot continue; train it from "
+                                 "scratch at the rung")
+            self.batch = cls(self.n_states, self.n_actions, list(rngs))
+            self.learners = [OneRun(self.batch, i, self.n_actions) for i in range(len(rngs))]
+        else:
+            # a warm start continues the learner object itself (its state is its own)
+            given = list(learners) if learners is not None else [None] * len(rngs)
+            self.learners = [new_learner(cfg, geometry, r) if x is None else x
+                             for r, x in zip(rngs, given, strict=True)]
         self.start_rngs = list(start_rngs)
         self.n = len(self.learners)
         self._out = np.zeros(self.n, dtype=np.int64)
@@ -293,6 +326,11 @@ class PlainBatchAgent:
 
     def begin_episode(self, active: np.ndarray, s0: np.ndarray) -> None:
         with learner_calls(self.learners[0]):
+            if self.batch is not None:
+                hook = getattr(self.batch, "episode_start_batch", None)
+                if hook is not None:
+                    hook(np.flatnonzero(active))
+                return
             for i in np.flatnonzero(active):
                 hook = self._starts_hook[i]
                 if hook is not None:
@@ -301,6 +339,11 @@ class PlainBatchAgent:
     def act(self, active: np.ndarray, s: np.ndarray) -> np.ndarray:
         out = self._out
         with learner_calls(self.learners[0]):
+            if self.batch is not None:
+                runs = np.flatnonzero(active)
+                out[runs] = actions_of(self.batch.act_batch(runs, s[runs]), runs.size,
+                                       self.n_actions)
+                return out
             for i in np.flatnonzero(active):
                 learner, si = self.learners[i], int(s[i])
                 out[i] = checked_action(learner, si, learner.act(si), self.n_actions)
@@ -309,6 +352,11 @@ class PlainBatchAgent:
     def update(self, active: np.ndarray, s: np.ndarray, a: np.ndarray, r: np.ndarray,
                s2: np.ndarray, terminated: np.ndarray, truncated: np.ndarray) -> None:
         with learner_calls(self.learners[0]):
+            if self.batch is not None:
+                runs = np.flatnonzero(active)
+                self.batch.update_batch(runs, s[runs], a[runs], r[runs], s2[runs],
+                                        terminated[runs])
+                return
             for i in np.flatnonzero(active):
                 self.learners[i].update(int(s[i]), int(a[i]), float(r[i]), int(s2[i]),
                                         bool(terminated[i]))

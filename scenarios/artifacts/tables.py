@@ -113,7 +113,23 @@ def plain_learner(d: dict[str, Any]) -> str:
                else "") + " |\n"
             f"| physics primitives/s | {ph['st-ql alone']:,.0f} | {ph['python port']:,.0f} |"
             + (f" {ph['jitclass port']:,.0f} ({ph['jitclass port'] / ph['st-ql alone']:.0%}) |"
-               if jit else "") + f" {ph['st-ql beside the port']:,.0f} |\n")
+               if jit else "") + f" {ph['st-ql beside the port']:,.0f} |\n"
+            + _batched_rows(d))
+
+
+def _batched_rows(d: dict[str, Any]) -> str:
+    """The batched port's rows, where the artifact measured it."""
+    b = d.get("batched")
+    if b is None:
+        return ""
+    g, ph = d["grid"], d["physics"]
+    return (f"\nThe numpy port written batched (one call per step for all its runs), "
+            f"{b['seeds']} runs in one lock-step batch, over the batch's wall time:\n\n"
+            "| | batched port | Python port (one run) | compiled `st-ql` |\n|---|---|---|---|\n"
+            f"| grid env steps/s | {b['grid']:,.0f} | {g['python port']:,.0f} | "
+            f"{g['st-ql']:,.0f} |\n"
+            f"| physics primitives/s | {b['physics']:,.0f} | {ph['python port']:,.0f} | "
+            f"{ph['st-ql alone']:,.0f} |\n")
 
 
 def plain_learner_sentence(d: dict[str, Any]) -> str:

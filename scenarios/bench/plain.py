@@ -10,6 +10,9 @@ docs/python-api.md renders). On ``paper-50``, goal-only rewards:
   and of the compiled ``st-ql`` through the fused kernel, each through
   :func:`learning.drivers.plain_train.train_grid`, the same ``--episodes`` from scratch,
   best of ``--repeats``;
+* a batched learner (``tests/plain_learners/st_ql_batched.py``, numpy, one call per step
+  for all its runs): ``--batch-seeds`` runs in one lock-step batch, grid env steps/s and
+  physics primitives/s over the batch's wall time;
 * physics at ``exact``: a sweep of ``--seeds`` compiled ``st-ql`` runs alone, then the
   same sweep with as many runs of each port beside them (one worker): the compiled
   runs' primitives per second of their own training time in both, and the ports'.
@@ -28,16 +31,19 @@ from typing import Any
 
 import numpy as np
 
+from learning.drivers.plain_batch_train import train_plain_batch
 from learning.drivers.plain_train import train_grid
+from learning.streams import streams
 from scenarios.artifacts import write_artifact
 from scenarios.runs.spec import load, make_config
-from scenarios.script_args import arg, artifact_arg, parse
+from scenarios.script_args import arg, artifact_arg, parse, study_command
 from scenarios.sweep.backends import run_local
 from scenarios.sweep.run import make_specs
 
 SCENARIO = "paper-50"
 PORT = "tests.plain_learners.st_ql:STQLPort"
 JIT_PORT = "tests.plain_learners.st_ql_jit:STQLJit"
+BATCHED = "tests.plain_learners.st_ql_batched:STQLBatched"
 
 
 def _port_importable() -> None:
@@ -60,9 +66,11 @@ def grid_steps_per_s(method: str, episodes: int, repeats: int) -> float:
     return best
 
 
-def physics_rates(seeds: int, episodes: int, with_port: bool) -> dict[str, float]:
-    """Primitives per second of each method's own training time in a physics sweep."""
-    methods = ["st-ql", PORT, JIT_PORT] if with_port else ["st-ql"]
+def physics_rates(seeds: int, episodes: int, port: str | None) -> dict[str, float]:
+    """Primitives per second of each method's own training time in a physics sweep: the
+    compiled ``st-ql`` alone (``port`` None), or beside ``port`` (the ports are measured in
+    sweeps of their own: plain learners share a batch, and its pace)."""
+    methods = ["st-ql"] if port is None else ["st-ql", port]
     specs = make_specs(SCENARIO, methods, list(range(seeds)), episodes, ["physics"],
                        rewards="goal-only")
     records = run_local(specs, jobs=1)
@@ -74,21 +82,42 @@ def physics_rates(seeds: int, episodes: int, with_port: bool) -> dict[str, float
     return out
 
 
-def measure(episodes: int, repeats: int, seeds: int, physics_episodes: int) -> dict[str, Any]:
+def batched_rates(seeds: int, episodes: int, physics_episodes: int) -> dict[str, float]:
+    """The batched port's ``seeds`` runs in one lock-step batch: grid env steps/s and physics
+    primitives/s, each over the batch's wall time."""
+    _, model = load(SCENARIO, rewards="goal-only")
+    cfg = make_config(BATCHED)
+    rs = [streams(i) for i in range(seeds)]
+    t0 = time.perf_counter()
+    runs = train_plain_batch(cfg, model, episodes, [r.learner for r in rs], 10,
+                             [r.starts for r in rs])
+    grid = sum(r.env_steps for r in runs) / (time.perf_counter() - t0)
+    specs = make_specs(SCENARIO, [BATCHED], list(range(seeds)), physics_episodes, ["physics"],
+                       rewards="goal-only")
+    records = run_local(specs, jobs=1)  # over its own training time, as the rows above
+    physics = sum(r["env_steps"] for r in records) / sum(r["wall_time_s"] for r in records)
+    return {"seeds": seeds, "grid": grid, "physics": physics}
+
+
+def measure(episodes: int, repeats: int, seeds: int, physics_episodes: int,
+            batch_seeds: int) -> dict[str, Any]:
     _port_importable()
     compiled = grid_steps_per_s("st-ql", episodes, repeats)
     port = grid_steps_per_s(PORT, episodes, repeats)
     jit_port = grid_steps_per_s(JIT_PORT, episodes, repeats)
-    physics_rates(2, 2, True)  # warm: compile, build the physics model
-    alone = physics_rates(seeds, physics_episodes, False)
-    beside = physics_rates(seeds, physics_episodes, True)
+    batched = batched_rates(batch_seeds, episodes // 10, physics_episodes)
+    physics_rates(2, 2, PORT)  # warm: compile, build the physics model
+    alone = physics_rates(seeds, physics_episodes, None)
+    beside = physics_rates(seeds, physics_episodes, PORT)
+    beside_jit = physics_rates(seeds, physics_episodes, JIT_PORT)
     return {
         "scenario": SCENARIO, "episodes": episodes, "repeats": repeats,
         "grid": {"st-ql": compiled, "python port": port, "slowdown": compiled / port,
                  "jitclass port": jit_port},
         "physics": {"seeds": seeds, "episodes": physics_episodes,
                     "st-ql alone": alone["st-ql"], "st-ql beside the port": beside["st-ql"],
-                    "python port": beside[PORT], "jitclass port": beside[JIT_PORT]},
+                    "python port": beside[PORT], "jitclass port": beside_jit[JIT_PORT]},
+        "batched": batched,
     }
 
 
@@ -98,17 +127,16 @@ class Args:
     repeats: int = arg(3, "grid runs, the best kept")
     seeds: int = arg(4, "physics runs per method")
     physics_episodes: int = arg(30, "physics episodes per run")
+    batch_seeds: int = arg(10, "runs of the batched learner in its one batch")
     artifact: str | None = artifact_arg("plain-learner")
 
 
 def main(argv: list[str] | None = None) -> int:
     a = parse(Args, __doc__, argv)
-    data = measure(a.episodes, a.repeats, a.seeds, a.physics_episodes)
+    data = measure(a.episodes, a.repeats, a.seeds, a.physics_episodes, a.batch_seeds)
     print(json.dumps(data, indent=1))
     if a.artifact is not None:
-        cmd = (f"python -m scenarios.bench.plain --episodes {a.episodes} --repeats {a.repeats} "
-               f"--seeds {a.seeds} --physics-episodes {a.physics_episodes} "
-               f"--artifact {a.artifact}")
+        cmd = study_command("scenarios.bench.plain", Args, a)
         write_artifact(f"plain-learner.{a.artifact}", cmd, ["grid", "physics-exact"], data,
                        study=__file__)
     return 0

@@ -13,6 +13,8 @@ from typing import Any
 from learning.methods.registry import is_located
 from learning.plain.learner import PlainConfig
 from learning.streams import streams
+from scenarios.runs.grid_batch import batch_key as grid_batch_key
+from scenarios.runs.grid_batch import grid_batchable
 from scenarios.runs.physics import RecordedRun, RunGroup, log_final, train_physics_runs
 from scenarios.runs.spec import RunOutcome, load, make_config, method_class, run_record
 from scenarios.runs.warm import pretrain_in_grid
@@ -29,8 +31,9 @@ def batchable(spec: Any) -> bool:
 
 
 def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
-    """Spec indices per task: each grid or recorded run alone; physics runs that share a
-    problem, budget and test cadence together, dealt round-robin (by seed, then method)
+    """Spec indices per task: each grid run alone, but a batched learner's grid runs of one
+    problem, budget and cadence together (:mod:`scenarios.runs.grid_batch`); physics runs
+    that share a problem, budget and test cadence together, dealt round-robin (by seed, then method)
     into at least ``jobs`` tasks of at most :data:`MAX_BATCH` runs.
 
     Single runs go seed by seed (every method's first seed, then every method's second):
@@ -44,7 +47,9 @@ def plan_tasks(specs: Sequence[Any], jobs: int = 1) -> list[list[int]]:
     groups: dict[tuple[Any, ...], list[int]] = {}
     singles: list[int] = []
     for i, sp in enumerate(specs):
-        if batchable(sp):
+        if grid_batchable(sp):  # a batched learner's grid runs: lock-step, one method
+            groups.setdefault(grid_batch_key(sp), []).append(i)
+        elif batchable(sp):
             groups.setdefault((sp.problem, sp.episodes, sp.test_every, sp.fidelity_spec,
                                in_python(sp.method)), []).append(i)
         else:

@@ -12,6 +12,7 @@ from typing import Any
 from learning.drivers.plain_train import train_grid
 from learning.drivers.train import epsilon_route_lengths
 from learning.streams import streams
+from scenarios.runs.grid_batch import grid_batchable, run_grid_batch
 from scenarios.runs.physics_batch import batchable, run_physics_batch
 from scenarios.runs.physics_grading import Grader
 from scenarios.runs.spec import (
@@ -29,9 +30,11 @@ from sim.scenario import Scenario
 
 
 def run_task(specs: Sequence[Any]) -> list[dict[str, Any]]:
-    """One task of :func:`scenarios.runs.physics_batch.plan_tasks`: a single run, or a
-    physics batch."""
+    """One task of :func:`scenarios.runs.physics_batch.plan_tasks`: a single run, a
+    physics batch, or a batched learner's grid runs."""
     with warm_up(sp.method for sp in specs):
+        if grid_batchable(specs[0]):  # a batched learner's grid runs, in lock-step
+            return run_grid_batch(specs)
         if len(specs) == 1 and not batchable(specs[0]):
             return [run_one(specs[0])]
         return run_physics_batch(specs)

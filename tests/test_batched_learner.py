@@ -1,0 +1,79 @@
+"""A batched plain learner (one call per step for every run of a batch): the same runs as
+the compiled method it ports, in the grid's lock-step batches and in physics, its failures
+said as any learner's."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from learning.plain.learner import LearnerError
+from scenarios import api
+from scenarios.runs.physics_batch import plan_tasks
+from scenarios.sweep.run import make_specs
+
+BATCHED = "tests.plain_learners.st_ql_batched:STQLBatched"
+NAMING = ("key", "method", "method_name", "config", "wall_time_s", "wall_time_per_episode_s")
+
+
+def _same(a, b) -> list[str]:
+    return [k for k in a if k not in NAMING and a[k] != b.get(k)]
+
+
+def test_a_batched_port_of_st_ql_equals_compiled_st_ql_in_grid_and_physics():
+    cmp = api.compare("paper-40", ["st-ql", BATCHED], worlds=("grid", "physics"), seeds=3,
+                      episodes=20, jobs=1)
+    for world in ("grid", "physics"):
+        for ours, theirs in zip(cmp.of("st-ql", world), cmp.of(BATCHED, world), strict=True):
+            assert _same(dict(ours.record), dict(theirs.record)) == []
+            assert np.array_equal(ours.policy, theirs.policy)
+    assert cmp.of(BATCHED, "grid")[0].method_name == "ST-QL (numpy, batched)"
+
+
+def test_a_batched_learners_grid_runs_are_one_task_and_others_stay_alone():
+    specs = make_specs("paper-40", ["st-ql", BATCHED], [0, 1, 2], 10, ["grid"])
+    tasks = plan_tasks(specs, jobs=1)
+    batched = [t for t in tasks if specs[t[0]].method == BATCHED]
+    assert batched == [[3, 4, 5]]  # the three seeds step together
+    assert sorted(t for t in tasks if specs[t[0]].method == "st-ql") == [[0], [1], [2]]
+
+
+def test_a_single_batched_run_trains_as_a_batch_of_one():
+    run = api.train("paper-40", method=BATCHED, episodes=20)
+    ref = api.train("paper-40", method="st-ql", episodes=20)
+    assert np.array_equal(run.policy, ref.policy)
+
+
+class _Floats:
+    batched = True
+
+    def __init__(self, n_states, n_actions, rngs):
+        self.n = len(rngs)
+
+    def act_batch(self, runs, states):
+        return np.full(runs.size, 1.0)
+
+    def update_batch(self, runs, states, actions, rewards, next_states, terminal):
+        pass
+
+    def greedy(self, run, state):
+        return 0
+
+
+def test_a_batched_learner_answering_floats_fails_the_run_naming_it():
+    with pytest.raises(LearnerError, match=r"_Floats\.act_batch returned .* not 1 integer"):
+        api.train("paper-40", method=_Floats, episodes=3)
+
+
+def test_a_class_declaring_batched_without_its_calls_is_refused():
+    class Half:
+        batched = True
+
+        def __init__(self, n_states, n_actions, rngs):
+            pass
+
+        def act(self, s):
+            return 0
+
+    with pytest.raises(ValueError, match="has no act_batch, update_batch, greedy"):
+        api.train("paper-40", method=Half, episodes=3)

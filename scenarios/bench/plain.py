@@ -105,11 +105,11 @@ def measure(episodes: int, repeats: int, seeds: int, physics_episodes: int,
     compiled = grid_steps_per_s("st-ql", episodes, repeats)
     port = grid_steps_per_s(PORT, episodes, repeats)
     jit_port = grid_steps_per_s(JIT_PORT, episodes, repeats)
-    batched = batched_rates(batch_seeds, episodes // 10, physics_episodes)
     physics_rates(2, 2, PORT)  # warm: compile, build the physics model
     alone = physics_rates(seeds, physics_episodes, None)
     beside = physics_rates(seeds, physics_episodes, PORT)
     beside_jit = physics_rates(seeds, physics_episodes, JIT_PORT)
+    batched = batched_rates(batch_seeds, episodes // 10, physics_episodes)  # (warm now)
     return {
         "scenario": SCENARIO, "episodes": episodes, "repeats": repeats,
         "grid": {"st-ql": compiled, "python port": port, "slowdown": compiled / port,

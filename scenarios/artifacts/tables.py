@@ -129,7 +129,9 @@ def _batched_rows(d: dict[str, Any]) -> str:
             f"| grid env steps/s | {b['grid']:,.0f} | {g['python port']:,.0f} | "
             f"{g['st-ql']:,.0f} |\n"
             f"| physics primitives/s | {b['physics']:,.0f} | {ph['python port']:,.0f} | "
-            f"{ph['st-ql alone']:,.0f} |\n")
+            f"{ph['st-ql alone']:,.0f} |\n\n"
+            f"The batch runs at {b['grid'] / g['python port']:.1f}x the per-run port's pace in "
+            f"the grid and {b['physics'] / ph['python port']:.1f}x in physics.\n")
 
 
 def plain_learner_sentence(d: dict[str, Any]) -> str:

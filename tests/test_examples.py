@@ -14,7 +14,8 @@ import pytest
 REPO = Path(__file__).resolve().parent.parent
 EXAMPLES = REPO / "examples"
 SB3_EXAMPLES = ["sb3_dqn_route.py", "sb3_ppo_diffdrive.py", "sb3_vec_env.py", "sb3_graded.py"]
-SCRIPTS = ["script_circles.py", "script_own_learner.py", "script_grid_then_robot.py"]
+SCRIPTS = ["script_circles.py", "script_own_learner.py", "script_grid_then_robot.py",
+           "batched_dqn.py"]
 
 
 def run_example(name: str, tmp_path: Path, scale: str = "0.01") -> str:
@@ -66,6 +67,15 @@ def test_script_own_learner(tmp_path):
     out = run_example("script_own_learner.py", tmp_path)
     for line in ("| COUNT-Q | grid | 2 |", "COUNT-Q: final route optimal in ",
                  "RNH-QL+: final route optimal in ", "ST-QL: final route optimal in "):
+        assert line in out, out
+
+
+def test_batched_dqn(tmp_path):
+    """A DQN in torch written to the batched protocol, against rnh-ql+ in both worlds."""
+    pytest.importorskip("torch")
+    out = run_example("batched_dqn.py", tmp_path)
+    for line in ("| rnh-ql+ | grid | 2 |", "| DQN (torch) | grid | 2 |",
+                 "| DQN (torch) | physics | 2 |"):
         assert line in out, out
 
 

@@ -12,6 +12,7 @@ lock-step physics batch (seeds x robots) and answers for all of them at once::
         def update_batch(self, runs, states, actions, rewards, next_states, terminal): ...
         def greedy(self, run, state) -> int: ...             # the policy graded, no draws
         def episode_start_batch(self, runs): ...             # optional
+        def greedy_all(self, run) -> actions: ...            # optional: every state's
 
 ``runs`` are the indices (into ``rngs``) of the runs the call is about: each run keeps its
 own stream (``rngs[run]``) and its own starts, so a learner that draws per run what a
@@ -107,6 +108,11 @@ class OneRun:
 
     def greedy(self, s: int) -> Any:
         return self.batch.greedy(self.run, s)
+
+    def greedy_all(self) -> Any:
+        """Every state's greedy action in one call (the batch's ``greedy_all``), or None."""
+        fn = getattr(self.batch, "greedy_all", None)
+        return None if fn is None else fn(self.run)
 
     def _episode_start(self) -> None:
         self._start(self._runs)

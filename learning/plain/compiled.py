@@ -24,8 +24,6 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from learning.compiled.hooks import draw_start
-
 
 def is_jitclass(cls: Any) -> bool:
     """Whether ``cls`` is a numba ``@jitclass`` (its instances run inside compiled loops)."""
@@ -43,6 +41,13 @@ def is_jit_learner(learner: Any) -> bool:
 
 def _has_episode_start(learner: Any) -> bool:
     return "episode_start" in learner._numba_type_.class_type.methods
+
+
+@njit(inline="always")
+def draw_start(rng, start_states):
+    """The episode's start state, drawn as the compiled methods draw it:
+    ``start_states[rng.integers(0, len)]`` (the same stream, the same starts)."""
+    return start_states[rng.integers(0, start_states.shape[0])]
 
 
 @njit(inline="always")

@@ -227,6 +227,13 @@ def greedy_table(learner: Any, n_states: int, n_actions: int) -> np.ndarray:
         if bad_s >= 0:
             checked_action(learner, bad_s, bad_a, n_actions, "greedy")  # raises, naming it
         return out
+    whole = getattr(learner, "greedy_all", None)
+    table = whole() if whole is not None else None
+    if table is not None:  # a batched learner's run, read in one call: checked all the same
+        try:
+            return actions_of(table, n_states, n_actions)
+        except LearnerAnswerError as exc:
+            raise LearnerError(f"{learner_label(learner)}.greedy_all {exc}") from None
     out = np.empty(n_states, dtype=np.int64)
     greedy = learner.greedy
     for s in range(n_states):

@@ -52,8 +52,9 @@ def _rel(path: Path) -> str:
 
 
 # code that computes a table's numbers outside the golden records' reach (sim and learning,
-# the runs and sweeps): the studies and their helpers, and the crosscheck's IR-SIM side
-STUDY_CODE = ("scenarios/studies", "sim/physics/crosscheck")
+# the runs and sweeps): the studies and their helpers, the crosscheck's IR-SIM side, and the
+# example learners a study imports (a user's learner, which no golden record covers)
+STUDY_CODE = ("scenarios/studies", "sim/physics/crosscheck", "examples")
 
 
 def study_helpers(path: Path) -> list[Path]:

@@ -152,6 +152,20 @@ def plain_learner_sentence(d: dict[str, Any]) -> str:
     return text + "\n"
 
 
+@renderer("own-learner", timed=True)
+def own_learner(d: dict[str, Any]) -> str:
+    """A user's learner (the batched torch DQN example) against rnh-ql+ in both worlds."""
+    lines = [f"`{d['scenario']}`, {d['episodes']} episodes, rewards `{d['rewards']}`, optimal "
+             f"route {d['optimal_route_length']} moves; median [quartiles] over seeds:", "",
+             "| method | world | final route optimal | stable optimal after | success rate "
+             "| training time [s] |", "|---|---|---|---|---|---|"]
+    for r in d["rows"]:
+        lines.append(f"| {r['name']} | {r['world']} | {r['optimal']}/{r['seeds']} | "
+                     f"{_q(r['stable_optimal'])} | {_q(r['success_rate'], 2)} | "
+                     f"{_q(r['train_s'], 1)} |")
+    return "\n".join(lines) + "\n"
+
+
 @renderer("memory", timed=True)
 def memory(d: dict[str, Any]) -> str:
     """Peak RSS and checkpoint size per method and map size."""

@@ -1,7 +1,11 @@
-"""A sweep's physics runs as tasks: runs that share a problem train together, as the
-sub-envs of one vector env (:func:`scenarios.runs.physics.train_physics_runs`).
+"""A sweep's batched runs as tasks: physics runs that share a problem train together, as the
+sub-envs of one vector env (:func:`scenarios.runs.physics.train_physics_runs`), and a
+batched plain learner's grid runs (:mod:`learning.plain.batched`) step together in one
+lock-step batch (:func:`run_grid_batch`).
 
-Recorded runs batch with the rest: a recording taps its run's sub-env.
+Recorded physics runs batch with the rest: a recording taps its run's sub-env. A grid run
+recorded in full runs alone (its recorder follows one run), as a batch of one: each run
+keeps its streams, so its record is the one it would have had alone.
 """
 
 from __future__ import annotations
@@ -10,12 +14,14 @@ import contextlib
 from collections.abc import Sequence
 from typing import Any
 
+from learning.drivers.plain_batch_train import train_plain_batch
+from learning.drivers.train import epsilon_route_lengths
 from learning.methods.registry import is_located
+from learning.plain.batched import is_batched
 from learning.plain.learner import PlainConfig
 from learning.streams import streams
-from scenarios.runs.grid_batch import batch_key as grid_batch_key
-from scenarios.runs.grid_batch import grid_batchable
 from scenarios.runs.physics import RecordedRun, RunGroup, log_final, train_physics_runs
+from scenarios.runs.physics_grading import Grader
 from scenarios.runs.spec import RunOutcome, load, make_config, method_class, run_record
 from scenarios.runs.warm import pretrain_in_grid
 
@@ -139,3 +145,41 @@ def _open_recorder(spec: Any, cfg: Any, sc: Any, model: Any,
         blueprint=not opts.prefix, with_scene=opts.detail,
         fidelity=spec.fidelity_spec.label))
     return RecordedRun(rec, plan)
+
+
+# ------------------------------------------------------------------ batched grid runs
+
+def grid_batchable(spec: Any) -> bool:
+    """A grid run of a batched plain learner, not recorded in full."""
+    if spec.world != "grid" or (spec.recording is not None and spec.recording.detail):
+        return False
+    if not is_located(spec.method):
+        return False
+    cls = method_class(spec.method)
+    return issubclass(cls, PlainConfig) and is_batched(cls.learner)
+
+
+def grid_batch_key(spec: Any) -> tuple[Any, ...]:
+    """Grid runs with equal keys train in one lock-step batch (one learner object)."""
+    return ("grid", spec.problem, spec.episodes, spec.test_every, spec.method, spec.overrides)
+
+
+def run_grid_batch(specs: Sequence[Any]) -> list[dict[str, Any]]:
+    """Train grid specs of one batched learner (one problem, budget, cadence) together; their
+    results.json records, in spec order."""
+    first = specs[0]
+    if any(grid_batch_key(sp) != grid_batch_key(first) for sp in specs):
+        raise ValueError("a grid batch needs one method, problem, budget and test cadence")
+    sc, model = load(*first.problem)
+    cfg = make_config(first.method, first.overrides)
+    rs = [streams(sp.seed) for sp in specs]
+    results = train_plain_batch(cfg, model, first.episodes, [r.learner for r in rs],
+                                first.test_every, [r.starts for r in rs])
+    records = []
+    for sp, r, res in zip(specs, rs, results, strict=True):
+        # the paper's test, on its own stream so it never changes the training run
+        eps_routes = epsilon_route_lengths(res.state, model, cfg.eps, r.evaluation)
+        extras = (Grader(sc, sp.fidelity_spec).final(res.state, sp.seed).extras
+                  if sp.drive_final else None)
+        records.append(run_record(sp, cfg, RunOutcome.of(res, eps_routes, extras)))
+    return records

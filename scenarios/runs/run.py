@@ -12,8 +12,12 @@ from typing import Any
 from learning.drivers.plain_train import train_grid
 from learning.drivers.train import epsilon_route_lengths
 from learning.streams import streams
-from scenarios.runs.grid_batch import grid_batchable, run_grid_batch
-from scenarios.runs.physics_batch import batchable, run_physics_batch
+from scenarios.runs.physics_batch import (
+    batchable,
+    grid_batchable,
+    run_grid_batch,
+    run_physics_batch,
+)
 from scenarios.runs.physics_grading import Grader
 from scenarios.runs.spec import (
     WORLDS,

@@ -55,7 +55,11 @@ def prepare() -> str | None:
     # SciPy's at its first compile, after LLVM has taken its share) OpenBLAS's buffers
     # did not fit and its import spun for minutes
     import numpy  # noqa: F401
-    import scipy.linalg  # noqa: F401
+
+    try:
+        import scipy.linalg  # noqa: F401  (numba's np.linalg support loads it)
+    except ImportError:  # not installed: numba then has no BLAS of SciPy's to load
+        pass
     return None
 
 

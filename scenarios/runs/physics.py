@@ -168,7 +168,8 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     start_h = handles([r for g in groups for r in g.start_rngs])
     world = PhysicsRouteVectorEnv(n, sc, max_episode_steps=sc.steps_per_episode,
                                   fidelity=fidelity, autoreset_mode=AutoresetMode.DISABLED,
-                                  trajectories=bool(recorded), contact_records=bool(recorded))
+                                  trajectories=bool(recorded), contact_records=bool(recorded),
+                                  lean_infos=not recorded)  # a tap reads the full infos
     noise = [r for g in groups for r in (g.noise_rngs or [None] * len(g.learner_rngs))]
     for i, r in enumerate(noise):
         if r is not None:

@@ -178,8 +178,10 @@ class PhysicsRouteVectorEnv(VectorEnv):
     start state per sub-env; only masked entries are read), ``reset_mask`` (``bool[N]``).
     ``trajectories=True`` keeps every physics step's pose of the last primitive
     (:meth:`trajectory`) for recordings; ``contact_records=False`` keeps no contact records
-    (:meth:`contact_records` stays empty; ``info["contacts"]`` still counts them).
-    ``rewards``, ``fidelity``: as the single env (``make_vec`` passes the id's
+    (:meth:`contact_records` stays empty; ``info["contacts"]`` still counts them);
+    ``lean_infos=True`` gives only ``info["contacts"]`` and ``info["time_s"]`` (what the
+    training loop reads: the full dict cost a plain learner's physics runs an eighth of
+    their time). ``rewards``, ``fidelity``: as the single env (``make_vec`` passes the id's
     ``goal-only``; built directly, the scenario's scheme).
     ``max_episode_steps`` (or ``steps_per_episode``): default the scenario's. ``start``:
     where a reset without a ``start`` option (an autoreset too) begins, as the single env.
@@ -198,8 +200,9 @@ class PhysicsRouteVectorEnv(VectorEnv):
                  autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
                  trajectories: bool = False, rewards: str | Rewards = SCENARIO_REWARDS,
                  steps_per_episode: int | None = None, start: str | int = "S",
-                 contact_records: bool = True) -> None:
+                 contact_records: bool = True, lean_infos: bool = False) -> None:
         num_envs = _vector_setup(self, num_envs, render_mode, autoreset_mode)
+        self.lean_infos = bool(lean_infos)
         # the single env's arguments, resolved as it resolves them (it builds no world
         # until reset): sub-env i is PhysicsRouteEnv with the same kwargs
         proto = PhysicsRouteEnv(scenario, config=config, fidelity=fidelity, rewards=rewards,
@@ -331,6 +334,10 @@ class PhysicsRouteVectorEnv(VectorEnv):
         entries are a reset's: not bumped, reached, no steps, no contacts)."""
         b, n = self.batch, self.num_envs
         r = b.r
+        if self.lean_infos:  # the training loop's reads only
+            contacts = (np.zeros(n, np.int64) if out is None else
+                        np.where(fresh, 0, out.contacts).astype(np.int64))
+            return {"contacts": contacts, "time_s": r.steps * self.config.dt_s}
         pose = np.empty((n, 3))
         pose[:, 0], pose[:, 1] = r.x, r.y
         np.add(r.th, np.pi, out=pose[:, 2])  # as wrap_angle

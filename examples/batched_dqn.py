@@ -127,6 +127,6 @@ class BatchedDQN:
 
 if __name__ == "__main__":  # the workers of a sweep may re-import this file
     cmp = api.compare("paper-40", ["rnh-ql+", BatchedDQN], worlds=("grid", "physics"),
-                      seeds=max(2, round(10 * SCALE)), episodes=max(10, round(300 * SCALE)),
+                      seeds=max(2, round(10 * SCALE)), episodes=max(4, round(300 * SCALE)),
                       rewards="goal-only", progress=True)
     print(cmp.summary())

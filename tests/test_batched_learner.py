@@ -11,13 +11,9 @@ from learning.plain.learner import LearnerError
 from scenarios import api
 from scenarios.runs.physics_batch import plan_tasks
 from scenarios.sweep.run import make_specs
+from tests.plain_learners import differing
 
 BATCHED = "tests.plain_learners.st_ql_batched:STQLBatched"
-NAMING = ("key", "method", "method_name", "config", "wall_time_s", "wall_time_per_episode_s")
-
-
-def _same(a, b) -> list[str]:
-    return [k for k in a if k not in NAMING and a[k] != b.get(k)]
 
 
 def test_a_batched_port_of_st_ql_equals_compiled_st_ql_in_grid_and_physics():
@@ -25,7 +21,7 @@ def test_a_batched_port_of_st_ql_equals_compiled_st_ql_in_grid_and_physics():
                       episodes=20, jobs=1)
     for world in ("grid", "physics"):
         for ours, theirs in zip(cmp.of("st-ql", world), cmp.of(BATCHED, world), strict=True):
-            assert _same(dict(ours.record), dict(theirs.record)) == []
+            assert differing(dict(ours.record), dict(theirs.record)) == []
             assert np.array_equal(ours.policy, theirs.policy)
     assert cmp.of(BATCHED, "grid")[0].method_name == "ST-QL (numpy, batched)"
 

@@ -12,13 +12,9 @@ import pytest
 
 from learning.plain.learner import LearnerError
 from scenarios import api
+from tests.plain_learners import differing
 
 JIT = "tests.plain_learners.st_ql_jit:STQLJit"
-NAMING = ("key", "method", "method_name", "config", "wall_time_s", "wall_time_per_episode_s")
-
-
-def _same(a, b) -> list[str]:
-    return [k for k in a if k not in NAMING and a[k] != b.get(k)]
 
 
 def test_a_jitclass_port_of_st_ql_equals_compiled_st_ql_in_grid_and_physics():
@@ -26,7 +22,7 @@ def test_a_jitclass_port_of_st_ql_equals_compiled_st_ql_in_grid_and_physics():
                       episodes=20, jobs=1)
     for world in ("grid", "physics"):
         for ours, theirs in zip(cmp.of("st-ql", world), cmp.of(JIT, world), strict=True):
-            assert _same(dict(ours.record), dict(theirs.record)) == []
+            assert differing(dict(ours.record), dict(theirs.record)) == []
             assert np.array_equal(ours.policy, theirs.policy)
 
 

@@ -46,6 +46,7 @@ from learning.plain.batched import (
     OneRun,
     actions_of,
     check_batched,
+    check_methods,
     is_batched,
 )
 from learning.plain.compiled import is_jit_learner
@@ -129,17 +130,8 @@ def check_learner(cls: Any, where: str | None = None) -> None:
                          f"{cls.__name__}(n_states, n_actions, rng)") from None
     except ValueError:  # no signature to read (a builtin): let the first run say
         pass
-    for meth, n in (("act", 1), ("update", 5), ("greedy", 1)):
-        try:
-            inspect.signature(getattr(cls, meth)).bind(None, *range(n))
-        except TypeError:
-            raise ValueError(f"{label}.{meth} must take (self, {_PARAMS[meth]})") from None
-        except ValueError:
-            pass
-
-
-_PARAMS = {"act": "state", "greedy": "state",
-           "update": "state, action, reward, next_state, terminal"}
+    check_methods(cls, label, {"act": "state", "greedy": "state",
+                               "update": "state, action, reward, next_state, terminal"})
 
 
 def plain_config(cls: Any, where: str) -> type[PlainConfig]:

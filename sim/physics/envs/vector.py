@@ -46,9 +46,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from sim.env_args import (
-    INTEGER_KINDS,
     SCENARIO_REWARDS,
-    check_num_envs,
     config_arg,
     discrete_actions,
     env_scenario,
@@ -58,6 +56,11 @@ from sim.env_args import (
 from sim.grid.env import start_state_from_options, starts_option
 from sim.physics.envs.diffdrive import DIFFDRIVE_CONFIG, DiffDriveEnv, diffdrive_periods
 from sim.physics.envs.route import PhysicsRouteEnv
+from sim.physics.envs.vector_args import (
+    reset_mask_option,
+    sub_env_seeds,
+    vector_setup,
+)
 from sim.physics.fidelity import Fidelity
 from sim.physics.kernel.batch import RouteBatch
 from sim.physics.reference.world import SharedSpace
@@ -66,16 +69,6 @@ from sim.scenario import Rewards, Scenario
 
 INFO_KEYS = ("state", "bumped", "reached", "timeout", "steps", "contacts", "pose", "time_s")
 MASK_KEYS = tuple(f"_{k}" for k in INFO_KEYS)
-
-
-def autoreset_mode_arg(mode: AutoresetMode | str) -> AutoresetMode:
-    """One of gymnasium's :class:`AutoresetMode` (or its value, ``"NextStep"``, ...)."""
-    try:
-        return AutoresetMode(mode)
-    except ValueError:
-        raise ValueError(f"autoreset_mode must be one of "
-                         f"{', '.join(repr(m.value) for m in AutoresetMode)} (gymnasium."
-                         f"vector.AutoresetMode), got {mode!r}") from None
 
 
 def stack_infos(per_env: list[dict[str, Any] | None], n: int) -> dict[str, Any]:
@@ -111,50 +104,6 @@ def final_infos(infos: dict[str, Any], obs: np.ndarray, ended: np.ndarray
             final_info[k][ended] = v[ended]
     return {"final_obs": final_obs, "_final_obs": ended.copy(),
             "final_info": final_info, "_final_info": ended.copy()}
-
-
-def sub_env_seeds(seed: int | list[int | None] | None, n: int) -> list[int | None]:
-    """Gymnasium's rule: an int seeds sub-env i with seed + i; a list gives one per sub-env."""
-    if seed is None:
-        return [None] * n
-    if isinstance(seed, int):
-        return [seed + i for i in range(n)]
-    seeds = list(seed)
-    if len(seeds) != n:
-        raise ValueError(f"{len(seeds)} seeds for {n} sub-envs")
-    return seeds
-
-
-def reset_mask_option(options: dict[str, Any], n: int) -> np.ndarray:
-    """Pop ``reset(options={"reset_mask": m})``: bool[n], the sub-envs to reset (every one
-    without the option). ``m`` holds exactly ``n`` booleans (or 0/1 integers); a shorter
-    or longer mask (numpy would broadcast it), a float or a 2 (which a cast calls True) is
-    an error."""
-    if "reset_mask" not in options:
-        return np.ones(n, bool)
-    value = options.pop("reset_mask")
-    try:
-        m = np.asarray(value)
-    except (TypeError, ValueError):  # a ragged list
-        m = np.asarray(None)
-    if not (m.shape == (n,) and (m.dtype == bool or (m.dtype.kind in INTEGER_KINDS
-                                                     and ((m == 0) | (m == 1)).all()))):
-        raise ValueError(f"options['reset_mask'] must be {n} booleans (bool[{n}], or 0/1 "
-                         f"integers), one per sub-env, got {value!r}; pass e.g. "
-                         f"np.ones({n}, dtype=bool)")
-    return m.astype(bool)
-
-
-def _vector_setup(env: Any, num_envs: int, render_mode: str | None,
-                  autoreset_mode: AutoresetMode | str) -> int:
-    """What both vector envs check and set first: no rendering, a bounded batch (returned
-    as an int), the autoreset mode in the env's metadata."""
-    if render_mode is not None:
-        raise ValueError(f"{type(env).__name__} does not render; use the single env")
-    num_envs = check_num_envs(num_envs)
-    env.metadata = {**type(env).metadata, "autoreset_mode": autoreset_mode_arg(autoreset_mode)}
-    env.num_envs = num_envs
-    return num_envs
 
 
 class PhysicsRouteVectorEnv(VectorEnv):
@@ -201,7 +150,7 @@ class PhysicsRouteVectorEnv(VectorEnv):
                  trajectories: bool = False, rewards: str | Rewards = SCENARIO_REWARDS,
                  steps_per_episode: int | None = None, start: str | int = "S",
                  contact_records: bool = True, lean_infos: bool = False) -> None:
-        num_envs = _vector_setup(self, num_envs, render_mode, autoreset_mode)
+        num_envs = vector_setup(self, num_envs, render_mode, autoreset_mode)
         self.lean_infos = bool(lean_infos)
         # the single env's arguments, resolved as it resolves them (it builds no world
         # until reset): sub-env i is PhysicsRouteEnv with the same kwargs
@@ -382,7 +331,7 @@ class DiffDriveVectorEnv(VectorEnv):
                  fidelity: Fidelity | str | None = None,
                  rewards: str | Rewards = SCENARIO_REWARDS,
                  steps_per_episode: int | None = None, start: str | int = "S") -> None:
-        num_envs = _vector_setup(self, num_envs, render_mode, autoreset_mode)
+        num_envs = vector_setup(self, num_envs, render_mode, autoreset_mode)
         sc = env_scenario(scenario, rewards)
         self.config = config_arg(config, DIFFDRIVE_CONFIG)
         self.shared = SharedSpace(sc, self.config)

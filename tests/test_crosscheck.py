@@ -51,7 +51,7 @@ def test_the_noise_calibration_gives_the_per_wheel_models_period_variances():
     rng = np.random.default_rng(0)
     e = rng.standard_normal((200_000, 2))
     for v, w in ((0.5, 0.0), (0.0, 2.0), (0.3, 1.0)):
-        got = np.array([wheel_twist(v, 0.0, w, 0.0, el, er, sigma, base)
+        got = np.array([wheel_twist(v, 0.0, w, 0.0, 0.0, 0.0, 0.0, el, er, sigma, base)
                         for el, er in e[:40_000]])
         var_v, var_w = got[:, 0].var(), got[:, 2].var()
         assert var_v == pytest.approx((a0 * v * v + a1 * w * w) / SUBSTEPS, rel=0.03)

@@ -94,19 +94,24 @@ def test_the_bias_is_drawn_once_per_run_from_the_physics_stream():
 
 
 def _biased_kinematics(pose, cmds, gains, base, period):
-    """The diff drive's discrete kinematics, written out: each command's twist as the biased
-    wheels deliver it along the heading at its period's start; a period's step integrates
-    the twist the last one left (positions first, as Chipmunk does)."""
+    """The diff drive's kinematics, written out: each command's twist as the biased wheels
+    deliver it, held for one period along its continuous arc (the unicycle integrated in
+    closed form), from the step after the command (the joints hand a twist on one step
+    late, as Chipmunk's solve does; one step per period here)."""
     g_l, g_r, e_b = gains
     x, y, th = pose
-    vx = vy = w = 0.0
+    v = w = 0.0
     for cvx, cvy, cw in cmds:
-        v = math.hypot(cvx, cvy)
-        v_l, v_r = (v - 0.5 * cw * base) * g_l, (v + 0.5 * cw * base) * g_r
+        speed = math.hypot(cvx, cvy)
+        v_l, v_r = (speed - 0.5 * cw * base) * g_l, (speed + 0.5 * cw * base) * g_r
         nv, nw = 0.5 * (v_l + v_r), (v_r - v_l) / (base * e_b)
-        nvx, nvy = nv * math.cos(th), nv * math.sin(th)
-        x, y, th = x + vx * period, y + vy * period, th + w * period
-        vx, vy, w = nvx, nvy, nw
+        if w == 0.0:
+            x, y = x + v * period * math.cos(th), y + v * period * math.sin(th)
+        else:
+            x += (v / w) * (math.sin(th + w * period) - math.sin(th))
+            y -= (v / w) * (math.cos(th + w * period) - math.cos(th))
+        th += w * period
+        v, w = nv, nw
     return x, y, th
 
 
@@ -137,8 +142,9 @@ def test_a_biased_open_loop_drive_follows_the_diff_drive_kinematics():
 def test_open_loop_end_pose_spread_is_the_wheel_noise_propagated_through_the_drive():
     """Per-period wheel noise sigma: heading variance T^2 sum 2 sigma^2 u_k^2 / b^2, along-
     track T^2 sum sigma^2 u_k^2 / 2, lateral the heading errors carried over the rest of
-    the drive (a command's direction is the heading at its period's start, which holds the
-    yaw of the periods up to two before: the step integrates the last solve's twist)."""
+    the drive: a period's yaw error turns the chord of its own period by half of it and
+    every later period's by all of it (each twist is held along its arc, from the step
+    after its command)."""
     sigma, n = 0.05, 2000
     b = _batch(f"wheel_noise={sigma},open_loop=true", n, seed=2)
     out = b.step(np.full(n, RIGHT))
@@ -147,7 +153,7 @@ def test_open_loop_end_pose_spread_is_the_wheel_noise_propagated_through_the_dri
     u = _drive_profile()
     T, base = PhysicsConfig().control_period_s, OPEN.robot.wheel_base_m
     var_yaw = (T * u) ** 2 * 2 * sigma**2 / base**2  # of each period's yaw
-    after = np.array([T * u[k + 2:].sum() for k in range(u.size)])  # distance it steers
+    after = np.array([T * (0.5 * u[k] + u[k + 1:].sum()) for k in range(u.size)])
     want = {"heading": math.sqrt(var_yaw.sum()),
             "along": math.sqrt(((T * u) ** 2 * sigma**2 / 2).sum()),
             "lateral": math.sqrt((var_yaw * after**2).sum())}

@@ -18,6 +18,7 @@ from sim.physics.drive_profiles import DriveLimits, profiles
 from sim.physics.motion import (
     at_target,
     cell_of,
+    held_twist_velocity,
     lag_wheel,
     plan_commands,
     slip_step,
@@ -44,11 +45,39 @@ def test_a_delivered_twist_is_each_wheel_scaled_then_recombined():
     vl, vr = 0.3 - 0.5 * 0.4 * BASE, 0.3 + 0.5 * 0.4 * BASE  # 0.2, 0.4
     vl_true, vr_true = vl * (1 + sigma * el) * gl, vr * (1 + sigma * er) * gr
     v, w = (vl_true + vr_true) / 2, (vr_true - vl_true) / (k * BASE)
-    got = wheel_twist(0.3 * math.cos(heading), 0.3 * math.sin(heading), 0.4, heading, el, er,
-                      sigma, BASE, gl, gr, k)
+    got = wheel_twist(0.3 * math.cos(heading), 0.3 * math.sin(heading), 0.4, heading, 0.0,
+                      0.0, 0.0, el, er, sigma, BASE, gl, gr, k)
     assert got == pytest.approx((v * math.cos(heading), v * math.sin(heading), w), rel=1e-12)
     # with no noise and unit gains the command comes back as it was sent
-    assert wheel_twist(0.3, 0.0, 0.4, 0.0, el, er, 0.0, BASE) == pytest.approx((0.3, 0.0, 0.4))
+    assert wheel_twist(0.3, 0.0, 0.4, 0.0, 0.0, 0.0, 0.0, el, er, 0.0, BASE) == pytest.approx(
+        (0.3, 0.0, 0.4))
+
+
+def test_a_held_twist_moves_along_its_arcs_chord():
+    """v = 0.4 m/s, w = 0.8 rad/s held for T = 0.5 s from heading 0.3, the robot yawing
+    0.2 rad/s for the step of dt = 0.1 s before the twist reaches it: the arc turns from
+    0.3 + 0.02 through 0.4 rad; its chord is 2 (v/w) sin(0.2) long, pointing at 0.52."""
+    vx, vy = held_twist_velocity(0.4, 0.8, 0.3, 0.2, 0.1, 0.5)
+    chord = 2.0 * (0.4 / 0.8) * math.sin(0.2)  # [m], travelled in T
+    assert (vx * 0.5, vy * 0.5) == pytest.approx(
+        (chord * math.cos(0.52), chord * math.sin(0.52)), rel=1e-12)
+    # the chord's end is the arc's end: x = (v/w)(sin(th1) - sin(th0)), as integrated
+    th0, th1 = 0.32, 0.72
+    assert vx * 0.5 == pytest.approx((0.4 / 0.8) * (math.sin(th1) - math.sin(th0)), rel=1e-12)
+    assert vy * 0.5 == pytest.approx(-(0.4 / 0.8) * (math.cos(th1) - math.cos(th0)), rel=1e-12)
+    # a straight drive is the straight line's arithmetic, bit for bit
+    assert held_twist_velocity(0.4, 0.0, 0.3, 0.0, 0.1, 0.5) == (
+        0.4 * math.cos(0.3), 0.4 * math.sin(0.3))
+
+
+def test_a_blind_biased_drive_ends_on_its_continuous_arc():
+    """A noise-free open-loop drive of one cell with a per-run wheel-ratio bias, in the
+    batched kernel: its cross-track error equals the continuous arc's, (1 - cos(k L)) / k,
+    to 1e-6 of it (the study's figure, :func:`blind_arc`, on 16 robots)."""
+    from scenarios.studies.ladder.primitives import blind_arc
+
+    lo, median, hi = (blind_arc(16, 3)["cross_track_over_arc"][i] for i in (1, 0, 2))
+    assert abs(median - 1.0) < 1e-6 and abs(lo - 1.0) < 1e-6 and abs(hi - 1.0) < 1e-6
 
 
 def test_the_lag_is_a_first_order_filter():

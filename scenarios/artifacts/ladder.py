@@ -262,14 +262,19 @@ def primitives_table(d: dict[str, Any]) -> str:
     arc = d.get("blind_arc")
     if arc:
         q = arc["cross_track_over_arc"]
-        note += (f"\n\nA blind drive curves less than the arc it stands for: a noise-free "
-                 f"open-loop drive of {arc['length_m']:g} m with a per-run wheel-ratio bias "
-                 f"ends {q[0]:.2f} [{q[1]:.2f}, {q[2]:.2f}] of the continuous arc's cross-track "
-                 f"error ({arc['robots']} robots, median [quartiles]): each period's twist "
-                 "follows the heading at the period's start, one physics step late, as "
-                 "Chipmunk steps a velocity set once per period. Open-loop figures are "
-                 "therefore optimistic by that much; with feedback the controller corrects "
-                 "it within the primitive.")
+        on_arc = all(abs(v - 1.0) <= 0.01 for v in q)
+        note += (f"\n\nA blind drive {'ends on' if on_arc else 'curves less than'} the arc it "
+                 f"stands for: a noise-free open-loop drive of {arc['length_m']:g} m with a "
+                 f"per-run wheel-ratio bias ends {q[0]:.2f} [{q[1]:.2f}, {q[2]:.2f}] of the "
+                 f"continuous arc's cross-track error ({arc['robots']} robots, median "
+                 "[quartiles]). ")
+        note += ("Each period's twist is held along the chord of the arc it turns through, "
+                 "from the step the joints hand it on (`sim.physics.motion."
+                 "held_twist_velocity`), so a held twist ends each period on its arc."
+                 if on_arc else
+                 "Each period's twist follows the heading at the period's start, one physics "
+                 "step late: open-loop figures are optimistic by that much; with feedback the "
+                 "controller corrects it within the primitive.")
     return head + "\n".join(lines) + note + "\n"
 
 

@@ -39,26 +39,28 @@ def twist_to_wheels(v_m_s: float, omega_rad_s: float,
 
 
 @njit(cache=True)
-def wheel_twist(vx: float, vy: float, omega: float, heading: float, e_left: float,
-                e_right: float, wheel_noise: float, wheel_base_m: float,
-                gain_left: float = 1.0, gain_right: float = 1.0, base_k: float = 1.0
-                ) -> tuple[float, float, float]:
+def wheel_twist(vx: float, vy: float, omega: float, heading: float, w_now: float, dt_s: float,
+                period_s: float, e_left: float, e_right: float, wheel_noise: float,
+                wheel_base_m: float, gain_left: float = 1.0, gain_right: float = 1.0,
+                base_k: float = 1.0) -> tuple[float, float, float]:
     """A commanded twist as a diff drive delivers it above ``exact``: each wheel's speed times
     ``1 + wheel_noise * e`` (``e_left``, ``e_right`` the robot's next two normals) and its
     per-run gain (``gain_left``, ``gain_right``: the wheel-diameter bias), yawing about the
     true wheelbase (``base_k`` times the nominal one the command was computed with), and the
-    motion along the robot's ``heading`` [rad] (a diff drive cannot move sideways). With
-    gains and ``base_k`` 1 the arithmetic is the unbiased one, bit for bit."""
+    motion along the arc the robot turns through while the twist is held
+    (:func:`held_twist_velocity`: from ``heading`` [rad], yawing ``w_now`` [rad/s] now; a
+    diff drive cannot move sideways). With gains and ``base_k`` 1 the arithmetic is the
+    unbiased one, bit for bit."""
     vl, vr = twist_to_wheels(math.hypot(vx, vy), omega, wheel_base_m)
-    return wheels_twist(vl, vr, heading, e_left, e_right, wheel_noise, wheel_base_m,
-                        gain_left, gain_right, base_k, 1.0, 1.0)
+    return wheels_twist(vl, vr, heading, w_now, dt_s, period_s, e_left, e_right, wheel_noise,
+                        wheel_base_m, gain_left, gain_right, base_k, 1.0, 1.0)
 
 
 @njit(cache=True, inline="always")
-def wheels_twist(vl: float, vr: float, heading: float, e_left: float, e_right: float,
-                 wheel_noise: float, wheel_base_m: float, gain_left: float, gain_right: float,
-                 base_k: float, slip_left: float, slip_right: float
-                 ) -> tuple[float, float, float]:
+def wheels_twist(vl: float, vr: float, heading: float, w_now: float, dt_s: float,
+                 period_s: float, e_left: float, e_right: float, wheel_noise: float,
+                 wheel_base_m: float, gain_left: float, gain_right: float, base_k: float,
+                 slip_left: float, slip_right: float) -> tuple[float, float, float]:
     """:func:`wheel_twist` from the wheels' speeds [m/s] the motors drive (after any lag),
     each also times its slip factor (1: no slip)."""
     if wheel_noise > 0.0:
@@ -72,7 +74,40 @@ def wheels_twist(vl: float, vr: float, heading: float, e_left: float, e_right: f
         vr *= gain_right
         wheel_base_m *= base_k
     v, w = wheels_to_twist(vl, vr, wheel_base_m)
-    return v * math.cos(heading), v * math.sin(heading), w
+    vx, vy = held_twist_velocity(v, w, heading, w_now, dt_s, period_s)
+    return vx, vy, w
+
+
+@njit(cache=True, inline="always")
+def held_twist_velocity(v: float, w: float, heading: float, w_now: float, dt_s: float,
+                        period_s: float) -> tuple[float, float]:
+    """The world-frame velocity [m/s] that, held for a control period, moves the robot along
+    the chord of the arc a twist (``v`` [m/s], ``w`` [rad/s]) turns through: so a held twist
+    ends every period on its continuous arc, exactly.
+
+    Why a chord: both worlds step a body velocity set once per period (Chipmunk does not turn
+    a linear velocity with the body), and the joints hand the new twist to the robot one
+    physics step late, so it is driven from the step after the command, while the robot is
+    still yawing ``w_now`` for that step. Its heading then runs from ``heading + w_now dt_s``
+    over ``w period_s``; the chord of that arc points half-way through it and is
+    ``sinc(w period_s / 2)`` of the arc's length. ``period_s`` 0: the velocity of the instant
+    (no turn within the period). With ``w`` and ``w_now`` 0 the arithmetic is the straight
+    line's, bit for bit."""
+    if w != 0.0 or w_now != 0.0:
+        half = 0.5 * w * period_s
+        heading = heading + w_now * dt_s + half
+        if half != 0.0:
+            v *= math.sin(half) / half
+    return v * math.cos(heading), v * math.sin(heading)
+
+
+@njit(cache=True, inline="always")
+def arc_of_chord(chord_m: float, yaw_rad: float) -> float:
+    """The length [m] of the arc that turns through ``yaw_rad`` between the ends of a chord
+    ``chord_m`` long: what the wheels travelled on a step that :func:`held_twist_velocity`
+    drove along the chord (the encoders read the arc)."""
+    half = 0.5 * yaw_rad
+    return chord_m if half == 0.0 else chord_m * half / math.sin(half)
 
 
 @njit(cache=True, inline="always")

@@ -13,7 +13,8 @@ pose from move to move as the rung says, on each map and at each rung. Per (map,
   replay error" of the reality-gap literature, one primitive at a time);
 - (once) how a blind drive curves: a noise-free open-loop drive of one cell with a per-run
   wheel bias, its cross-track error against the continuous arc's of the same curvature
-  (each period's twist follows the heading at the period's start, as Chipmunk steps it);
+  (1 when each period's twist is held along its arc, as
+  :func:`sim.physics.motion.held_twist_velocity` drives it);
 - the bumper re-firing: P(a move bumps | the move before it bumped), against P(it bumps |
   the move before did not), and against the grid's count (the share of those moves the
   grid itself blocks, from the cell the robot is in). ``noisy`` is also run with

@@ -60,6 +60,7 @@ from sim.physics.kernel.wheels import deliver
 from sim.physics.motion import (
     SETTLE_M_S,
     Leg,
+    arc_of_chord,
     at_target,
     cell_of,
     leg_command,
@@ -215,9 +216,10 @@ def advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g
                         vx, vy, w = deliver(rb, p, vx, vy, w, e_left, e_right, z_left,
                                             z_right)
                     else:
-                        vx, vy, w = wheel_twist(vx, vy, w, rb.th, e_left, e_right,
-                                                p.wheel_noise, p.wheel_base_m, rb.gain_l,
-                                                rb.gain_r, rb.base_k)
+                        vx, vy, w = wheel_twist(vx, vy, w, rb.th, rb.w, p.dt, p.period,
+                                                e_left, e_right, p.wheel_noise,
+                                                p.wheel_base_m, rb.gain_l, rb.gain_r,
+                                                rb.base_k)
                 rb.cvx, rb.cvy, rb.cw = vx, vy, w
                 rb.cmd_set = k
             while rb.sub < p.substeps:
@@ -248,7 +250,8 @@ def advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g
                     integrate(rb, vx, vy, p)
                     check = hit  # the sweep met a surface: ask Chipmunk
                     if p.localisation:  # the wheels turned (a hold slides them; below)
-                        moved, yaw = math.hypot(vx, vy) * p.dt, rb.th - rb.pth
+                        yaw = rb.th - rb.pth  # the wheels turned the arc, not the chord
+                        moved = arc_of_chord(math.hypot(vx, vy) * p.dt, yaw)
                         rb.odo_d += moved
                         rb.odo_th += yaw
                     if held and _rest(rb, p, g, s, depth0):

@@ -39,5 +39,5 @@ def deliver(rb, p, vx, vy, w, e_left, e_right, z_left, z_right):
                                       p.slip_fraction)
         f_right, rb.slip_r = slip_step(rb.slip_r, z_right, p.slip_p, p.slip_duration_s,
                                        p.period, p.slip_fraction)
-    return wheels_twist(vl, vr, rb.th, e_left, e_right, p.wheel_noise, p.wheel_base_m,
-                        rb.gain_l, rb.gain_r, rb.base_k, f_left, f_right)
+    return wheels_twist(vl, vr, rb.th, rb.w, p.dt, p.period, e_left, e_right, p.wheel_noise,
+                        p.wheel_base_m, rb.gain_l, rb.gain_r, rb.base_k, f_left, f_right)

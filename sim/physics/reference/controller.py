@@ -88,6 +88,7 @@ class PrimitiveController:
                 "kernel and are tested against their analytic models (tests/test_ladder_knobs.py)")
         period = config.control_period_s
         self._period = period
+        self._dt = config.dt_s
         self._keep = lag_keep(fid, period)
         self._delay = delay_periods(fid, period)
         self._slip_p = slip_start_probability(fid, period)
@@ -113,8 +114,9 @@ class PrimitiveController:
         The fidelity's rules (the reference of :func:`sim.physics.kernel.primitive.advance`):
 
         - wheel noise: each control period's twist is delivered by :func:`wheel_twist` with
-          the next two normals of ``rng`` (left, right), along the heading at the period's
-          start; every step is guarded by its own cast (:meth:`PhysicsWorld.before_step`);
+          the next two normals of ``rng`` (left, right), along the chord of the arc it turns
+          through (:func:`sim.physics.motion.held_twist_velocity`); every step is guarded by
+          its own cast (:meth:`PhysicsWorld.before_step`);
         - carried pose: a contact stops the robot where it is, at rest, resting against the
           surface (``world.resting``); see :meth:`_held_step` for the steps that follow.
           Without it a bump places the robot back on its start cell's centre; above
@@ -179,7 +181,8 @@ class PrimitiveController:
                 z = rng.standard_normal(2) if fid.slips else (0.0, 0.0)
                 world.set_twist(*self._deliver(world, vx, vy, w, e, z))
             else:
-                world.set_twist(*wheel_twist(vx, vy, w, world.pose[2], e[0], e[1], sigma,
+                world.set_twist(*wheel_twist(vx, vy, w, world.pose[2], world.velocity[2],
+                                             self._dt, self._period, e[0], e[1], sigma,
                                              base))
             turning = 0 < nturn and k <= nturn  # the turn and the stop after it
             if self._steps(world, turning, sub, traj):
@@ -228,7 +231,8 @@ class PrimitiveController:
             f_right, wheels.slip_right = slip_step(wheels.slip_right, z[1], self._slip_p,
                                                    fid.slip_duration_s, self._period,
                                                    fid.slip_fraction)
-        return wheels_twist(vl, vr, world.pose[2], e[0], e[1], fid.wheel_noise, base, 1.0, 1.0,
+        return wheels_twist(vl, vr, world.pose[2], world.velocity[2], self._dt, self._period,
+                            e[0], e[1], fid.wheel_noise, base, 1.0, 1.0,
                             1.0, f_left, f_right)
 
     def _held_step(self, world: PhysicsWorld, turning: bool) -> bool:

@@ -60,3 +60,47 @@ def test_a_jitclass_answering_no_action_fails_the_run_naming_it():
     assert numba is not None
     with pytest.raises(LearnerError, match=r"Four\.act\(\d+\) returned 4, not an action"):
         api.train("paper-40", method=Four, episodes=3)
+
+
+_BROKEN = '''
+import numpy as np
+from numba import types
+from numba.experimental import jitclass
+
+
+@jitclass([("q", types.float64[:, :])])
+class Broken:
+    def __init__(self, n_states, n_actions, rng):
+        self.q = np.zeros((n_states, n_actions))
+
+    def act(self, s):
+        return self.q[s].no_such_thing()
+
+    def update(self, s, a, r, s2, terminal):
+        pass
+
+    def greedy(self, s):
+        return 0
+'''
+
+
+def test_a_jitclass_that_does_not_compile_is_refused_up_front_in_one_line(tmp_path):
+    """Before any run: one line with numba's reason and the learner's own file and line,
+    exit 2 from the command (not numba's page of typing traces, not a failed run)."""
+    import subprocess
+    import sys
+
+    (tmp_path / "brokenjit.py").write_text(_BROKEN)
+    env = dict(os.environ, PYTHONPATH=f"{tmp_path}{os.pathsep}"
+               f"{os.environ.get('PYTHONPATH', '')}")
+    out = subprocess.run([sys.executable, "-m", "scenarios.cli", "train", "paper-40",
+                          "--method", "brokenjit:Broken", "--episodes", "3"],
+                         capture_output=True, text=True, env=env, timeout=300,
+                         cwd=Path(__file__).resolve().parent.parent)
+    assert out.returncode == 2, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1, out.stderr
+    assert "brokenjit:Broken does not compile" in lines[0]
+    assert "no_such_thing" in lines[0] and f"{tmp_path / 'brokenjit.py'}:13" in lines[0]
+    assert "Fix: fix the class" in lines[0]
+    assert "Broken on paper-40" not in out.stdout  # refused before the run was announced

@@ -13,16 +13,21 @@ run's ``rng`` as a field (``numba.typeof(np.random.default_rng())``); numba draw
 same stream as Python, so a port that draws what a compiled method draws runs the same run.
 
 An action out of range stops the loop and is reported as the run's failure (numba does
-not check indices: an action of 4 would read another row's memory).
+not check indices: an action of 4 would read another row's memory). A class that does not
+compile is refused before any run (:func:`check_compiles`), in one line that names its
+file and line (:func:`compile_message`), not numba's page of typing traces.
 """
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
 from types import FunctionType
 from typing import Any
 
 import numpy as np
 from numba import njit
+from numba.core.errors import NumbaError
 
 
 def is_jitclass(cls: Any) -> bool:
@@ -189,3 +194,68 @@ def greedy_table(learner: Any, n_states: int,
     out = np.empty(n_states, dtype=np.int64)
     bad_s, bad_a = _read(_table)(learner, int(n_states), int(n_actions), out)
     return out, int(bad_s), int(bad_a)
+
+
+# ------------------------------------------------------------------ a class that does not compile
+
+_HERE = str(Path(__file__).resolve().parent)
+_BOILERPLATE = ("Failed in ", "- Resolution failure", "During:", "None", "<source elided>")
+_AT = re.compile(r" at (\S+) \((\d+)\)$")
+
+
+def compile_message(exc: NumbaError) -> str:
+    """numba's typing or lowering error as one line: the first thing it says is wrong, and
+    the first place in the learner's own code it points at (``at FILE:LINE``)."""
+    what, where, in_source = "", "", False
+    for raw in str(exc).splitlines():
+        line = raw.strip()
+        if line.startswith("File "):
+            in_source = True  # the source excerpt that follows, up to a blank line
+        elif not line:
+            in_source = False
+        elif in_source:
+            continue
+        elif line.startswith("During:"):
+            m = _AT.search(line)
+            if m and not where and not m.group(1).startswith(_HERE):
+                where = f" at {m.group(1)}:{m.group(2)}"
+        elif not what and not line.startswith(_BOILERPLATE):
+            what = line
+    return (what or type(exc).__name__) + where
+
+
+def check_compiles(cls: Any, label: str) -> None:
+    """Build ``cls`` on a two-cell arena and compile every loop it runs in (the episodes, the
+    greedy walk and table), doing no work: a ValueError in one line when numba refuses it,
+    before any run starts. The arrays have the dtypes of the grid model
+    (:class:`learning.geometry.TabularMDP`) and the drivers' episode logs, so the runs reuse
+    what this compiled (``cache=False``: in this process only)."""
+    try:
+        learner = cls(2, 4, np.random.default_rng(0))
+    except NumbaError as exc:
+        raise ValueError(f"{label}(n_states, n_actions, rng) does not compile as a "
+                         f"@jitclass: {compile_message(exc)}") from None
+    except Exception as exc:
+        raise ValueError(f"{label}(2, 4, rng) raised {type(exc).__name__}: {exc}") from None
+    nxt, terminal = np.zeros((2, 4), np.int32), np.zeros(2, np.bool_)
+    try:
+        run_episodes(learner, _NoModel(nxt, np.zeros((2, 4)), terminal,
+                                       np.zeros(1, np.int32), 0),
+                     0, np.random.default_rng(0),
+                     {"steps": np.zeros(0, np.int32), "returns": np.zeros(0),
+                      "success": np.zeros(0, np.bool_)}, 0, np.zeros((0, 1), np.int32))
+        greedy_walk(learner, nxt, terminal, 0, 0)
+        greedy_table(learner, 0, 4)
+    except NumbaError as exc:
+        raise ValueError(f"{label} does not compile in the training loop: "
+                         f"{compile_message(exc)}; a @jitclass's act, update and greedy must "
+                         "type under numba (numba.readthedocs.io, 'Supported Python "
+                         "features')") from None
+
+
+class _NoModel:
+    """A model to compile against: the loop's arrays, no episodes to run."""
+
+    def __init__(self, next_state, reward, terminal, start_states, max_steps):
+        self.next_state, self.reward, self.terminal = next_state, reward, terminal
+        self.start_states, self.max_steps = start_states, max_steps

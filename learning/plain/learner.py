@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
+from numba.core.errors import NumbaError
 
 from learning.config import MethodConfig
 from learning.geometry import Geometry
@@ -109,9 +110,23 @@ def known_class(where: str) -> type | None:
     return _CLASSES.get(where)
 
 
+class LearnerClassError(ValueError):
+    """A learner class that cannot run as a plain learner (found, but not to the protocol):
+    its fix is in the class, not in the name that found it."""
+
+
 def check_learner(cls: Any, where: str | None = None) -> None:
-    """Refuse what cannot run as a plain learner, saying what is missing and how to add it."""
-    label = where or getattr(cls, "__qualname__", repr(cls))
+    """Refuse what cannot run as a plain learner, saying what is missing and how to add it
+    (a :class:`LearnerClassError`)."""
+    try:
+        _check_learner(cls, where or getattr(cls, "__qualname__", repr(cls)))
+    except LearnerClassError:
+        raise
+    except ValueError as exc:
+        raise LearnerClassError(str(exc)) from None
+
+
+def _check_learner(cls: Any, label: str) -> None:
     if not isinstance(cls, type):
         raise ValueError(f"{label} is not a class: a plain learner is a class built as "
                          "Cls(n_states, n_actions, rng) with act, update and greedy")
@@ -132,6 +147,8 @@ def check_learner(cls: Any, where: str | None = None) -> None:
         pass
     check_methods(cls, label, {"act": "state", "greedy": "state",
                                "update": "state, action, reward, next_state, terminal"})
+    if compiled.is_jitclass(cls):
+        compiled.check_compiles(cls, label)
 
 
 def plain_config(cls: Any, where: str) -> type[PlainConfig]:
@@ -140,7 +157,7 @@ def plain_config(cls: Any, where: str) -> type[PlainConfig]:
         check_learner(cls, where)
         eps = float(getattr(cls, "eps", PAPER_EPS))
         if not 0.0 <= eps <= 1.0:
-            raise ValueError(f"{where}.eps = {eps!r} must be in [0, 1] (the epsilon of the "
+            raise LearnerClassError(f"{where}.eps = {eps!r} must be in [0, 1] (the epsilon of the "
                              "paper's epsilon-greedy test)")
         name = str(getattr(cls, "name", cls.__name__))
         _CONFIGS[where] = dataclass(frozen=True)(type(
@@ -184,6 +201,9 @@ def learner_calls(learner: Any) -> Iterator[None]:
         raise
     except LearnerAnswerError as exc:  # a batched learner's answer, checked by actions_of
         raise LearnerError(f"{learner_label(learner)}.act_batch {exc}") from None
+    except NumbaError as exc:  # a @jitclass that numba refuses (check_compiles: up front)
+        raise LearnerError(f"{learner_label(learner)} does not compile: "
+                           f"{compiled.compile_message(exc)}") from None
     except SystemExit as exc:
         raise LearnerError(f"{learner_label(learner)} called sys.exit({exc.code!r}) "
                            f"{_where(exc)}; a learner must not exit") from None

@@ -30,6 +30,7 @@ from learning.metrics import (
     optimal_test_fraction,
     reward_per_step,
 )
+from learning.plain.learner import LearnerClassError
 from scenarios.runs.results import quantile
 from sim.errors import InputError
 from sim.grid import TabularModel, build_model
@@ -176,6 +177,10 @@ def method_class(method: str) -> type:
     method's config or a plain-Python learner: :func:`learning.methods.registry.config_class`)."""
     try:
         return config_class(method)
+    except LearnerClassError as exc:  # found, but not to the protocol: the class is the fix
+        raise ExperimentError(CONFIG, "method", str(exc).removesuffix("."),
+                              "fix the class to the protocol docs/python-api.md gives for a "
+                              "learner of your own") from None
     except ValueError as exc:
         raise ExperimentError(CONFIG, "method", str(exc).removesuffix("."),
                               "name a method of docs/methods.md (rnhql train --help lists "

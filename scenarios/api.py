@@ -46,6 +46,7 @@ from scenarios.api_args import (
     MAX_SEEDS,
     MethodLike,
     ScenarioLike,
+    carried_methods_arg,
     cell_arg,
     err,
     fidelity_arg,
@@ -155,6 +156,8 @@ def train(scenario: ScenarioLike, method: MethodLike = "rnh-ql+", *, world: str 
     if carried is not None and n_pre:
         raise err(fn, "pretrain", "and init both say where the learner starts",
                   "pass one of them")
+    if n_pre or carried is not None:
+        carried_methods_arg(fn, "pretrain" if n_pre else "init", [name])
     cfg = make_config(name, overrides)  # a bad setting fails here, before any work
     if is_plain(cfg) and (save is not None or resume is not None):
         raise err(fn, "save" if save is not None else "resume",
@@ -232,6 +235,8 @@ def compare(scenario: ScenarioLike, methods: Sequence[MethodLike] | MethodLike |
                    "pass out='DIR' as well, or drop resume")
     sc, _ = problem_of(fn, scenario, start, goal, rewards_text, s_starts, worlds)
     n_pre = pretrain_arg(fn, pretrain, worlds)
+    if n_pre:
+        carried_methods_arg(fn, "pretrain", names)
     per_method = settings_per_method(names, overrides)
 
     specs = make_specs(scenario, names, list(range(seed_base, seed_base + n_seeds)), episodes,

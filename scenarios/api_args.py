@@ -15,6 +15,7 @@ import numpy as np
 
 from learning.config import MethodConfig
 from learning.methods.registry import METHODS, comparison_methods
+from learning.plain.batched import is_batched
 from learning.plain.learner import located_name, remember
 from scenarios.memory_limit import recording_refused
 from scenarios.runs.spec import WORLDS, load, method_class, physics_budget
@@ -270,6 +271,19 @@ def pretrain_arg(fn: str, pretrain: Any, worlds: Sequence[str]) -> int:
         raise err(fn, "pretrain", f"has {episodes!r} episodes, not a whole number in "
                   f"1..{MAX_EPISODES:,}", "pass e.g. pretrain=('grid', 300)")
     return int(episodes)
+
+
+def carried_methods_arg(fn: str, arg: str, methods: Sequence[str]) -> None:
+    """A warm start (``pretrain`` or ``init``) carries each run's own learner into its next
+    world: an :class:`InputError` for a batched learner, whose one object learns for a whole
+    batch of runs and cannot continue one of them."""
+    for name in methods:
+        cls = method_class(name)
+        if getattr(cls, "learner", None) is not None and is_batched(cls.learner):
+            raise err(fn, arg, f"does not apply: {name} is a batched learner (one object for "
+                      "a batch of runs), and a warm start carries one run's learner",
+                      f"train it from scratch at the rung (drop {arg}=...), or write it "
+                      "as a plain learner of one run")
 
 
 def problem_of(fn: str, scenario: str | Scenario, start: Cell | None, goal: Cell | None,

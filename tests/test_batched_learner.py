@@ -73,3 +73,14 @@ def test_a_class_declaring_batched_without_its_calls_is_refused():
 
     with pytest.raises(ValueError, match="has no act_batch, update_batch, greedy"):
         api.train("paper-40", method=Half, episodes=3)
+
+
+def test_a_warm_start_of_a_batched_learner_is_refused_before_any_work():
+    from sim.errors import InputError
+
+    with pytest.raises(InputError, match=r"pretrain.*batched learner.*from scratch"):
+        api.train("paper-40", method=BATCHED, world="physics", fidelity="noisy",
+                  pretrain=("grid", 5), episodes=2)
+    with pytest.raises(InputError, match=r"pretrain.*batched learner"):
+        api.compare("paper-40", ["st-ql", BATCHED], worlds=("physics",), seeds=1, episodes=2,
+                    pretrain=("grid", 5))

@@ -104,3 +104,17 @@ def test_a_jitclass_that_does_not_compile_is_refused_up_front_in_one_line(tmp_pa
     assert "no_such_thing" in lines[0] and f"{tmp_path / 'brokenjit.py'}:13" in lines[0]
     assert "Fix: fix the class" in lines[0]
     assert "Broken on paper-40" not in out.stdout  # refused before the run was announced
+
+
+def test_a_jitclass_warm_start_equals_the_python_ports():
+    """--pretrain grid:N then the noisy rung: the jitclass learner is carried field by field
+    (numba's instances do not pickle) and runs the Python port's run, figure for figure."""
+    runs = [api.train("paper-40", method=m, world="physics", fidelity="noisy",
+                      pretrain=("grid", 20), episodes=3, seed=1)
+            for m in (JIT, "tests.plain_learners.st_ql:STQLPort")]
+    recs = [dict(r.record) for r in runs]
+    for rec in recs:  # the first phase's clock aside
+        rec["pretrain"] = {k: v for k, v in rec["pretrain"].items() if k != "wall_time_s"}
+    assert recs[0]["pretrain"]["episodes"] == 20
+    assert differing(*recs) == []
+    assert np.array_equal(runs[0].policy, runs[1].policy)

@@ -196,6 +196,24 @@ def greedy_table(learner: Any, n_states: int,
     return out, int(bad_s), int(bad_a)
 
 
+def copied(learner: Any, cls: Any, n_states: int, n_actions: int) -> Any:
+    """A deep copy of a jitclass learner of class ``cls`` (numba's instances cannot be
+    pickled, so ``copy.deepcopy`` fails on them): a new instance, built for the same arena,
+    then every field of the spec set to a deep copy of the original's (arrays copied,
+    Generators at the same point of their streams). A field that is itself a jitclass
+    instance is refused: its class cannot be read back from it."""
+    import copy
+
+    fresh = cls(n_states, n_actions, np.random.default_rng(0))
+    for name in learner._numba_type_.class_type.struct:
+        value = getattr(learner, name)
+        if is_jit_learner(value):
+            raise ValueError(f"{cls.__name__}.{name} holds a jitclass instance: a warm start "
+                             "cannot copy it; hold its fields in the learner itself")
+        setattr(fresh, name, copy.deepcopy(value))
+    return fresh
+
+
 # ------------------------------------------------------------------ a class that does not compile
 
 _HERE = str(Path(__file__).resolve().parent)

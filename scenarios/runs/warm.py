@@ -27,8 +27,10 @@ from learning.compiled.named_state import copy_state
 from learning.drivers.checkpoint import CheckpointError, load_checkpoint
 from learning.drivers.plain_train import train_grid
 from learning.methods.registry import n_states_of
+from learning.plain.compiled import copied, is_jit_learner
 from learning.plain.learner import is_plain, snapshot
 from sim.errors import InputError
+from sim.grid.actions import N_ACTIONS
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,7 +56,11 @@ class Carried:
     def starting_learner(self) -> Any:
         """What the next run's agent starts from: a copy of the state or learner (the one
         carried stays as it was, so a Run can seed several runs alike)."""
-        return copy.deepcopy(self.learner) if self.plain else self.state
+        if not self.plain:
+            return self.state
+        if is_jit_learner(self.learner):  # numba's instances do not pickle: field by field
+            return copied(self.learner, type(self.config).learner, self.n_states, N_ACTIONS)
+        return copy.deepcopy(self.learner)
 
     def generators(self, learner: np.random.Generator, starts: np.random.Generator
                    ) -> tuple[np.random.Generator, np.random.Generator]:

@@ -106,3 +106,34 @@ def test_the_figure_names_a_folder_that_is_not_a_study(tmp_path, capsys):
 
     assert figure([str(tmp_path), "--out", str(tmp_path / "x.png")]) == 2
     assert "scaling_maps" in capsys.readouterr().err
+
+
+def test_open_ground_blocks_a_tenth_of_the_cells():
+    free = generate("open", 256, 11)
+    assert 0.88 < free.mean() < 0.91  # 10 % blocked, a few free islands cut off
+    assert np.array_equal(free, generate("random", 256, 11, density=0.1))
+
+
+def test_streets_cut_blocks_of_bounded_size_by_straight_streets():
+    """Every block is a rectangle of 6-24 cells a side between streets 2-10 wide: a row of
+    the map meets runs of built cells no longer than 24 (nor shorter than 6 unless cut by
+    the map's edge or an open square), and the map has streets crossing it end to end."""
+    free = generate("streets", 256, 5)
+    for line in (free, free.T):
+        for row in line[::17]:
+            runs = np.diff(np.flatnonzero(np.diff(np.r_[1, row.astype(int), 1])))[::2]
+            assert runs.size == 0 or runs.max() <= 24
+    crossing = [free[:, j].all() for j in range(256)] + [free[i, :].all() for i in range(256)]
+    assert any(crossing)
+
+
+def test_corner_placement_by_hand():
+    from sim.grid.planning import corner_start_goal
+
+    free = np.ones((5, 6), dtype=bool)
+    free[0, 0] = False  # the corner blocked: S is the next cell of least row + col, the upper
+    free[4, 5] = free[4, 4] = False  # G: most row + col among what S reaches, the lower
+    free[1:4, 3] = False
+    s, g, moves = corner_start_goal(free)
+    assert s == (0, 1) and g == (3, 5)
+    assert moves == grid_distances(free, (1, 0))[3, 5] == 7

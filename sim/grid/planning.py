@@ -102,6 +102,25 @@ def far_start_goal(free: np.ndarray) -> tuple[tuple[int, int], tuple[int, int], 
     return b, a, int(da[b])
 
 
+def corner_start_goal(free: np.ndarray) -> tuple[tuple[int, int], tuple[int, int], int]:
+    """(start, goal, moves) as (row, col) indices of ``free``, at opposite corners: S the
+    free cell nearest the top-left corner (least row + col; on a tie the upper), G the cell
+    S reaches nearest the bottom-right one (most row + col; on a tie the lower). Why
+    corners besides the diameter: on open ground the diameter's ends can sit mid-edge,
+    while corner to corner every monotone staircase is a shortest route, so shortest
+    routes tie in their thousands (the case a judging set must have)."""
+    rows, cols = np.nonzero(free)
+    if rows.size == 0:
+        raise ValueError("the map has no free cell")
+    corner = np.lexsort((rows, rows + cols))[0]  # least row + col, then least row
+    s = (int(rows[corner]), int(cols[corner]))
+    d = grid_distances(free, s[::-1])  # BFS moves from S, (row, col) grid
+    rr, cc = np.nonzero(d >= 0)
+    far = np.lexsort((rr, rr + cc))[-1]  # most row + col, then most row
+    g = (int(rr[far]), int(cc[far]))
+    return s, g, int(d[g])
+
+
 def distances_to(next_state: np.ndarray, goal: int) -> np.ndarray:
     """int32[nS]: moves to ``goal`` along a transition table ``next_state[s, a]``, -1 where
     none. Moves need not be symmetric (the physics world's are not): the BFS runs from the

@@ -102,7 +102,8 @@ def test_the_finding_across_studies_names_each_map_kinds_winner():
                 f"maze-w4-{size} uniform (route 9)"]
         runs = {"a": {c: [10, 20, None] for c in cols}, "b": {c: [30, 30, 30] for c in cols}}
         protocols = {c: c.split(" ")[1] for c in cols}
-        return {"columns": cols, "ranking": ranking(runs, dict.fromkeys(cols, 100), protocols)}
+        return {"columns": cols, "runs": runs,
+                "ranking": ranking(runs, dict.fromkeys(cols, 100), protocols)}
 
     text = KINDS["heldout"].render_rows([study(256), study(512)])
     lines = text.splitlines()
@@ -110,3 +111,35 @@ def test_the_finding_across_studies_names_each_map_kinds_winner():
     assert len(lines) == 2 + 4  # two studies x two protocols
     assert lines[2].startswith("| 256² | 10 % of starts from S | a 2/3 · 20 [")
     assert "| – |" in lines[3]  # no rooms map under uniform starts
+
+
+def test_a_tie_is_every_tied_method_named_whatever_the_order_they_ran_in():
+    """Two methods with the same median and optimal seeds on a map: the table, the finding
+    and its words name both, in name order, each with its own interval, and render the same
+    when the methods were run (and stored) the other way round."""
+    from scenarios.artifacts.heldout import heldout_summary
+    from scenarios.artifacts.tables import KINDS
+    from scenarios.studies.maps.ranking import ranking
+
+    cols = ["maze-w4-256 uniform (route 9)", "rooms-256 uniform (route 9)"]
+    eps = {"zeta": {cols[0]: [20, 30, 40], cols[1]: [10, 10, 10]},
+           "alpha": {cols[0]: [25, 30, 35], cols[1]: [50, 60, None]}}
+
+    def study(order):
+        runs = {m: eps[m] for m in order}
+        protocols = dict.fromkeys(cols, "uniform")
+        return {"caption": "c", "columns": cols, "rows": {m: {} for m in order},
+                "runs": runs, "budgets": dict.fromkeys(cols, 100), "protocols": protocols,
+                "ranking": ranking(runs, dict.fromkeys(cols, 100), protocols)}
+
+    a, b = study(["zeta", "alpha"]), study(["alpha", "zeta"])
+    assert a["ranking"]["winners"][cols[0]]["method"] != \
+        b["ranking"]["winners"][cols[0]]["method"]  # the study stores the first it ran
+    for render in (lambda d: KINDS["heldout"].render(d).split("Per map")[1],  # (rows: as run)
+                   lambda d: KINDS["heldout"].render_rows([d]), lambda d: heldout_summary([d])):
+        assert render(a) == render(b)
+    words = heldout_summary([a])
+    assert "`zeta` first on 2 of 2 (maze-w4, rooms)" in words
+    assert "`alpha` first on 1 of 2 (maze-w4)" in words
+    row = KINDS["heldout"].render_rows([a]).splitlines()[2]
+    assert "| alpha 3/3 · 30 [" in row and "] = zeta 3/3 · 30 [" in row

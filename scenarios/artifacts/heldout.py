@@ -1,12 +1,19 @@
 """The held-out studies' tables (:mod:`scenarios.studies.maps.heldout`): the per-map table
 with its rankings under it, and the finding across studies (a row per study and protocol,
-each map kind's winner). Registered with :mod:`scenarios.artifacts.tables` on import."""
+each map kind's winner). Registered with :mod:`scenarios.artifacts.tables` on import.
+
+**Ties.** A map's winner is every method with the lowest median episodes to a stable
+optimal route and, among those, the most optimal seeds: all of them are named, in name
+order, each with its own interval, and each counts the map as won. The study stores one
+of them (the first in ``--methods`` order); which one never shows here, so nothing
+rendered depends on the order of the arguments."""
 
 from __future__ import annotations
 
 from typing import Any
 
 from scenarios.artifacts.tables import renderer, row_renderer
+from scenarios.runs.statistics import bootstrap_ci
 
 RANKING_NOTE = ("each method's IQM share of the episode budget spent before a stable optimal "
                 "route (never: all of it; lower is better) [95 % stratified bootstrap "
@@ -34,9 +41,10 @@ def heldout(d: dict[str, Any]) -> str:
                 "–" if o == m else _est(r["poi"][m][o], 2) for o in order) + " |")
     if d.get("ranking", {}).get("winners"):
         lines += ["", "Per map, the method with the lowest median episodes to a stable optimal "
-                  "route [95 % bootstrap interval of the median]: " + "; ".join(
-                      f"{c.split(' (')[0]}: {_winner(w, _tied(d, c, w))}"
-                      for c, w in d["ranking"]["winners"].items()) + "."]
+                  "route (ties: every method with that median and as many optimal seeds, in "
+                  "name order) [95 % bootstrap interval of the median]: " + "; ".join(
+                      f"{c.split(' (')[0]}: {_winner(d, c)}"
+                      for c in d["ranking"]["winners"]) + "."]
     return "\n".join(lines) + "\n"
 
 
@@ -48,26 +56,26 @@ def _est(v: list[float], digits: int) -> str:
     return f"{v[0]:.{digits}f} [{v[1]:.{digits}f}, {v[2]:.{digits}f}]"
 
 
-def _winner(w: dict[str, Any], tied: list[str]) -> str:
-    lo, hi = (("never" if v is None else f"{v:.0f}") for v in w["ci"])
-    med = "never" if w["median"] is None else f"{w['median']:.0f}"
-    also = f" (tied: {', '.join(tied)})" if tied else ""
-    return f"{w['method']}{also} {w['optimal']}/{w['seeds']} · {med} [{lo}, {hi}]"
-
-
-def _tied(d: dict[str, Any], col: str, w: dict[str, Any]) -> list[str]:
-    """The other methods with the winner's median and optimal seeds on map ``col``."""
+def _winner(d: dict[str, Any], col: str) -> str:
+    """Map ``col``'s winners (:func:`winners`), each ``method optimal/seeds · median [interval]``,
+    joined by ``=``."""
     out = []
-    for m, by_map in d.get("runs", {}).items():
-        eps = by_map.get(col)
-        if m == w["method"] or not eps or sum(e is not None for e in eps) != w["optimal"]:
-            continue
-        ordered = sorted(float("inf") if e is None else e for e in eps)
-        mid = len(ordered) // 2
-        med = ordered[mid] if len(ordered) % 2 else (ordered[mid - 1] + ordered[mid]) / 2
-        if med == (float("inf") if w["median"] is None else w["median"]):
-            out.append(m)
-    return out
+    for m in winners(d, col):
+        eps = d["runs"][m][col]
+        med = _median(eps)
+        lo, hi = (("never" if v == float("inf") else f"{v:.0f}") for v in bootstrap_ci(eps))
+        out.append(f"{m} {sum(e is not None for e in eps)}/{len(eps)} · {_episodes(med)} "
+                   f"[{lo}, {hi}]")
+    return " = ".join(out)
+
+
+def winners(d: dict[str, Any], col: str) -> list[str]:
+    """Every method with the stored winner's median and optimal seeds on map ``col``, in
+    name order (the module's tie rule)."""
+    w = d["ranking"]["winners"][col]
+    best = (float("inf") if w["median"] is None else w["median"], -w["optimal"])
+    return sorted(m for m, by_map in d["runs"].items() if by_map.get(col)
+                  and (_median(by_map[col]), -sum(e is not None for e in by_map[col])) == best)
 
 
 @row_renderer("heldout")
@@ -80,9 +88,7 @@ def heldout_winners(ds: list[dict[str, Any]]) -> str:
     for d in (d for d in ds if "ranking" in d):  # older artifacts kept no seeds to rank
         size = d["columns"][0].split(" ")[0].rsplit("-", 1)[1]
         for proto, r in d["ranking"]["protocols"].items():
-            won = {c.split(" ")[0].rsplit("-", 1)[0]:
-                   _winner(d["ranking"]["winners"][c], _tied(d, c, d["ranking"]["winners"][c]))
-                   for c in r["maps"]}
+            won = {c.split(" ")[0].rsplit("-", 1)[0]: _winner(d, c) for c in r["maps"]}
             first = r["order"][0]
             starts = _protocol(proto)
             lines.append(f"| {size}² | {starts[0].lower()}{starts[1:]} | " + " | ".join(
@@ -99,10 +105,10 @@ def heldout_summary(ds: list[dict[str, Any]]) -> str:
         for proto, r in d["ranking"]["protocols"].items():
             won: dict[str, list[str]] = {}
             for c in r["maps"]:
-                w = d["ranking"]["winners"][c]
-                won.setdefault(w["method"], []).append(c.split(" ")[0].rsplit("-", 1)[0])
-            wins = "; ".join(f"`{m}` wins {len(ks)} of {len(r['maps'])} ({', '.join(ks)})"
-                             for m, ks in sorted(won.items(), key=lambda x: -len(x[1])))
+                for m in winners(d, c):  # a tie: a win of each
+                    won.setdefault(m, []).append(c.split(" ")[0].rsplit("-", 1)[0])
+            wins = "; ".join(f"`{m}` first on {len(ks)} of {len(r['maps'])} ({', '.join(ks)})"
+                             for m, ks in sorted(won.items(), key=lambda x: (-len(x[1]), x[0])))
             starts = _protocol(proto)
             out.append(f"**{size}², {starts[0].lower()}{starts[1:]}**: `{r['order'][0]}` ranks "
                        f"first by IQM; {wins}.")
@@ -139,7 +145,7 @@ def heldout_verdicts(d: dict[str, Any]) -> str:
     for c in cols:
         mine = _median(runs[c])
         best_ref, best = min(((m, _median(d["runs"][m][c])) for m in refs if c in d["runs"][m]),
-                             key=lambda x: x[1], default=(None, float("inf")))
+                             key=lambda x: (x[1], x[0]), default=(None, float("inf")))
         target = 1.2 * best + 10
         line = (f"{c.split(' (')[0]}: {_episodes(mine)} against {best_ref}'s "
                 f"{_episodes(best)} (target {_episodes(target)})")

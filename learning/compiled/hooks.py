@@ -115,6 +115,12 @@ def end(st):
     end_tally(st.tally)
 
 
+@njit(cache=True, inline="always")
+def shaping(st):
+    """The closed episode's shaping terms: (mean, standard deviation)."""
+    return st.tally.f_mean[0], st.tally.f_std[0]
+
+
 # ---------------------------------------------------------------- for the batch agent
 # The same hooks, called on agent i's row of a stacked state with agent i's generator
 # handle. Not inlined: numba's overload inliner loses writes made through a named tuple

@@ -326,6 +326,15 @@ class PlainBatchAgent:
         self.n = len(self.learners)
         self._out = np.zeros(self.n, dtype=np.int64)
         self._starts_hook = [getattr(x, "episode_start", None) for x in self.learners]
+        # @jitclass learners: their unrecorded runs are driven by the compiled physics loop
+        # (scenarios.runs.physics_fused.jit_driver), which reads them behind one box
+        self.jit = bool(self.learners) and all(is_jit_learner(x) for x in self.learners)
+        self.jit_with_start = self.jit and compiled._has_episode_start(self.learners[0])
+
+    def refuse_action(self, i: int, s: int, a: int) -> None:
+        """Run ``i``'s learner answered ``a`` at ``s`` in the compiled loop: a
+        :class:`LearnerError` naming it (the loop stopped before using it)."""
+        checked_action(self.learners[i], s, a, self.n_actions)
 
     def state(self, i: int) -> State:
         return snapshot(self.learners[i], self.cfg, self.n_states, self.n_actions)

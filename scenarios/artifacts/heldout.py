@@ -13,7 +13,6 @@ from __future__ import annotations
 from typing import Any
 
 from scenarios.artifacts.tables import renderer, row_renderer
-from scenarios.runs.statistics import bootstrap_ci
 
 RANKING_NOTE = ("each method's IQM share of the episode budget spent before a stable optimal "
                 "route (never: all of it; lower is better) [95 % stratified bootstrap "
@@ -40,11 +39,10 @@ def heldout(d: dict[str, Any]) -> str:
             lines.append(f"| {m} | {_est(r['iqm'][m], 3)} | " + " | ".join(
                 "–" if o == m else _est(r["poi"][m][o], 2) for o in order) + " |")
     if d.get("ranking", {}).get("winners"):
+        won = "; ".join(f"{c.split(' (')[0]}: {_winner(d, c)}" for c in d["ranking"]["winners"])
         lines += ["", "Per map, the method with the lowest median episodes to a stable optimal "
                   "route (ties: every method with that median and as many optimal seeds, in "
-                  "name order) [95 % bootstrap interval of the median]: " + "; ".join(
-                      f"{c.split(' (')[0]}: {_winner(d, c)}"
-                      for c in d["ranking"]["winners"]) + "."]
+                  f"name order) [95 % bootstrap interval of the median, where one won]: {won}."]
     return "\n".join(lines) + "\n"
 
 
@@ -57,16 +55,15 @@ def _est(v: list[float], digits: int) -> str:
 
 
 def _winner(d: dict[str, Any], col: str) -> str:
-    """Map ``col``'s winners (:func:`winners`), each ``method optimal/seeds · median [interval]``,
-    joined by ``=``."""
-    out = []
-    for m in winners(d, col):
-        eps = d["runs"][m][col]
-        med = _median(eps)
-        lo, hi = (("never" if v == float("inf") else f"{v:.0f}") for v in bootstrap_ci(eps))
-        out.append(f"{m} {sum(e is not None for e in eps)}/{len(eps)} · {_episodes(med)} "
-                   f"[{lo}, {hi}]")
-    return " = ".join(out)
+    """Map ``col``'s winner, ``method optimal/seeds · median [interval]``; a tie (:func:`winners`)
+    names every method in it, joined by ``=``, with the shared figures and no interval (the
+    study kept one for the first it ran)."""
+    w, names = d["ranking"]["winners"][col], winners(d, col)
+    med = "never" if w["median"] is None else f"{w['median']:.0f}"
+    if len(names) > 1:
+        return f"{' = '.join(names)} {w['optimal']}/{w['seeds']} · {med} (a tie)"
+    lo, hi = (("never" if v is None else f"{v:.0f}") for v in w["ci"])
+    return f"{w['method']} {w['optimal']}/{w['seeds']} · {med} [{lo}, {hi}]"
 
 
 def winners(d: dict[str, Any], col: str) -> list[str]:
@@ -74,8 +71,9 @@ def winners(d: dict[str, Any], col: str) -> list[str]:
     name order (the module's tie rule)."""
     w = d["ranking"]["winners"][col]
     best = (float("inf") if w["median"] is None else w["median"], -w["optimal"])
-    return sorted(m for m, by_map in d["runs"].items() if by_map.get(col)
-                  and (_median(by_map[col]), -sum(e is not None for e in by_map[col])) == best)
+    return sorted(m for m, by_map in d.get("runs", {}).items() if by_map.get(col)
+                  and (_median(by_map[col]), -sum(e is not None for e in by_map[col])) == best
+                  ) or [w["method"]]
 
 
 @row_renderer("heldout")

@@ -106,6 +106,7 @@ def measure(episodes: int, repeats: int, seeds: int, physics_episodes: int,
     port = grid_steps_per_s(PORT, episodes, repeats)
     jit_port = grid_steps_per_s(JIT_PORT, episodes, repeats)
     physics_rates(2, 2, PORT)  # warm: compile, build the physics model
+    physics_rates(1, 1, JIT_PORT)  # warm: its compiled physics loop (cache=False: per process)
     alone = physics_rates(seeds, physics_episodes, None)
     beside = physics_rates(seeds, physics_episodes, PORT)
     beside_jit = physics_rates(seeds, physics_episodes, JIT_PORT)

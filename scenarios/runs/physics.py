@@ -39,7 +39,7 @@ from learning.drivers.batch_agent import BatchAgent
 from learning.drivers.train import TrainResult
 from learning.geometry import geometry_of
 from learning.plain.learner import PlainBatchAgent, is_plain
-from scenarios.runs.physics_fused import FusedRuns, Rules
+from scenarios.runs.physics_fused import FusedRuns, Rules, jit_driver
 from scenarios.runs.physics_grading import FinalGrade, Grader, final_policy_label
 from scenarios.runs.work import add_episodes
 from scenarios.signals import sigint_handled_by
@@ -347,13 +347,16 @@ def fused_groups(agents: list[Any], bounds: list[tuple[int, int]], recorded: dic
                  batch: Any, start_h: np.ndarray, starts: np.ndarray, rules: Rules,
                  n_episodes: int, test_every: int, loop: dict[str, np.ndarray]
                  ) -> list[tuple[Any, FusedRuns]]:
-    """(agent, its fused runs) for each group of compiled learners with unrecorded runs."""
+    """(agent, its fused runs) for each group of compiled learners (or of a ``@jitclass``
+    learner's) with unrecorded runs."""
     out = []
     for ag, (b0, b1) in zip(agents, bounds, strict=True):
         rows = np.array([k for k in range(b1 - b0) if b0 + k not in recorded], np.int64)
-        if isinstance(ag, BatchAgent) and rows.size:
+        jit = getattr(ag, "jit", False)  # runs of a @jitclass learner: its own compiled loop
+        if (isinstance(ag, BatchAgent) or jit) and rows.size:
             out.append((ag, FusedRuns(ag, rows, b0, batch, start_h[b0:b1], starts, rules,
-                                      n_episodes, test_every, loop)))
+                                      n_episodes, test_every, loop,
+                                      jit_driver(ag.jit_with_start) if jit else None)))
     return out
 
 

@@ -32,16 +32,19 @@ import hashlib
 import os
 import time
 from pathlib import Path
+from types import FunctionType, ModuleType
 from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
 from learning.compiled import hooks
-from learning.compiled.generator_handle import generator_from
+from learning.compiled.generator_handle import HANDLE_SIZE, generator_from
 from learning.compiled.named_state import row
+from learning.compiled.state_box import box_of
 from learning.jitcache import restamp
 from learning.jitcache import sources_digest as learning_digest
+from sim.grid.actions import N_ACTIONS
 from sim.physics.drive_profiles import Profiles
 from sim.physics.jitcache import sources_digest as physics_digest
 from sim.physics.kernel.noise import refill_one
@@ -87,7 +90,7 @@ def drop_stale_cache(module: Path | None = None) -> bool:
 
 
 drop_stale_cache()
-ACT, MOVE, START, TEST, FINISHED = 0, 1, 2, 3, 4  # where a run stands between calls
+ACT, MOVE, START, TEST, FINISHED, BAD = 0, 1, 2, 3, 4, 5  # where a run stands between calls
 CALL_PRIMITIVES = 16384  # primitives a call drives at most, shared among its runs: a call
 #                          then takes ~15-50 ms (1-3 us a primitive; haql cut off in a noisy
 #                          world ~15 us), the bound on answering Ctrl-C and progress
@@ -131,6 +134,9 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                 stage[i] = ACT
             elif k == ACT:
                 a[i] = hooks.act_h(row(stt, i), s[i], learner_h[i])
+                if a[i] < 0 or a[i] >= N_ACTIONS:  # a learner of the user's: Python says
+                    stage[i] = BAD
+                    break
                 begin_one(rb, a[i], p.cell_m, p.nx, p.ny, p.localisation)
                 stage[i] = MOVE
             elif k == MOVE:
@@ -158,12 +164,11 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                 if not (terminated or t[i] >= max_steps):
                     stage[i] = ACT
                     continue
-                tally = row(stt, i).tally
                 hooks.end(row(stt, i))
                 e = done[i]
                 logs_i[0, i, e], logs_i[1, i, e], logs_i[2, i, e] = t[i], ncontact[i], callp[i]
                 logs_f[0, i, e], logs_f[1, i, e] = ret[i], 1.0 if terminated else 0.0
-                logs_f[2, i, e], logs_f[3, i, e] = tally.f_mean[0], tally.f_std[0]
+                logs_f[2, i, e], logs_f[3, i, e] = hooks.shaping(row(stt, i))
                 logs_f[4, i, e], logs_f[5, i, e] = wall[i], rb.steps * dt
                 done[i] = e + 1
                 ended += 1
@@ -172,9 +177,85 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                     stage[i] = TEST
                     break
                 stage[i] = START
-            else:  # TEST or FINISHED: Python's turn
+            else:  # TEST, FINISHED or BAD: Python's turn
                 break
     return prims, ended, checks
+
+
+# ------------------------------------------------------------------ a @jitclass learner's runs
+
+@njit(inline="always")
+def _nth(learners, i):
+    return learners[i]
+
+
+@njit(inline="always")
+def _jit_act(learner, s, h):
+    return learner.act(s)
+
+
+@njit(inline="always")
+def _jit_update(learner, s, a, r, s2, terminated, h):
+    learner.update(s, a, r, s2, terminated)
+
+
+@njit(inline="always")
+def _jit_start(learner, s0):
+    learner.episode_start()
+
+
+@njit(inline="always")
+def _jit_no_start(learner, s0):
+    pass
+
+
+@njit(inline="always")
+def _jit_end(learner):
+    pass
+
+
+@njit(inline="always")
+def _jit_shaping(learner):
+    return 0.0, 0.0  # a plain learner shapes nothing the loop could read
+
+
+_JIT_DRIVERS: dict[bool, Any] = {}
+
+
+def jit_driver(with_start: bool) -> Any:
+    """:func:`drive_runs` for runs of a plain learner written as a ``@jitclass``: the same
+    source, compiled with the learner's own ``act``, ``update`` and (``with_start``)
+    ``episode_start`` as its hooks and the run's learner as its row (a typed list of the
+    runs' learners behind the box). Compiled without numba's on-disk cache, as the grid's
+    loop (:mod:`learning.plain.compiled`), so a class edited under the same name never meets
+    a stale kernel; once per process and kind of class."""
+    fn = _JIT_DRIVERS.get(with_start)
+    if fn is None:
+        jit_hooks = ModuleType("jit_learner_hooks")
+        jit_hooks.draw_start = hooks.draw_start
+        jit_hooks.begin_row = _jit_start if with_start else _jit_no_start
+        jit_hooks.act_h, jit_hooks.update_h = _jit_act, _jit_update
+        jit_hooks.end, jit_hooks.shaping = _jit_end, _jit_shaping
+        names = dict(drive_runs.py_func.__globals__, hooks=jit_hooks, row=_nth)
+        fn = _JIT_DRIVERS[with_start] = njit(cache=False)(
+            FunctionType(drive_runs.py_func.__code__, names, "drive_jit_runs"))
+    return fn
+
+
+_BOX_OF: Any = None
+
+
+def jit_box(learners: list[Any]) -> tuple[Any, np.ndarray]:
+    """The runs' jitclass learners as :func:`jit_driver` reads them: behind one box a typed
+    list holding the same objects (the loop's updates are the Python objects'), boxed
+    without numba's on-disk cache; and the learner-stream handles the loop's signature
+    takes (unread: a jitclass draws from its own field)."""
+    from numba.typed import List
+
+    global _BOX_OF
+    if _BOX_OF is None:
+        _BOX_OF = njit(cache=False)(box_of.py_func)
+    return _BOX_OF(List(learners)), np.zeros((len(learners), HANDLE_SIZE), np.uint64)
 
 
 class FusedRuns:
@@ -185,8 +266,9 @@ class FusedRuns:
 
     def __init__(self, agent: Any, rows: np.ndarray, b0: int, batch: Any, start_h: np.ndarray,
                  starts: np.ndarray, rules: Rules, n_episodes: int, test_every: int,
-                 loop: dict[str, np.ndarray]) -> None:
+                 loop: dict[str, np.ndarray], driver: Any = None) -> None:
         n = agent.n
+        self._drive = drive_runs if driver is None else driver  # (a jitclass learner's own)
         self.agent, self.b0, self.batch, self.n_episodes = agent, b0, batch, n_episodes
         sl = slice(b0, b0 + n)
         self.mine = np.zeros(n, np.bool_)
@@ -196,7 +278,9 @@ class FusedRuns:
         self.logs_i = np.zeros((3, n, n_episodes), np.int64)
         self.logs_f = np.zeros((6, n, n_episodes))
         self.callp = np.zeros(n, np.int64)
-        self._args = [agent._box, agent._handles, start_h, starts, batch.robots[sl],
+        box, handles = (jit_box(agent.learners) if getattr(agent, "jit", False)
+                        else (agent._box, agent._handles))
+        self._args = [box, handles, start_h, starts, batch.robots[sl],
                       np.zeros(1, batch.robots.dtype), batch._noise[sl], batch._npos[sl],
                       batch._nend[sl], batch._nblock[sl], batch._noise_h[sl], batch._traj[sl],
                       batch._booked_rows[sl], batch._booked[sl], *batch._args,
@@ -216,9 +300,11 @@ class FusedRuns:
         lp = self.loop
         done0 = lp["done"].copy()
         t0 = time.perf_counter()
-        prims, ended, checks = drive_runs(
+        prims, ended, checks = self._drive(
             *self._args, lp["s"], lp["a"], lp["t"], lp["ret"], lp["contacts"], lp["done"],
             lp["wall"], *self._tail)
+        for k in np.flatnonzero(self.stage == BAD):  # raises, naming the learner
+            self.agent.refuse_action(int(k), int(lp["s"][k]), int(lp["a"][k]))
         rate = (time.perf_counter() - t0) / max(prims, 1)
         lp["wall"][self.mine] += self.callp[self.mine] * rate  # episodes under way
         for k in np.flatnonzero(lp["done"] != done0):  # episodes ended: their share

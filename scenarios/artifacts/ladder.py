@@ -400,7 +400,8 @@ def warm_start_sentence(d: dict[str, Any]) -> str:
         parts.append(f"at `{rung}` the grid's policy is kept from the first primitive on "
                      f"{kept} of {len(rows)} map × method cells ({cost}); continued learning "
                      f"ends higher than the better of the grid's policy and the rung alone "
-                     f"on {n['higher']} cells and lower on {n['lower']}")
+                     f"on {n['higher']} cell{'s' * (n['higher'] != 1)} and lower on "
+                     f"{n['lower']}")
     return ("**Learn on the grid, finish on the robot** ([docs/ladder.md](docs/ladder.md"
             "#how-much-robot-time-does-the-grid-save)): pretrained "
             f"{d['grid_episodes']} episodes in the grid, then trained at the rung, "

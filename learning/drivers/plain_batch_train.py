@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from learning.drivers.train import EPISODE_FIELDS, TrainResult, finished
+from learning.drivers.train import TrainResult, episode_arrays, finished
 from learning.geometry import TabularMDP, geometry_of
 from learning.plain.batched import OneRun, actions_of
 from learning.plain.learner import (
@@ -25,8 +25,6 @@ from learning.plain.learner import (
     learner_calls,
     snapshot,
 )
-
-_DTYPES = {"steps": np.int32, "success": np.bool_}
 
 
 def train_plain_batch(cfg: PlainConfig, model: TabularMDP, n_episodes: int,
@@ -46,8 +44,7 @@ def train_plain_batch(cfg: PlainConfig, model: TabularMDP, n_episodes: int,
     starts, max_steps, start = model.start_states, int(model.max_steps), int(model.start)
     batch = type(cfg).learner(n_states, n_actions, list(rngs))
     views = [OneRun(batch, i, n_actions) for i in range(k)]
-    arrays = [{f: np.zeros(n_episodes, dtype=_DTYPES.get(f, np.float64))
-               for f in EPISODE_FIELDS} for _ in range(k)]
+    arrays = [episode_arrays(n_episodes) for _ in range(k)]
     tests: list[tuple[list[int], list[int]]] = [([], []) for _ in range(k)]
     s = np.array([starts[r.integers(0, starts.shape[0])] for r in start_rngs], np.int64)
     t = np.zeros(k, np.int64)

@@ -19,9 +19,9 @@ import numpy as np
 
 from learning.compiled.kernels import NO_TRACE
 from learning.drivers.train import (
-    EPISODE_FIELDS,
     TrainObserver,
     TrainResult,
+    episode_arrays,
     finished,
     train_tabular,
 )
@@ -38,8 +38,6 @@ from learning.plain.learner import (
     new_learner,
     snapshot,
 )
-
-_DTYPES = {"steps": np.int32, "success": np.bool_}
 
 
 def _episodes(learner, model: TabularMDP, n: int, start_rng: np.random.Generator,
@@ -97,7 +95,7 @@ def train_plain(cfg: PlainConfig, model: TabularMDP, n_episodes: int, rng: np.ra
     geom = geometry_of(model)
     learner = new_learner(cfg, geom, rng)
     start_rng = rng if start_rng is None else start_rng
-    arrays = {f: np.zeros(n_episodes, dtype=_DTYPES.get(f, np.float64)) for f in EPISODE_FIELDS}
+    arrays = episode_arrays(n_episodes)
     tests_e: list[int] = []
     tests_l: list[int] = []
     done = env_steps = 0

@@ -33,6 +33,12 @@ KERNEL_OUT = ("steps", "returns", "success", "shaping_mean", "shaping_std")  # r
 _DTYPES = {"steps": np.int32, "success": np.bool_}
 
 
+def episode_arrays(n_episodes: int) -> dict[str, np.ndarray]:
+    """A run's per-episode logs, zeroed (:data:`EPISODE_FIELDS`: steps int32, success bool,
+    the rest float64), as every driver fills them."""
+    return {f: np.zeros(n_episodes, dtype=_DTYPES.get(f, np.float64)) for f in EPISODE_FIELDS}
+
+
 
 
 @dataclass(eq=False)
@@ -174,7 +180,7 @@ def train_tabular(cfg: MethodConfig, model: TabularMDP, n_episodes: int, rng: np
     """
     if test_every < 1:
         raise ValueError(f"test_every must be >= 1, got {test_every}")
-    arrays = {f: np.zeros(n_episodes, dtype=_DTYPES.get(f, np.float64)) for f in EPISODE_FIELDS}
+    arrays = episode_arrays(n_episodes)
     tests_e: list[int] = []
     tests_l: list[int] = []
     if resume is None:

@@ -379,10 +379,37 @@ def test_the_coverage_walk_tries_a_move_in_every_free_cell_and_then_ends(paper50
 
 
 @pytest.mark.parametrize("field, value", [("explore_steps", -2), ("model_test", 2),
-                                          ("model_acting", 3), ("known_route", -1)])
+                                          ("model_acting", 3), ("known_route", -1),
+                                          ("untried_bonus", -1.0)])
 def test_the_model_options_refuse_values_they_do_not_have(field, value):
     with pytest.raises(ValueError, match=rf"RNHQLPlus\.{field} = {value} must be"):
         RNHQLPlus(**{field: value})
+
+
+def test_the_untried_bonus_sends_the_q_behaviour_to_moves_it_has_not_tried():
+    """untried_bonus: Q starts at the bonus, and the epsilon-greedy Q behaviour (no walk,
+    no model acting) then tries twice as many moves as without it, same seed; the greedy
+    test never counts the bonus (a fresh agent's test moves are the default's); at 0 it is
+    the default, not listed. (Counted: moves tried, cell and direction.)"""
+    from learning import make_agent
+    from scenarios.runs.spec import load
+
+    m = load("paper-50", None, None, "goal-only")[1]  # the held-out studies' rewards
+    geom = geometry_of(m)
+    fresh = [make_agent(RNHQLPlus(untried_bonus=b), geom, np.random.default_rng(0))
+             for b in (0.0, 100.0)]
+    assert np.all(fresh[1].state.q == 100.0) and np.all(fresh[0].state.q == 0.0)
+    for agent in fresh:
+        agent.begin_episode(int(m.start))
+    assert [fresh[0].greedy_action(s) for s in range(m.n_states)] == \
+        [fresh[1].greedy_action(s) for s in range(m.n_states)]
+    acted = []
+    for b in (0.0, 100.0):  # the goal's reward: an untried move is worth reaching G
+        st = train_tabular(RNHQLPlus(untried_bonus=b), m, 30, np.random.default_rng(3)).state
+        acted.append(int((st.model.successor >= 0).sum()))
+    assert acted[1] > 2 * acted[0], acted
+    assert "untried_bonus" not in RNHQLPlus().record_fields()
+    assert RNHQLPlus(untried_bonus=100).record_fields()["untried_bonus"] == 100
 
 
 def test_rnh_ql_plus_explore_is_rnh_ql_plus_with_the_model_options(paper50_model):

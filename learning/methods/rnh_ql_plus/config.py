@@ -62,6 +62,16 @@ class RNHQLPlus(MethodConfig):
       :func:`learning.parts.coverage.walk_budget`): the first steps of each episode walk to
       cells never visited (:mod:`learning.parts.coverage`), bumping the walls on the way, then
       the behaviour above takes over.
+    * ``untried_bonus`` (0 by default; uniform starts): optimism in the face of the
+      unverified, with Q choosing. Every Q value starts at ``untried_bonus`` above the
+      potential, and the behaviour values a move never tried at its look-ahead plus the
+      bonus; a tried move's Q forgets the bonus at the learning rate as its outcome is
+      learned (real and planned updates), and the bonus of the untried moves further on
+      reaches it through the bootstrap. So the epsilon-greedy Q behaviour heads for the
+      nearest moves not yet verified where they are worth more than the route to G, and
+      for G once the moves near it are verified (optimistic initial values, Sutton & Barto
+      2.6; R-max's unknown pairs, as a Q-table's start). The greedy test never adds the
+      bonus to an untried move.
 
     Why the last three exist, with what was measured: docs/methods.md, "Why rnh-ql+'s
     held-out options".
@@ -81,13 +91,15 @@ class RNHQLPlus(MethodConfig):
     model_test: int = 0  # 1: the greedy test walks the optimistic model's route (see above)
     explore_steps: int = 0  # coverage walk at the start of each episode [steps]; 0: none;
     #                         -1: 4 x the arena's longer side (learning.parts.coverage)
+    untried_bonus: float = 0.0  # a move not yet tried is worth this above Phi [reward]
 
     # Options added after records and checkpoints were written: a record lists one only when
     # it is not at its default, so every record from before (and the behaviour digests
     # hashed from them, scenarios.artifacts) stays what it was; a file without it loads it
     # at its default, the behaviour it was trained with.
     UNLISTED_AT_DEFAULT: ClassVar[dict[str, Any]] = {"model_acting": 0, "model_test": 0,
-                                                     "explore_steps": 0}
+                                                     "explore_steps": 0,
+                                                     "untried_bonus": 0.0}
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -99,6 +111,10 @@ class RNHQLPlus(MethodConfig):
             raise ValueError(f"{type(self).__name__}.model_acting = {self.model_acting!r} "
                              "acts on the optimistic model's look-ahead: it needs lookahead = 1 "
                              "and shaping_scale > 0")
+        if not self.untried_bonus >= 0.0:
+            raise ValueError(f"{type(self).__name__}.untried_bonus = {self.untried_bonus!r} "
+                             "must be >= 0 (the value of a move never tried, above the "
+                             "potential; 0: no bonus)")
 
     def params(self) -> Params:
         """The compiled rules' scalars."""
@@ -106,7 +122,7 @@ class RNHQLPlus(MethodConfig):
                       float(self.warmup_episodes), int(self.n_planning),
                       float(self.shaping_scale), bool(self.lookahead), bool(self.known_route),
                       bool(self.sweeping), bool(self.model_acting), bool(self.model_test),
-                      int(self.explore_steps))
+                      int(self.explore_steps), float(self.untried_bonus))
 
     def record_fields(self) -> dict[str, object]:
         """The fields (but the newer options at their defaults, :attr:`UNLISTED_AT_DEFAULT`),
@@ -180,3 +196,4 @@ class Params(NamedTuple):
     model_acting: bool
     model_test: bool
     explore_steps: int
+    bonus: float  # untried_bonus

@@ -59,9 +59,10 @@ def untried_value(u, goal, phi_s, phi_u, r_free, r_goal, gamma):
 
 
 @njit(**HOOK)
-def action_values(par, q, out, y, succ, nb, goal, r_free, r_goal, s):
+def action_values(par, q, out, y, succ, nb, goal, r_free, r_goal, s, bonus):
     """Row s's action values (Q + Phi - Phi(s)) into the scratch row ``out[0]``: a tried
-    action its Q; an untried one :func:`untried_value`."""
+    action its Q; an untried one :func:`untried_value` plus ``bonus`` (the behaviour's
+    ``untried_bonus``; the test's 0)."""
     scale = par.scale
     phi_s = scale * y[s]
     for a in range(q.shape[1]):
@@ -70,7 +71,7 @@ def action_values(par, q, out, y, succ, nb, goal, r_free, r_goal, s):
         else:
             u = nb[s, a]
             out[0, a] = untried_value(u, goal, phi_s, scale * y[max(u, 0)], r_free, r_goal,
-                                      par.gamma)
+                                      par.gamma) + bonus
 
 
 @njit(**HOOK)
@@ -162,7 +163,8 @@ def act(st, s, rng):
             if par.model_acting:
                 model_values(par, values, y, blocked, nb, goal, r_free_seen[0], r_goal, s)
             else:
-                action_values(par, q, values, y, succ, nb, goal, r_free_seen[0], r_goal, s)
+                action_values(par, q, values, y, succ, nb, goal, r_free_seen[0], r_goal, s,
+                              par.bonus)
             a = argmax_drawn(values, 0, rng)
     return a
 
@@ -198,7 +200,7 @@ def exploit(st, s):
     if a < 0:  # no move yet
         if par.lookahead and shaping[0]:
             action_values(par, q, values, y, succ, nb, goal, r_free_seen[0],
-                          goal_reward(r_goal_seen, r_free_seen, par.gamma), s)
+                          goal_reward(r_goal_seen, r_free_seen, par.gamma), s, 0.0)
             a = argmax_first(values, 0)
         else:
             a = argmax_first(q, s)

@@ -51,7 +51,8 @@ ADDED = ("reading.r_stay", "reading.r_clean", "coverage.distance")
 def init_state(cfg: RNHQLPlus, geom: Geometry, rng: np.random.Generator) -> State:
     n_s, n_a = geom.n_states, geom.n_actions
     par = cfg.params()._replace(explore_steps=walk_budget(cfg.explore_steps, geom))
-    return State(par, new_tally(), np.zeros((n_s, n_a)), new_move_model(n_s, n_a),
+    q = np.full((n_s, n_a), float(cfg.untried_bonus))  # optimism in the face of the untried
+    return State(par, new_tally(), q, new_move_model(n_s, n_a),
                  new_free_space(geom), new_optimism(n_s), np.zeros((1, n_a)), np.zeros(1),
                  np.zeros(1, np.bool_), new_known_routes(n_s),
                  new_pair_queue(n_s * n_a) if cfg.sweeping else new_pair_queue(0, 0),

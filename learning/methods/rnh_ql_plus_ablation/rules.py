@@ -74,7 +74,7 @@ def action_values(par, q, out, y, phi_row, w, on, centre, succ, nb, goal, r_free
     :func:`~learning.methods.rnh_ql_plus.rules.untried_value` on :func:`potential` (``based``: rows
     are re-based, Phi(s) is the row's)."""
     if direct:
-        plus_action_values(par, q, out, y, succ, nb, goal, r_free, r_goal, s)
+        plus_action_values(par, q, out, y, succ, nb, goal, r_free, r_goal, s, 0.0)
     else:
         phi_s = phi_row[s] if based else potential(par, w, on, centre, y, s)
         for a in range(q.shape[1]):

@@ -143,3 +143,51 @@ def test_a_tie_is_every_tied_method_named_whatever_the_order_they_ran_in():
     assert "`alpha` first on 1 of 2 (maze-w4)" in words
     row = KINDS["heldout"].render_rows([a]).splitlines()[2]
     assert "| alpha = zeta 3/3 · 30 (a tie) |" in row
+
+
+def test_the_corners_scenario_runs_in_the_held_out_study_from_corner_to_corner(tmp_path):
+    """scenarios.studies.maps.corners writes a map's corner-to-corner scenario (its map beside
+    it, named relative to it); the held-out study runs it as it is; a bad map exits 2."""
+    from scenarios.runs.spec import load
+    from scenarios.studies.maps import corners
+    from sim.grid.planning import corner_start_goal
+
+    toml, route = corners.write_corners("maze-w2-24", 5, 0.0, tmp_path / "maps")
+    free, _ = heldout.problem_map("maze-w2-24", 5, 0.0)
+    assert route == corner_start_goal(free)[2]
+    _, model = load(str(toml))
+    assert int(model.distance_to_goal[model.start]) == route
+    assert f'map = "{toml.stem.removesuffix("-corners")}.map"' in toml.read_text()
+    out = tmp_path / "h"
+    assert heldout.main(["--out", str(out), "--problems", f"{toml}@uniform",
+                         "--methods", "haql", "--seeds", "1"]) == 0
+    assert f"(route {route})" in (out / "heldout.md").read_text()
+    with pytest.raises(SystemExit) as e:
+        corners.main(["--maps", "forest-24", "--out", str(tmp_path / "x")])
+    assert e.value.code == 2
+
+
+def test_the_growth_study_tables_episodes_against_free_cells(tmp_path, capsys):
+    """scenarios.studies.maps.growth: a row per size with its free cells and route, each
+    method's quartiles (never where the median seed never got there), the exponents and
+    the N log N yardstick's; bad sizes exit 2."""
+    from scenarios.studies.maps import growth
+
+    out = tmp_path / "g"
+    assert growth.main(["--out", str(out), "--kind", "open", "--sizes", "24,16",
+                        "--methods", "rnh-ql+explore,haql", "--seeds", "2"]) == 0
+    text = (out / "growth.md").read_text()
+    assert text in capsys.readouterr().out
+    rows = [line for line in text.splitlines() if line.startswith("| 16 ") or
+            line.startswith("| 24 ")]
+    assert [r.split(" | ")[0] for r in rows] == ["| 16", "| 24"]  # sorted by size
+    assert all(r.count("/2 · ") == 2 for r in rows)
+    assert "Exponents" in text and "N log N grows as N^" in text
+    assert growth.quartiles([10, None, 30, 20]) == [17.5, 25.0, None]
+    assert growth.exponent([100, 400], [10.0, 40.0]) == pytest.approx(1.0)
+    assert growth.exponent([100, 400], [10.0, None]) is None
+    for bad in (["--sizes", "4"], ["--kind", "forest"], ["--protocol", "half"],
+                ["--kind", "rooms", "--sizes", "16"]):  # rooms of 15 cells: none free
+        with pytest.raises(SystemExit) as e:
+            growth.main(["--out", str(tmp_path / "x"), *bad])
+        assert e.value.code == 2

@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from scenarios.artifacts import (
+    growth,  # noqa: F401 (registers the growth study's table)
     heldout,  # noqa: F401 (registers the held-out tables)
     ladder,  # noqa: F401 (registers the ladder's tables)
 )

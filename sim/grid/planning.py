@@ -91,6 +91,8 @@ def far_start_goal(free: np.ndarray) -> tuple[tuple[int, int], tuple[int, int], 
     cells are tried as the first source, and the one reaching most cells is kept, so a
     small island cannot hold the pair."""
     cells = np.argwhere(free)
+    if cells.size == 0:
+        raise ValueError("the map has no free cell")
     best = None
     for r, c in cells[np.linspace(0, len(cells) - 1, 8).astype(int)]:
         d = grid_distances(free, (int(c), int(r)))  # BFS moves from (row r, col c)

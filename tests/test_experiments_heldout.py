@@ -191,3 +191,31 @@ def test_the_growth_study_tables_episodes_against_free_cells(tmp_path, capsys):
         with pytest.raises(SystemExit) as e:
             growth.main(["--out", str(tmp_path / "x"), *bad])
         assert e.value.code == 2
+
+
+def test_the_fresh_sets_verdicts_are_read_map_by_map_from_the_artifact():
+    """fresh_verdicts: the Q-choosing learner's seeds under uniform starts, the best method
+    against the best reference (1.2 x + 10) on every map, the open maps' best method; a
+    corner scenario's path is shown as its map and placement."""
+    from scenarios.artifacts.heldout import fresh_verdicts, label, map_of
+    from scenarios.artifacts.tables import KINDS
+    from scenarios.studies.maps.ranking import ranking
+
+    corner = "results/fresh-maps/maze-w4-256-s2027-b0.02-corners.toml uniform (route 9)"
+    cols = ["open-256 uniform (route 9)", corner, "open-256 s10 (route 9)"]
+    runs = {"mine": {cols[0]: [10] * 9 + [None], cols[1]: [50] * 8 + [None] * 2,
+                     cols[2]: [40] * 10},
+            "r-max": {cols[0]: [20] * 10, cols[1]: [30] * 10, cols[2]: [30] * 10},
+            "haql": {cols[0]: [None] * 10, cols[1]: [None] * 10, cols[2]: [10] * 10}}
+    protocols = {c: c.split(" ")[1] for c in cols}
+    d = {"caption": "c", "columns": cols, "rows": {m: {} for m in runs}, "runs": runs,
+         "budgets": dict.fromkeys(cols, 100), "protocols": protocols,
+         "ranking": ranking(runs, dict.fromkeys(cols, 100), protocols)}
+    text = fresh_verdicts(d, "mine")
+    assert "under uniform starts: missed on 1 of 2 (maze-w4-256 corners uniform 8/10)" in text
+    assert "(r-max): met on 3 of 3 maps" in text  # mine 10 vs 20; r-max 30 wins; haql 10
+    assert "open-256 uniform mine 9/10; open-256 s10 haql 10/10" in text
+    assert map_of(corner) == ("maze-w4 corners", "256")
+    assert label(corner) == "maze-w4-256 corners uniform (route 9)"
+    assert "| maze-w4-256 corners uniform (route 9) |" in KINDS["heldout"].render(d)
+    assert "(other was not run here.)" in fresh_verdicts(d, "other")

@@ -10,9 +10,39 @@ rendered depends on the order of the arguments."""
 
 from __future__ import annotations
 
+import re
+from pathlib import PurePosixPath
 from typing import Any
 
 from scenarios.artifacts.tables import renderer, row_renderer
+
+# a scenario file's stem as the held-out studies write them: KIND-N[-sSEED][-bBRAID][-corners]
+_STEM = re.compile(r"(?P<kind>.+?)-(?P<size>\d+)(?:-s\d+)?(?:-b[\d.]+)?(?P<corners>-corners)?")
+
+
+def map_of(col: str) -> tuple[str, str]:
+    """(kind, side) of a column's map: ``maze-w4-256 s10 (route ...)`` -> ("maze-w4", "256");
+    a scenario file written by :mod:`scenarios.studies.maps.corners`
+    (``.../maze-w4-256-s2027-b0.02-corners.toml``) -> ("maze-w4 corners", "256"); a
+    built-in scenario ``paper-50`` -> ("paper", "50")."""
+    name = col.split(" ")[0]
+    if name.endswith(".toml"):
+        m = _STEM.fullmatch(PurePosixPath(name).stem)
+        if m:
+            return m["kind"] + (" corners" if m["corners"] else ""), m["size"]
+    kind, _, size = name.rpartition("-")
+    return (kind, size) if kind else (name, "")
+
+
+def label(col: str) -> str:
+    """A column as the tables show it: a scenario file's path by its map, kind, side and
+    placement (``maze-w4-256 corners s10 (route 1054)``), every other column as it is."""
+    name, _, rest = col.partition(" ")
+    if not name.endswith(".toml"):
+        return col
+    kind, size = map_of(col)
+    base, _, place = kind.partition(" ")
+    return f"{base}-{size}{' ' + place if place else ''} {rest}"
 
 RANKING_NOTE = ("each method's IQM share of the episode budget spent before a stable optimal "
                 "route (never: all of it; lower is better) [95 % stratified bootstrap "
@@ -25,7 +55,7 @@ def heldout(d: dict[str, Any]) -> str:
     """Held-out maps: a row per method, a column per map and protocol; cells
     optimal seeds / seeds · median episodes to a stable optimal route · median wall time."""
     cols = d["columns"]
-    lines = [d["caption"], "", "| method | " + " | ".join(cols) + " |",
+    lines = [d["caption"], "", "| method | " + " | ".join(label(c) for c in cols) + " |",
              "|---|" + "---|" * len(cols)]
     for row, cells in d["rows"].items():
         lines.append(f"| {row} | " + " | ".join(cells.get(c, "–") for c in cols) + " |")
@@ -39,7 +69,8 @@ def heldout(d: dict[str, Any]) -> str:
             lines.append(f"| {m} | {_est(r['iqm'][m], 3)} | " + " | ".join(
                 "–" if o == m else _est(r["poi"][m][o], 2) for o in order) + " |")
     if d.get("ranking", {}).get("winners"):
-        won = "; ".join(f"{c.split(' (')[0]}: {_winner(d, c)}" for c in d["ranking"]["winners"])
+        won = "; ".join(f"{label(c).split(' (')[0]}: {_winner(d, c)}"
+                        for c in d["ranking"]["winners"])
         lines += ["", "Per map, the method with the lowest median episodes to a stable optimal "
                   "route (ties: every method with that median and as many optimal seeds, in "
                   f"name order) [95 % bootstrap interval of the median, where one won]: {won}."]
@@ -80,13 +111,13 @@ def winners(d: dict[str, Any], col: str) -> list[str]:
 def heldout_winners(ds: list[dict[str, Any]]) -> str:
     """Held-out studies as one finding: a row per study and protocol, a column per map
     kind, each cell the map's winner (:func:`_winner`), with the IQM ranking's first."""
-    kinds = list(dict.fromkeys(c.split(" ")[0].rsplit("-", 1)[0] for d in ds for c in d["columns"]))
+    kinds = list(dict.fromkeys(map_of(c)[0] for d in ds for c in d["columns"]))
     lines = ["| maps | starts | " + " | ".join(kinds) + " | lowest IQM [95 %] |",
              "|---|---|" + "---|" * (len(kinds) + 1)]
     for d in (d for d in ds if "ranking" in d):  # older artifacts kept no seeds to rank
-        size = d["columns"][0].split(" ")[0].rsplit("-", 1)[1]
+        size = map_of(d["columns"][0])[1]
         for proto, r in d["ranking"]["protocols"].items():
-            won = {c.split(" ")[0].rsplit("-", 1)[0]: _winner(d, c) for c in r["maps"]}
+            won = {map_of(c)[0]: _winner(d, c) for c in r["maps"]}
             first = r["order"][0]
             starts = _protocol(proto)
             lines.append(f"| {size}² | {starts[0].lower()}{starts[1:]} | " + " | ".join(
@@ -99,12 +130,12 @@ def heldout_summary(ds: list[dict[str, Any]]) -> str:
     per size and protocol, who ranks first by IQM and who wins how many maps, which."""
     out = []
     for d in (d for d in ds if "ranking" in d):
-        size = d["columns"][0].split(" ")[0].rsplit("-", 1)[1]
+        size = map_of(d["columns"][0])[1]
         for proto, r in d["ranking"]["protocols"].items():
             won: dict[str, list[str]] = {}
             for c in r["maps"]:
                 for m in winners(d, c):  # a tie: a win of each
-                    won.setdefault(m, []).append(c.split(" ")[0].rsplit("-", 1)[0])
+                    won.setdefault(m, []).append(map_of(c)[0])
             wins = "; ".join(f"`{m}` first on {len(ks)} of {len(r['maps'])} ({', '.join(ks)})"
                              for m, ks in sorted(won.items(), key=lambda x: (-len(x[1]), x[0])))
             starts = _protocol(proto)
@@ -154,3 +185,51 @@ def heldout_verdicts(d: dict[str, Any]) -> str:
             f"**Speed against the references run here ({', '.join(refs)}): met on "
             f"{len(met)} of {len(cols)} maps**" + (f"; missed on {'; '.join(missed)}"
                                                     if missed else "") + ".\n")
+
+
+def _optimal(eps: list[Any]) -> int:
+    return sum(e is not None for e in eps)
+
+
+def fresh_verdicts(d: dict[str, Any], learner: str) -> str:
+    """The fresh judging set's three verdicts (docs/studies.md, fixed before its runs),
+    checked from the artifact map by map: ``learner`` (the Q-choosing rnh-ql+) optimal in at
+    least 9 of 10 seeds on every map under uniform starts; the best method (the map's
+    winner, :func:`winners`) within 1.2 x the best reference's median + 10 episodes on every
+    map and protocol; and on the open maps the best method optimal in at least 9 of 10."""
+    runs, protocols = d["runs"], d["protocols"]
+    refs = [m for m in REFERENCES if m in runs]
+    out = []
+    mine = runs.get(learner)
+    if mine is None:
+        out.append(f"({learner} was not run here.)")
+    else:
+        uni = [c for c in mine if protocols[c] == "uniform"]
+        low = [f"{label(c).split(' (')[0]} {_optimal(mine[c])}/{len(mine[c])}" for c in uni
+               if _optimal(mine[c]) < 0.9 * len(mine[c])]
+        out.append(f"**`{learner}` optimal in ≥ 9 of 10 seeds under uniform starts: "
+                   + ("met on every map" if not low else
+                      f"missed on {len(low)} of {len(uni)} ({'; '.join(low)})") + ".**")
+    met, missed, open_maps = 0, [], []
+    for c in d["columns"]:
+        best = winners(d, c)
+        b_med = _median(runs[best[0]][c])
+        ref, r_med = min(((m, _median(runs[m][c])) for m in refs if c in runs[m]),
+                         key=lambda x: (x[1], x[0]), default=(None, float("inf")))
+        if b_med <= 1.2 * r_med + 10:
+            met += 1
+        else:
+            missed.append(f"{label(c).split(' (')[0]}: {' = '.join(best)} {_episodes(b_med)} "
+                          f"against {ref}'s {_episodes(r_med)}")
+        if map_of(c)[0] == "open":
+            n = _optimal(runs[best[0]][c])
+            open_maps.append(f"{label(c).split(' (')[0]} {' = '.join(best)} "
+                             f"{n}/{len(runs[best[0]][c])}")
+    n = len(d["columns"])
+    out.append(f"**The best method within 1.2 × the best reference's median + 10 episodes "
+               f"({', '.join(refs)}): met on {met} of {n} maps**"
+               + (f"; missed on {'; '.join(missed)}" if missed else "") + ".")
+    if open_maps:
+        out.append("**Open maps, the best method optimal in ≥ 9 of 10 seeds**: "
+                   + "; ".join(open_maps) + ".")
+    return " ".join(out) + "\n"

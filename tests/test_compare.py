@@ -169,7 +169,8 @@ def test_run_key_covers_everything_that_changes_a_run(tmp_path):
 
 
 def test_one_quantile_definition_with_never_last():
-    from scenarios.runs.results import _stats, quantile
+    from scenarios.runs.statistics import quantile
+    from scenarios.runs.statistics import seed_stats as _stats
 
     assert quantile([1, 2, 3, 4], 0.5) == 2.5  # type 7: interpolates
     assert quantile([4, 1, 3, 2], 0.25) == 1.75

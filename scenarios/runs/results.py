@@ -68,9 +68,10 @@ from scenarios.runs.statistics import (
     LEVEL,
     N_RESAMPLES,
     Estimate,
-    bootstrap_ci,
     generator,
     probability_of_improvement,
+    quantile,
+    seed_stats,
 )
 from sim.files import atomic_write_text
 
@@ -100,56 +101,15 @@ def _ladder_knob_text(knobs: dict) -> str:
                         else "), no fixes"))
     return "".join(f", {p}" for p in parts)
 
-def quantile(values: list[float | None], q: float) -> float:
-    """The q-quantile of ``values`` by one definition used everywhere in rnhql.
-
-    Hyndman & Fan type 7 (numpy's and R's default): sort, take position
-    h = (n - 1)·q, interpolate linearly between the values either side of h.
-    ``None`` (never reached, G not reached) counts as +infinity and sorts last;
-    interpolating towards it gives +infinity, landing exactly on a finite value
-    gives that value. So a median of 10 seeds is the mean of the 5th and 6th
-    values, and is ``never`` as soon as the 6th seed never got there.
-    """
-    arr = np.sort(np.array([math.inf if v is None else float(v) for v in values]))
-    if arr.size == 0:
-        raise ValueError("quantile of no values")
-    h = (arr.size - 1) * q
-    lo = math.floor(h)
-    frac = h - lo
-    if frac == 0.0:
-        return float(arr[lo])
-    a, b = arr[lo], arr[lo + 1]
-    if math.isinf(b):
-        return math.inf
-    return float(a + (b - a) * frac)
-
-
-def _finite(v: float) -> float | None:
-    return None if math.isinf(v) else v
-
-
-def _stats(values: list[float | None]) -> dict[str, Any]:
-    """Median, quartiles (:func:`quantile`) and the median's 95 % bootstrap interval
-    (``ci95``, a fresh seeded generator per figure); ``None`` in and out means never / no G.
-    """
-    if not values:
-        return {"median": None, "q25": None, "q75": None, "ci95": None}
-    out: dict[str, Any] = {}
-    for name, q in (("median", 0.5), ("q25", 0.25), ("q75", 0.75)):
-        out[name] = _finite(quantile(values, q))
-    out["ci95"] = [_finite(v) for v in bootstrap_ci(values, rng=generator())]
-    return out
-
-
 def summarise(runs: list[dict[str, Any]]) -> dict[str, dict[str, dict[str, Any]]]:
     groups: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
     for r in runs:
         groups[(r["method"], r["world"])].append(r)
     out: dict[str, dict[str, dict[str, Any]]] = defaultdict(dict)
     for (method, world), rs in groups.items():
-        entry: dict[str, Any] = {f: _stats([r.get(f) for r in rs]) for f in SUMMARY_FIGURES}
+        entry: dict[str, Any] = {f: seed_stats([r.get(f) for r in rs]) for f in SUMMARY_FIGURES}
         # a route that never reaches G has no length: rank it as infinitely long
-        entry["final_route_length"] = _stats([r["final_route_length"] if
+        entry["final_route_length"] = seed_stats([r["final_route_length"] if
                                               r["final_route_length"] >= 0 else None for r in rs])
         entry["reached_goal_fraction"] = float(np.mean([r["final_route_length"] >= 0
                                                         for r in rs]))
@@ -157,12 +117,12 @@ def summarise(runs: list[dict[str, Any]]) -> dict[str, dict[str, dict[str, Any]]
         entry["seeds"] = len(rs)
         pols = [r.get("final_policy") for r in rs]
         if all(p is not None for p in pols):  # physics: the final policy's drives
-            entry["final_policy_p_goal"] = _stats([p["p_goal"] for p in pols])
+            entry["final_policy_p_goal"] = seed_stats([p["p_goal"] for p in pols])
             entry["final_policy_reliable_fraction"] = float(np.mean(
                 [p["p_goal"] >= RELIABLE_P_GOAL for p in pols]))
-            entry["final_policy_primitives_mean"] = _stats([p["primitives_mean"]
+            entry["final_policy_primitives_mean"] = seed_stats([p["primitives_mean"]
                                                             for p in pols])
-            entry["final_policy_contacts_mean"] = _stats([p["contacts_mean"] for p in pols])
+            entry["final_policy_contacts_mean"] = seed_stats([p["contacts_mean"] for p in pols])
             entry["final_policy_rollouts"] = int(pols[0]["rollouts"])
             if all("optimal_at_fidelity" in r for r in rs):
                 entry["optimal_at_fidelity_fraction"] = float(np.mean(

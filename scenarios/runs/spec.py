@@ -31,7 +31,7 @@ from learning.metrics import (
     reward_per_step,
 )
 from learning.plain.learner import LearnerClassError
-from scenarios.runs.results import quantile
+from scenarios.runs.statistics import quantile
 from sim.errors import InputError
 from sim.grid import TabularModel, build_model
 from sim.physics.fidelity import Fidelity, parse_fidelity

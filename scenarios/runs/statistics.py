@@ -6,20 +6,20 @@ reports use (:data:`SEED`), fresh per estimate so an interval does not depend on
 else was estimated before it.
 
 **Never reached.** A ``None`` (never reached, G not reached) is the worst outcome a seed
-can have. :func:`bootstrap_ci` counts it as ``+inf``, like :func:`scenarios.runs.results.
-quantile`: the median of a resample is ``+inf`` as soon as its middle order statistic (or
-one of the two) is ``None``, and an interval end is ``+inf`` when the percentile lands on
-or interpolates towards such a resample (so ``[40, inf]`` reads "at most 40 is ruled
-out, and it may well never get there"). :func:`probability_of_improvement` counts it as
-the worst value on the figure's side (``+inf`` when lower is better, ``-inf`` when higher
-is better): it loses to every value and ties (½) with another ``None``.
+can have. :func:`bootstrap_ci` counts it as ``+inf``, like :func:`quantile`: the median
+of a resample is ``+inf`` as soon as its middle order statistic (or one of the two) is
+``None``, and an interval end is ``+inf`` when the percentile lands on or interpolates
+towards such a resample (so ``[40, inf]`` reads "at most 40 is ruled out, and it may
+well never get there"). :func:`probability_of_improvement` counts it as the worst value
+on the figure's side (``+inf`` when lower is better, ``-inf`` when higher is better): it
+loses to every value and ties (½) with another ``None``.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -31,7 +31,7 @@ Stat = Callable[[np.ndarray], np.ndarray]
 
 
 def median(samples: np.ndarray) -> np.ndarray:
-    """Median along the last axis (type 7, as :func:`~scenarios.runs.results.quantile`)."""
+    """Median along the last axis (type 7, as :func:`quantile`)."""
     return np.median(samples, axis=-1)
 
 
@@ -193,3 +193,36 @@ def probability_of_improvement_tasks(xs: Sequence[Sequence[float | None]],
     k = len(xs)
     lo, hi = percentile_interval(boot / k, level)
     return Estimate(point / k, lo, hi)
+
+
+def quantile(values: Sequence[float | None], q: float) -> float:
+    """The q-quantile of ``values`` by one definition used everywhere in rnhql.
+
+    Hyndman & Fan type 7 (numpy's and R's default): sort, take position
+    h = (n - 1)·q, interpolate linearly between the values either side of h.
+    ``None`` (never reached, G not reached) counts as +infinity and sorts last;
+    interpolating towards it gives +infinity, landing exactly on a finite value
+    gives that value. So a median of 10 seeds is the mean of the 5th and 6th
+    values, and is ``never`` as soon as the 6th seed never got there.
+    """
+    arr = np.sort(as_values(values))
+    if arr.size == 0:
+        raise ValueError("quantile of no values")
+    return _quantile_sorted(arr, q)
+
+
+def _finite(v: float) -> float | None:
+    return None if math.isinf(v) else v
+
+
+def seed_stats(values: Sequence[float | None]) -> dict[str, Any]:
+    """A figure over seeds as the summaries keep it: median, quartiles (:func:`quantile`)
+    and the median's 95 % bootstrap interval (``ci95``, a fresh seeded generator per
+    figure); ``None`` in and out means never / no G."""
+    if not values:
+        return {"median": None, "q25": None, "q75": None, "ci95": None}
+    out: dict[str, Any] = {}
+    for name, q in (("median", 0.5), ("q25", 0.25), ("q75", 0.75)):
+        out[name] = _finite(quantile(values, q))
+    out["ci95"] = [_finite(v) for v in bootstrap_ci(values, rng=generator())]
+    return out

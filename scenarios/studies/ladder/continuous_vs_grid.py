@@ -32,8 +32,8 @@ from scenarios.artifacts.ladder import ladder_table
 from scenarios.figures.plots import draw_map
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
-from scenarios.runs.results import quantile
 from scenarios.runs.spec import RunSpec, load, make_config
+from scenarios.runs.statistics import quantile
 from scenarios.script_args import arg, artifact_arg, jobs_arg, parse, study_command
 from scenarios.studies.ladder.predictivity import srcc
 from scenarios.studies.maps.heldout import KIND, write_problem

@@ -27,8 +27,8 @@ from learning.compiled.readout import greedy_actions
 from learning.streams import streams
 from scenarios.artifacts import write_artifact
 from scenarios.runs.physics import RunGroup, train_physics_runs
-from scenarios.runs.results import quantile
 from scenarios.runs.spec import load, make_config
+from scenarios.runs.statistics import quantile
 from scenarios.script_args import arg, parse, study_command
 from sim.files import atomic_write_text
 from sim.physics.fidelity import parse_fidelity

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from scenarios import api
 from scenarios.artifacts import write_artifact
-from scenarios.runs.results import quantile
+from scenarios.runs.statistics import quantile
 from scenarios.script_args import arg, parse, study_command
 
 DQN = "examples.batched_dqn:BatchedDQN"

@@ -33,8 +33,7 @@ from scenarios.artifacts import ROOT, load_artifact, write_artifact
 from scenarios.artifacts.ladder import warm_start_table
 from scenarios.figures.save import save_figure
 from scenarios.palette import method_colour_mpl
-from scenarios.runs.results import quantile
-from scenarios.runs.statistics import bootstrap_ci
+from scenarios.runs.statistics import bootstrap_ci, quantile
 from scenarios.script_args import arg, artifact_arg, jobs_arg, parse
 from scenarios.studies.ladder.continuous_vs_grid import STUDY_MAPS, _map_path, _slug
 from sim.files import atomic_write_text

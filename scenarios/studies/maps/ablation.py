@@ -32,8 +32,8 @@ import numpy as np
 from learning.metrics import episodes_to_stable_optimal
 from scenarios.artifacts import ROOT, load_artifact, write_artifact
 from scenarios.figures.save import save_figure
-from scenarios.runs.results import quantile
 from scenarios.runs.spec import RunSpec
+from scenarios.runs.statistics import quantile
 from scenarios.script_args import arg, artifact_arg, jobs_arg, parse, parser_of
 from scenarios.studies.maps.suite import build_suite
 from scenarios.sweep.run import SweepFiles, ctrl_c_held, run_sweep
@@ -102,7 +102,7 @@ def ablation_specs(rows: Sequence[Row], maps: list[dict], seeds: int, episodes: 
 
 
 def quartiles(xs: list[int | None]) -> tuple[float, float, float]:
-    """(median, q25, q75) by the one quantile definition (scenarios.runs.results.quantile:
+    """(median, q25, q75) by the one quantile definition (scenarios.runs.statistics.quantile:
     type 7, None = never = +inf sorts last)."""
     if not xs:
         return math.inf, math.inf, math.inf

@@ -33,8 +33,8 @@ from typing import Any
 import numpy as np
 
 from scenarios.artifacts import check_artifact_name, load_artifact, write_artifact
-from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
+from scenarios.runs.statistics import quantile
 from scenarios.script_args import arg, parse, parser_of
 from scenarios.studies.maps.heldout import method_of, share_of, write_problem
 from scenarios.sweep.backends import Progress, run_local
@@ -68,7 +68,7 @@ def map_name(kind: str, size: int) -> str:
 
 def quartiles(values: list[int | None]) -> list[float | None]:
     """[q25, median, q75] of the seeds' episodes to a stable optimal route, a seed that never
-    got there ranked last (:func:`scenarios.runs.results.quantile`, the sweeps' summary);
+    got there ranked last (:func:`scenarios.runs.statistics.quantile`, the sweeps' summary);
     a quartile that falls on or beside such a seed is None (never)."""
     out = [quantile(values, q) for q in (0.25, 0.5, 0.75)]
     return [None if math.isinf(v) else float(v) for v in out]

@@ -30,8 +30,8 @@ from learning.metrics import episodes_to_stable_optimal
 from learning.parts.rbf import rbf_features
 from learning.streams import streams
 from scenarios.artifacts import write_artifact
-from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
+from scenarios.runs.statistics import quantile
 from scenarios.script_args import arg, artifact_arg, parse, study_command
 from sim.files import atomic_write_text
 from sim.grid.planning import value_iteration

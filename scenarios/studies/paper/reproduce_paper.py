@@ -26,8 +26,8 @@ import numpy as np
 from learning.methods.registry import comparison_methods
 from learning.metrics import reward_per_step
 from scenarios.artifacts import write_artifact
-from scenarios.runs.results import quantile
 from scenarios.runs.spec import load
+from scenarios.runs.statistics import quantile
 from scenarios.script_args import arg, artifact_arg, jobs_arg, parse, study_command
 from scenarios.studies.paper.reward_facts import reward_facts
 from scenarios.sweep.execute import sweep as run_specs

@@ -40,6 +40,10 @@ METHOD_COLOURS: dict[str, tuple[int, int, int]] = {  # RGB
 # methods without a colour of their own (a study's variant): the next four of the same
 # search, each far from the method colours (CIEDE2000 >= 18)
 OTHER_COLOURS = ((252, 108, 12), (252, 0, 252), (12, 156, 168), (144, 108, 96))
+# two methods that kept the colour their name's hash gave them, so a variant's hash
+# (rnh-ql+:untried_bonus=1 beside them in the held-out profiles) cannot land on it
+NAMED_OTHER = {"rnh-ql+explore": OTHER_COLOURS[1], "abstraction-ql": OTHER_COLOURS[3]}
+VARIANT_COLOURS = tuple(c for c in OTHER_COLOURS if c not in NAMED_OTHER.values())
 
 
 def method_colour(method: str) -> tuple[int, int, int]:
@@ -47,7 +51,9 @@ def method_colour(method: str) -> tuple[int, int, int]:
     base = method.split(" ", 1)[0]  # "rnh-ql+ (a variant)" or "haql (grid)" -> the method
     if base in METHOD_COLOURS:
         return METHOD_COLOURS[base]
-    return OTHER_COLOURS[zlib.crc32(method.encode()) % len(OTHER_COLOURS)]
+    if base in NAMED_OTHER:
+        return NAMED_OTHER[base]
+    return VARIANT_COLOURS[zlib.crc32(method.encode()) % len(VARIANT_COLOURS)]
 
 
 def method_colour_mpl(method: str) -> tuple[float, float, float]:

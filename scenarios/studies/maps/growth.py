@@ -117,7 +117,7 @@ def figure_from_artifact(name: str, path: str | Path) -> Path:
         hi = np.array([q[2] if q[2] is not None else q[1] for _, q in kept]) - med
         slope = d["exponents"][lab]
         ax.errorbar(xs, med, yerr=[lo, hi], marker="o", capsize=3,
-                    color=method_colour_mpl(lab.partition(":")[0]),
+                    color=method_colour_mpl(lab),
                     label=lab + ("" if slope is None else f" (slope {slope:.2f})"))
         if xs[0] == cells[0]:
             firsts.append(med[0])

@@ -115,3 +115,15 @@ def test_colours_read_on_the_viewer_background_and_others_stay_apart():
         assert min(ciede2000(lab(other), lab(c)) for c in METHOD_COLOURS.values()) >= 18
     assert method_colour("rnh-ql+ablation") in OTHER_COLOURS
     assert method_colour("haql (grid)") == METHOD_COLOURS["haql"]
+
+
+def test_a_variants_colour_is_never_a_named_methods():
+    """A study's variant (a hashed colour) cannot coincide with a method that has one by
+    name, listed or kept: the held-out profiles draw rnh-ql+explore, abstraction-ql and
+    rnh-ql+:untried_bonus=1 side by side."""
+    from scenarios.palette import METHOD_COLOURS, NAMED_OTHER, method_colour
+
+    named = {method_colour(m) for m in (*METHOD_COLOURS, *NAMED_OTHER)}
+    for variant in ("rnh-ql+:untried_bonus=1", "rnh-ql+:untried_bonus=100",
+                    "rnh-ql+:untried_bonus=1;n_planning=0", "haql:eps=0.2"):
+        assert method_colour(variant) not in named, variant

@@ -219,3 +219,10 @@ def test_the_fresh_sets_verdicts_are_read_map_by_map_from_the_artifact():
     assert label(corner) == "maze-w4-256 corners uniform (route 9)"
     assert "| maze-w4-256 corners uniform (route 9) |" in KINDS["heldout"].render(d)
     assert "(other was not run here.)" in fresh_verdicts(d, "other")
+    from scenarios.artifacts.heldout import head_to_head
+
+    h2h = head_to_head(d, "mine", "r-max")
+    assert "**uniform starts**: P(`mine` < `r-max`) " in h2h
+    assert "open 10 against 20 (0.5 ×); maze-w4 corners 50 against 30 (1.7 ×)." in h2h
+    assert "**10 % of starts from S**: P(`mine` < `r-max`) 0.00" in h2h
+    assert "open 40 against 30 (1.3 ×)." in h2h

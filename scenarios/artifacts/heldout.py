@@ -233,3 +233,23 @@ def fresh_verdicts(d: dict[str, Any], learner: str) -> str:
         out.append("**Open maps, the best method optimal in ≥ 9 of 10 seeds**: "
                    + "; ".join(open_maps) + ".")
     return " ".join(out) + "\n"
+
+
+def head_to_head(d: dict[str, Any], a: str, b: str) -> str:
+    """Method ``a`` against ``b``, per protocol: P(a's run spends less of the budget than
+    b's) [95 %] from the ranking, and each map's median episodes of both (a, then b), with
+    the share of a's over b's where both settle."""
+    out = []
+    for proto, r in d["ranking"]["protocols"].items():
+        if a not in r["poi"] or b not in r["poi"][a]:
+            continue
+        cells = []
+        for c in r["maps"]:
+            ma, mb = _median(d["runs"][a][c]), _median(d["runs"][b][c])
+            ratio = f" ({ma / mb:.1f} ×)" if ma < float("inf") and 0 < mb < float("inf") else ""
+            cells.append(f"{map_of(c)[0]} {_episodes(ma)} against {_episodes(mb)}{ratio}")
+        starts = _protocol(proto)
+        out.append(f"**{starts[0].lower()}{starts[1:]}**: P(`{a}` < `{b}`) "
+                   f"{_est(r['poi'][a][b], 2)}; median episodes, map by map: "
+                   + "; ".join(cells) + ".")
+    return " ".join(out) + "\n"

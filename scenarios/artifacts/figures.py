@@ -43,6 +43,7 @@ class Screenshot:
 
 
 JUDGING = ("heldout.judging-256", "heldout.judging-512")
+FRESH = ("heldout.fresh-256",)  # the fresh judging set (its 512² half joins when it has run)
 SCALING_MAPS = tuple(f"scaling-maps.{n}" for n in ("small", "seed7", "512"))
 FIGURES = (
     ArtifactFigure("docs/scaling.png", ("scaling.arenas",),
@@ -60,6 +61,8 @@ FIGURES = (
     ArtifactFigure("docs/physics_batch.png", ("physics-batch.this-machine",),
                    "scenarios.bench.physics_batch:figure_from_artifact"),
     ArtifactFigure("docs/heldout-profiles.png", JUDGING,
+                   "scenarios.studies.maps.ranking:figure_from_artifact"),
+    ArtifactFigure("docs/heldout-fresh-profiles.png", FRESH,
                    "scenarios.studies.maps.ranking:figure_from_artifact"),
 )
 

@@ -27,15 +27,15 @@ import math
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from shlex import quote
 from typing import Any
 
 import numpy as np
 
 from scenarios.artifacts import check_artifact_name, load_artifact, write_artifact
+from scenarios.artifacts.growth import growth
 from scenarios.runs.spec import load
 from scenarios.runs.statistics import quantile
-from scenarios.script_args import arg, parse, parser_of
+from scenarios.script_args import arg, parse, parser_of, study_command
 from scenarios.studies.maps.heldout import method_of, share_of, write_problem
 from scenarios.sweep.backends import Progress, run_local
 from scenarios.sweep.run import make_specs, run_sweep
@@ -191,15 +191,11 @@ def main(argv: list[str] | None = None) -> int:
             "exponents": {lab: exponent([p["cells"] for p in points],
                                         [p["methods"][lab]["quartiles"][1] for p in points])
                           for lab in labels}}
-    from scenarios.artifacts.growth import growth  # the table the docs render
-
     text = growth(data)
     atomic_write_text(out / "growth.md", text)
     if args.artifact:
-        command = "python -m scenarios.studies.maps.growth " + " ".join(
-            f"--{k.replace('_', '-')} {quote(str(v))}" for k, v in vars(args).items()
-            if v not in (None, False) and k not in ("artifact", "resume", "jobs"))
-        write_artifact(f"growth.{args.artifact}", f"{command} --artifact {args.artifact}",
+        write_artifact(f"growth.{args.artifact}",
+                       study_command("scenarios.studies.maps.growth", Args, args),
                        ["grid"], data, study=__file__)
     print(text)
     return 0

@@ -55,6 +55,23 @@ def test_a_new_method_leaves_every_table_fresh_and_a_changed_one_names_itself(tm
     assert stale_parts(legacy, behaviour_digests(golden)) == ["grid"]
 
 
+def test_an_artifact_records_the_methods_it_measured_and_a_fixed_policy_check_all(tmp_path):
+    """A held-out table of rnh-ql+explore and haql is not stale when R-max changes (it never
+    ran it); ``r-max`` is not read into ``mf-r-max``, nor ``rnh-ql`` into ``rnh-ql+``; a
+    physics check naming no method depends on every method's records."""
+    from scenarios.artifacts import measured
+
+    recorded = {"rnh-ql": "1", "rnh-ql+": "2", "rnh-ql+explore": "3", "haql": "4",
+                "r-max": "5", "mf-r-max": "6"}
+    table = {"rows": [{"method": "rnh-ql+explore"}, {"method": "HAQL"}], "note": "MF-R-max"}
+    got = measured(recorded, table, "python -m scenarios.studies.maps.heldout --methods x")
+    assert got == {"rnh-ql+explore": "3", "haql": "4", "mf-r-max": "6"}
+    assert measured(recorded, {"p_goal": 0.98}, "rnhql crosscheck maze-1") == recorded
+    path = write_artifact("physics-grading.m", "python -m x --methods haql", ["grid"],
+                          {"k": 1}, directory=tmp_path)
+    assert set(json.loads(path.read_text())["behaviour"]["grid"]) == {"haql"}
+
+
 def test_an_artifact_records_its_provenance_and_turns_stale_with_the_behaviour(tmp_path):
     path = write_artifact("physics-grading.t", "python -m x --y", ["physics-noisy"],
                           {"k": 1}, directory=tmp_path)

@@ -126,6 +126,42 @@ def test_r_max_values_an_untried_move_by_phi_and_a_known_one_by_its_bumps():
     assert keys[right] < 0 and st.cost[0] == np.inf  # its only move always bumps
 
 
+@pytest.mark.parametrize("m", [1, 3])
+def test_r_max_repairs_its_costs_to_what_a_dijkstra_from_scratch_computes(paper40, m):
+    """After every model change (a move becoming known free, bumping, or with a bump share
+    of 1/3 or 2/3 at m = 3, hence costs like 1.5), the incrementally repaired costs and
+    look-aheads equal a full Dijkstra's number for number, and the repair left nothing
+    queued."""
+    from learning.geometry import geometry_of
+    from learning.methods.references.r_max import init_state, model_changed, refresh_costs, settle
+
+    rng = np.random.default_rng(11)
+    st = init_state(RMax(m=m), geometry_of(paper40), rng)
+    refresh_costs(st)
+    walls = _walls(paper40)
+    n_a = st.tries.shape[1]
+    rises = falls = 0
+    for i, j in enumerate(rng.permutation(st.tries.size)):  # every move, in a random order
+        s, a = divmod(int(j), n_a)
+        if st.neighbour[s, a] < 0:
+            continue
+        before = st.cost.copy()
+        st.tries[s, a] = m
+        st.clean[s, a] = 0 if walls[s, a] else m - int(rng.random() < 0.2) * (m - 1)
+        st.version[0] += 1
+        model_changed(st, s)
+        settle(st, -1)
+        assert st.cost_version[0] == st.version[0] and st.field.open.size[0] == 0
+        repaired = st.cost.copy()
+        rises += int((repaired > before).sum())
+        falls += int((repaired < before).sum())
+        if i % 4 == 0:  # an error would persist: checking every fourth change finds it
+            st.cost_version[0] = -1
+            refresh_costs(st)
+            np.testing.assert_array_equal(repaired, st.cost)
+    assert rises > 300 and falls == 0  # learning a move only ever raises optimistic costs
+
+
 def test_the_abstractions_value_follows_the_coarse_map_given_in_advance():
     """12 x 4 cells in three 4 x 4 blocks, G in the left one: with no map every block is
     linked to the next; with the middle block's cells all blocked, no abstract route

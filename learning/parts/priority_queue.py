@@ -94,3 +94,38 @@ def pop(key, pair, where, size):
         where[pair[0]] = 0
         _down(key, pair, where, n, 0)
     return top
+
+
+@njit(cache=True)
+def place(key, pair, where, size, j, priority):
+    """Queue pair ``j`` with exactly ``priority``, raised or lowered if it is queued already
+    (an incremental search re-keys a cell whose estimate rose as well as one whose fell)."""
+    i = where[j]
+    if i < 0:
+        push(key, pair, where, size, j, priority)
+        return
+    old = key[i]
+    key[i] = priority
+    if priority > old:
+        _up(key, pair, where, i)
+    elif priority < old:
+        _down(key, pair, where, size[0], i)
+
+
+@njit(cache=True)
+def drop(key, pair, where, size, j):
+    """Take pair ``j`` out of the queue (nothing if it is not queued)."""
+    i = where[j]
+    if i < 0:
+        return
+    where[j] = -1
+    n = size[0] - 1
+    size[0] = n
+    if i == n:
+        return
+    moved = pair[n]  # the last slot's pair fills the hole, then sifts either way
+    key[i] = key[n]
+    pair[i] = moved
+    where[moved] = i
+    _up(key, pair, where, i)
+    _down(key, pair, where, n, where[moved])

@@ -159,6 +159,28 @@ from scenarios.artifacts.digests import (  # noqa: E402, F401 (re-exported: thei
 )
 
 
+def _display_names() -> dict[str, str]:
+    from learning.methods.registry import METHODS  # heavy (compiled methods): when writing
+
+    return {cli: getattr(cls, "name", cli) for cli, cls in METHODS.items()}
+
+
+def measured(recorded: dict[str, str], data: Any, command: str) -> dict[str, str]:
+    """The digests of the methods an artifact measured, among ``recorded``'s: each method
+    its data or command names (its CLI or display name as a whole word: ``rnh-ql`` is not
+    ``rnh-ql+``). A table is stale when a method it measured changed, not when one it never
+    ran did. An artifact that names no method at all (a physics check of fixed policies)
+    keeps them all: any change of the part it depends on stales it."""
+    text = json.dumps(data) + " " + command
+    names = _display_names()
+
+    def named(name: str) -> bool:
+        return re.search(r"(?<![\w+-])" + re.escape(name) + r"(?![\w+-])", text) is not None
+
+    kept = {m: d for m, d in recorded.items() if named(m) or named(names.get(m, m))}
+    return kept or dict(recorded)
+
+
 def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any,
                    directory: Path = RESULTS_DIR, study: str | Path | None = None) -> Path:
     """Write ``docs/results/<name>.json`` atomically: the study's figures and provenance
@@ -171,7 +193,8 @@ def write_artifact(name: str, command: str, depends_on: Iterable[str], data: Any
     digests = behaviour_digests()
     doc = {"format": FORMAT, "name": name, "command": command,
            "date": _dt.date.today().isoformat(), "code_version": code_version(),
-           "behaviour": {p: {m: d for m, d in digests[p].items() if m != "*"} for p in parts},
+           "behaviour": {p: measured({m: d for m, d in digests[p].items() if m != "*"},
+                                     data, command) for p in parts},
            "wall_s": process_wall_s(),
            "machine": machine_load(), "data": data}
     if study is not None:

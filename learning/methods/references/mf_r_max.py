@@ -44,9 +44,9 @@ from numba import njit
 from learning.config import MethodConfig, params_tuple
 from learning.geometry import Geometry
 from learning.methods.references import r_max
-from learning.methods.references.r_max import Plan, Search
+from learning.methods.references.r_max import Field
 from learning.parts.move_reading import MoveReading, read_move
-from learning.parts.tabular import begin_plain, least_seen_to_work
+from learning.parts.tabular import begin_plain
 from learning.parts.tally import Tally
 
 HOOK = dict(cache=True, inline="always")
@@ -85,11 +85,10 @@ class State(NamedTuple):
     tries: np.ndarray  # int32[nS, nA]; tries of each move, up to the level's m
     clean: np.ndarray  # int32[nS, nA]; clean arrivals among those tries
     version: np.ndarray  # int64[1]; the model's version (moves that became known or reopened)
-    plan: Plan
     reading: MoveReading
     cost: np.ndarray  # float64[nS]; scratch, as R-max's
     cost_version: np.ndarray  # int64[1]
-    search: Search
+    field: Field
     keys: np.ndarray  # float64[nA]
     below: np.ndarray  # int8[nS, nA]; 1: known from the level below, trusted; 2: contradicted
     #                    at the rung, its outcomes counted since (0: R-max's own rule)
@@ -111,7 +110,7 @@ def carry(st: State) -> State:
     becomes trusted, its model worth ``m_rung`` tries (a move a lower rung contradicted keeps
     its counts); Φ the level below's costs to G where it knew one (never below the
     free-space distance)."""
-    r_max.refresh_costs(st)
+    r_max.current_costs(st, -1)
     m_rung = int(st.par.m_rung)
     counted = st.below == 2  # contradicted at a lower rung: its counts carry as they are
     known = (st.tries >= int(st.par.m)) & ~counted
@@ -119,8 +118,7 @@ def carry(st: State) -> State:
     st.clean[...] = np.where(known, np.where(st.clean > 0, m_rung, 0), st.clean)
     st.tries[...] = np.where(known, m_rung, st.tries)
     st.phi[...] = np.where(np.isfinite(st.cost), np.maximum(st.cost, st.phi), st.phi)
-    st.version[0] += 1
-    st.plan.at[0] = -1
+    st.version[0] += 1  # Φ changed everywhere: the next act refreshes every cost
     st.level[0] += 1
     return st
 
@@ -147,7 +145,8 @@ def update(st, s, a, r, s2, terminated, rng):
     st.tries[s, a] += 1
     if clean:
         st.clean[s, a] += 1
-    st.version[0] += 1  # its cost changed: the route is replanned
+    st.version[0] += 1  # its cost changed: the costs it touches are repaired
+    r_max.model_changed(st, s)
 
 
 begin = begin_plain
@@ -155,9 +154,7 @@ begin = begin_plain
 
 @njit(**HOOK)
 def exploit(st, s):
-    r_max.refresh_costs(st)
-    r_max.move_costs(st, s, st.keys)
-    return least_seen_to_work(st.keys, st.clean[s], 1)
+    return r_max.exploit(st, s)
 
 
 def q_table(st: State) -> np.ndarray:

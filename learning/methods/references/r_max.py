@@ -25,13 +25,21 @@ sees no wall at all. It explores more and plans less. And a noisy world's stray 
 blocks a move for good when ``m = 1`` (the model is frozen once known); larger ``m``
 averages, at ``m`` tries of every blocked move.
 
-Planning: an A* search from the agent's cell over the known moves, whose leaves are the
-untried moves (key: the cost through them) and G (consistent: Φ changes by at most one a
-move, and every known move costs at least one). The route found is followed until a move
-becomes known or the agent is not where the route said: one search per newly known move,
-each as large as the known region the route has to leave. The greedy test and the
-readers use every cell's cost at once, from one multi-source Dijkstra over the known
-moves backwards (seeded by the untried moves and G), recomputed when the model changed.
+Planning: every cell's cost to G is kept exact for the current model, incrementally.
+One multi-source Dijkstra over the known moves backwards (seeded by the untried moves and
+G) sets them at a run's first move (and after a resume, or a warm start's switch of Φ).
+After that, a move that becomes known changes one cell's look-ahead, and an LPA*-style
+repair (Koenig, Likhachev & Furcy 2004, run to consistency everywhere, with no start to
+focus on) re-settles only the cells whose cost it changes. Most newly known moves change
+nothing: a free move into ground not yet visited costs 1 + Φ both ways. So the work a
+run spends planning grows with the walls it finds, not with the moves it learns (an A*
+from scratch at every newly known move, the first version here, took minutes a 512²
+run). The behaviour is then greedy on these costs, one look-ahead a step. Its rule for
+ties: among moves of equal cost, the first untried one (so of equally cheap unknowns the
+nearest is tried now), else the greedy test's rule, the first known to work, else the
+first in action order. The costs are the one fixed point of the model's Bellman
+equation, so the repaired field equals a Dijkstra's from scratch number for number, and a
+resumed run (which rebuilds the field) acts as the uninterrupted one does.
 """
 
 from __future__ import annotations
@@ -46,7 +54,7 @@ from learning.config import MethodConfig, params_tuple
 from learning.geometry import Geometry
 from learning.parts.free_space import back_move, new_free_space
 from learning.parts.move_reading import MoveReading, new_move_reading, read_move
-from learning.parts.priority_queue import PairQueue, new_pair_queue, pop, push
+from learning.parts.priority_queue import PairQueue, drop, new_pair_queue, place, pop, push
 from learning.parts.tabular import begin_plain, least_seen_to_work
 from learning.parts.tally import Tally, new_tally
 
@@ -70,24 +78,13 @@ class RMax(MethodConfig):
     params_type: ClassVar[type] = Params
 
 
-class Plan(NamedTuple):
-    moves: np.ndarray  # int8[nS]; the route being followed, first move first
-    length: np.ndarray  # int64[1]; its moves
-    next: np.ndarray  # int64[1]; the index of the next move to take
-    at: np.ndarray  # int64[1]; the cell the route expects the agent in (-1: no route)
-    version: np.ndarray  # int64[1]; the model's version the route was planned on
+class Field(NamedTuple):
+    """Scratch of the cost field's upkeep (derived: rebuilt empty, never stored)."""
 
-
-class Search(NamedTuple):
-    """Scratch of the searches (derived: rebuilt empty, never stored)."""
-
-    g: np.ndarray  # float64[nS]; cost from the search's root (A*) or to G (Dijkstra)
-    stamp: np.ndarray  # int64[nS]; the search that last set g (older: unset)
-    closed: np.ndarray  # int64[nS]; the search that last closed the cell
-    parent: np.ndarray  # int32[nS]; the cell the best route came from
-    via: np.ndarray  # int8[nS]; the move from the parent
-    epoch: np.ndarray  # int64[1]; searches made
-    open: PairQueue  # the open cells, largest -f first
+    rhs: np.ndarray  # float64[nS]; each cell's one-move look-ahead cost (LPA*'s rhs)
+    closed: np.ndarray  # int64[nS]; the Dijkstra from scratch that last closed the cell
+    epoch: np.ndarray  # int64[1]; Dijkstras from scratch made
+    open: PairQueue  # the cells to settle, the least min(cost, rhs) first (key: minus it)
 
 
 class State(NamedTuple):
@@ -98,32 +95,27 @@ class State(NamedTuple):
     tries: np.ndarray  # int32[nS, nA]; tries of each move, up to m (then known)
     clean: np.ndarray  # int32[nS, nA]; clean arrivals among those tries (the rest bumped)
     version: np.ndarray  # int64[1]; moves that became known (the model's version)
-    plan: Plan  # the route the behaviour follows (stored: a resumed run follows it too)
     reading: MoveReading  # the rewards of a stay and of a clean arrival
     cost: np.ndarray  # float64[nS]; every cell's cost to G at ``cost_version`` (scratch)
-    cost_version: np.ndarray  # int64[1]; the version ``cost`` was computed at (-1: none)
-    search: Search
+    cost_version: np.ndarray  # int64[1]; the version ``cost`` is exact for (-1: none)
+    field: Field
     keys: np.ndarray  # float64[nA]; scratch: each move's cost at the state in hand
 
 
-DERIVED = ("cost", "cost_version", "search.g", "search.stamp", "search.closed",
-           "search.parent", "search.via", "search.epoch", "search.open.key",
-           "search.open.pair", "search.open.where", "search.open.size")
+DERIVED = ("cost", "cost_version", "field.rhs", "field.closed", "field.epoch",
+           "field.open.key", "field.open.pair", "field.open.where", "field.open.size")
 
 
 def init_state(cfg: RMax, geom: Geometry, rng: np.random.Generator) -> State:
     n_s, n_a = geom.n_states, geom.n_actions
     free = new_free_space(geom)  # nothing blocked: the arena's own distances
     phi = np.where(free.distance >= 0, free.distance, n_s).astype(np.float64)
-    plan = Plan(np.zeros(n_s, np.int8), np.zeros(1, np.int64), np.zeros(1, np.int64),
-                np.full(1, -1, np.int64), np.full(1, -1, np.int64))
-    search = Search(np.zeros(n_s), np.zeros(n_s, np.int64), np.zeros(n_s, np.int64),
-                    np.zeros(n_s, np.int32), np.zeros(n_s, np.int8), np.zeros(1, np.int64),
-                    new_pair_queue(n_s))
+    field = Field(np.zeros(n_s), np.zeros(n_s, np.int64), np.zeros(1, np.int64),
+                  new_pair_queue(n_s))
     return State(cfg.params(), new_tally(), free.neighbour, phi,
                  np.zeros((n_s, n_a), np.int32), np.zeros((n_s, n_a), np.int32),
-                 np.zeros(1, np.int64), plan, new_move_reading(), np.zeros(n_s),
-                 np.full(1, -1, np.int64), search, np.zeros(n_a))
+                 np.zeros(1, np.int64), new_move_reading(), np.zeros(n_s),
+                 np.full(1, -1, np.int64), field, np.zeros(n_a))
 
 
 @njit(cache=True, inline="always")
@@ -143,77 +135,6 @@ def _clear(q):
 
 
 @njit(cache=True)
-def plan_route(st, s0):
-    """A* from ``s0`` to the cheapest leaf (an untried move, or G); writes the route into
-    ``st.plan`` and returns its first move (-1: no leaf is reachable)."""
-    nb = st.neighbour
-    phi = st.phi
-    tries = st.tries
-    clean = st.clean
-    m = st.par.m
-    se = st.search
-    q = se.open
-    g, stamp, closed, parent, via = se.g, se.stamp, se.closed, se.parent, se.via
-    se.epoch[0] += 1
-    ep = se.epoch[0]
-    g[s0] = 0.0
-    stamp[s0] = ep
-    push(q.key, q.pair, q.where, q.size, s0, -phi[s0])
-    best, leaf, leaf_move = np.inf, -1, -1  # the cheapest leaf found: cost, cell, move
-    while q.size[0] > 0 and -q.key[0] < best:
-        x = pop(q.key, q.pair, q.where, q.size)
-        closed[x] = ep
-        if phi[x] == 0.0:  # G, the one cell at free-space distance 0
-            if g[x] < best:
-                best, leaf, leaf_move = g[x], x, -1
-            continue
-        for a in range(nb.shape[1]):
-            u = nb[x, a]
-            if u < 0:
-                continue
-            if tries[x, a] < m:
-                c = g[x] + 1.0 + phi[u]
-                if c < best:
-                    best, leaf, leaf_move = c, x, a
-                continue
-            w = known_weight(tries, clean, x, a)
-            if w < 0.0 or closed[u] == ep:
-                continue
-            c = g[x] + w
-            if stamp[u] != ep or c < g[u]:
-                g[u] = c
-                stamp[u] = ep
-                parent[u] = x
-                via[u] = a
-                push(q.key, q.pair, q.where, q.size, u, -(c + phi[u]))
-    _clear(q)
-    plan = st.plan
-    if leaf < 0:
-        plan.at[0] = -1
-        return -1
-    n = 0
-    x = leaf
-    while x != s0:
-        n += 1
-        x = parent[x]
-    total = n + (1 if leaf_move >= 0 else 0)
-    if total == 0:  # s0 is G: nothing to do (an episode ends there)
-        plan.at[0] = -1
-        return -1
-    if leaf_move >= 0:
-        plan.moves[n] = leaf_move
-    x = leaf
-    for i in range(n - 1, -1, -1):
-        plan.moves[i] = via[x]
-        x = parent[x]
-    plan.length[0] = total
-    plan.next[0] = 0
-    plan.version[0] = st.version[0]
-    plan.at[0] = s0
-    return plan.moves[0]
-
-
-@njit(cache=True)
 def refresh_costs(st):
     """Every cell's cost to G under the current model, when the model changed since the
     last call: a multi-source Dijkstra backwards over the known moves, each cell seeded by
@@ -226,11 +147,12 @@ def refresh_costs(st):
     clean = st.clean
     m = st.par.m
     cost = st.cost
-    se = st.search
-    q = se.open
-    closed = se.closed
-    se.epoch[0] += 1
-    ep = se.epoch[0]
+    fd = st.field
+    q = fd.open
+    closed = fd.closed
+    _clear(q)  # repairs still pending: the costs are recomputed from scratch
+    fd.epoch[0] += 1
+    ep = fd.epoch[0]
     n_s, n_a = nb.shape
     for x in range(n_s):
         c = 0.0 if phi[x] == 0.0 else np.inf
@@ -256,7 +178,105 @@ def refresh_costs(st):
                 cost[y] = c
                 push(q.key, q.pair, q.where, q.size, y, -c)
     _clear(q)
+    fd.rhs[:] = cost  # settled: every cell's look-ahead is its cost
     st.cost_version[0] = st.version[0]
+
+
+@njit(cache=True)
+def look_ahead(st, x):
+    """Cell x's cost through its best move under the model (LPA*'s rhs): an untried move
+    1 + Φ of where it heads, a known one its expected tries plus the cost of where it
+    leads; 0 at G."""
+    if st.phi[x] == 0.0:
+        return 0.0
+    nb = st.neighbour
+    c = np.inf
+    for a in range(nb.shape[1]):
+        u = nb[x, a]
+        if u < 0:
+            continue
+        if st.tries[x, a] < st.par.m:
+            k = 1.0 + st.phi[u]
+        else:
+            w = known_weight(st.tries, st.clean, x, a)
+            if w < 0.0:
+                continue
+            k = w + st.cost[u]
+        if k < c:
+            c = k
+    return c
+
+
+@njit(cache=True)
+def _touch(st, x):
+    """Queue x at the lesser of its cost and look-ahead if they differ, else unqueue it."""
+    q = st.field.open
+    g, rhs = st.cost[x], st.field.rhs[x]
+    if g == rhs:
+        drop(q.key, q.pair, q.where, q.size, x)
+    else:
+        place(q.key, q.pair, q.where, q.size, x, -min(g, rhs))
+
+
+@njit(cache=True)
+def settle(st, target):
+    """Settle queued repairs until ``target``'s cost is exact (-1: every cell's): LPA*'s
+    loop, with D* Lite's stop (Koenig & Likhachev 2002) for a target. A cell whose
+    look-ahead fell takes it and lowers its predecessors'; one whose look-ahead rose
+    forgets its cost, and the predecessors that counted on it look again. With a target
+    the loop stops once no queued cell is cheaper than it and it is consistent: every cell
+    cheaper than the target is then exact, and so is every move's cost that can tie the
+    target's best (a cell still queued is at least as dear as the target, so a move into
+    it costs more). Rises behind the agent (the cells that reach G through it) wait, and
+    many of them merge before anything reads them."""
+    nb = st.neighbour
+    n_a = nb.shape[1]
+    phi, tries, clean, m = st.phi, st.tries, st.clean, st.par.m
+    g, rhs = st.cost, st.field.rhs
+    q = st.field.open
+    while q.size[0] > 0:
+        if target >= 0 and g[target] == rhs[target] and -q.key[0] >= g[target]:
+            return
+        x = pop(q.key, q.pair, q.where, q.size)
+        gx = g[x]
+        lowered = gx > rhs[x]
+        if lowered:
+            g[x] = rhs[x]
+        else:
+            g[x] = np.inf
+            _touch(st, x)
+        for b in range(n_a):
+            y = nb[x, back_move(b)]  # y reaches x by move b
+            if y < 0 or nb[y, b] != x or tries[y, b] < m or phi[y] == 0.0:
+                continue
+            w = known_weight(tries, clean, y, b)
+            if w < 0.0:
+                continue
+            if lowered:
+                if w + g[x] < rhs[y]:
+                    rhs[y] = w + g[x]
+                    _touch(st, y)
+            elif rhs[y] == w + gx:  # y's look-ahead went through x's old cost
+                rhs[y] = look_ahead(st, y)
+                _touch(st, y)
+
+
+@njit(cache=True, inline="always")
+def model_changed(st, s):
+    """The model of a move at s changed (``version`` already raised): queue s's new
+    look-ahead for :func:`settle` if the costs were current for the version before, else
+    leave them to the next full refresh."""
+    if st.cost_version[0] == st.version[0] - 1:
+        st.field.rhs[s] = look_ahead(st, s)
+        _touch(st, s)
+        st.cost_version[0] = st.version[0]
+
+
+@njit(cache=True)
+def current_costs(st, target):
+    """Make ``st.cost`` exact at ``target`` (-1: everywhere) for the current model."""
+    refresh_costs(st)
+    settle(st, target)
 
 
 @njit(cache=True, inline="always")
@@ -275,28 +295,37 @@ def move_costs(st, s, keys):
 
 
 @njit(**HOOK)
+def greedy_move(st, s):
+    """The move of least cost under the model; among ties, a known move that has worked
+    first (:func:`learning.parts.tabular.least_seen_to_work`'s rule); -1 when no move leads
+    anywhere (every way out is known to bump)."""
+    current_costs(st, s)
+    move_costs(st, s, st.keys)
+    a = least_seen_to_work(st.keys, st.clean[s], 1)
+    return a if st.keys[a] >= 0.0 else -1
+
+
+@njit(**HOOK)
 def act(st, s, rng):
+    """Greedy on the costs; among tied moves an untried one first (the nearest of the
+    equally cheap unknowns is tried now, R-max's optimism), else the greedy test's rule."""
     n_a = st.neighbour.shape[1]
     if st.par.eps > 0.0 and rng.random() < st.par.eps:
         return rng.integers(0, n_a)
-    plan = st.plan
-    if (plan.at[0] == s and plan.version[0] == st.version[0]
-            and plan.next[0] < plan.length[0]):
-        a = plan.moves[plan.next[0]]
-    else:
-        a = plan_route(st, s)
-        if a < 0:  # no leaf reachable (every way out bumped): any move, a bump will tell
-            return rng.integers(0, n_a)
-    plan.next[0] += 1
-    u = st.neighbour[s, a]
-    plan.at[0] = u if u >= 0 else s
+    a = greedy_move(st, s)
+    if a < 0:  # nowhere to go (every way out bumped): any move, a bump will tell
+        return rng.integers(0, n_a)
+    keys, tries, m = st.keys, st.tries, st.par.m
+    for b in range(n_a):
+        if keys[b] == keys[a] and tries[s, b] < m:
+            return b
     return a
 
 
 @njit(**HOOK)
 def update(st, s, a, r, s2, terminated, rng):
-    """Count the try; the m-th freezes the move's model and makes the model a new version
-    (the route is replanned at the next act)."""
+    """Count the try; the m-th freezes the move's model, makes the model a new version and
+    repairs the costs it changed."""
     clean = read_move(st.reading.r_stay, st.reading.r_clean, s, r, s2, terminated)
     if st.tries[s, a] < st.par.m:
         st.tries[s, a] += 1
@@ -304,6 +333,7 @@ def update(st, s, a, r, s2, terminated, rng):
             st.clean[s, a] += 1
         if st.tries[s, a] == st.par.m:
             st.version[0] += 1
+            model_changed(st, s)
 
 
 begin = begin_plain
@@ -311,17 +341,14 @@ begin = begin_plain
 
 @njit(**HOOK)
 def exploit(st, s):
-    """The move of least cost under the model; among ties, a known move that has worked
-    first (:func:`learning.parts.tabular.least_seen_to_work`'s rule)."""
-    refresh_costs(st)
-    move_costs(st, s, st.keys)
-    return least_seen_to_work(st.keys, st.clean[s], 1)
+    """The greedy test's move: the behaviour's without ε (0 when no move leads anywhere)."""
+    return max(greedy_move(st, s), 0)
 
 
 def q_table(st: State) -> np.ndarray:
     """float64[nS, nA]: minus each move's cost to G under the model (a move that always
     bumps or leads nowhere: minus the number of cells)."""
-    refresh_costs(st)
+    current_costs(st, -1)
     n_s, n_a = st.neighbour.shape
     keys = np.zeros(n_a)
     out = np.empty((n_s, n_a))

@@ -226,3 +226,15 @@ def test_the_fresh_sets_verdicts_are_read_map_by_map_from_the_artifact():
     assert "open 10 against 20 (0.5 ×); maze-w4 corners 50 against 30 (1.7 ×)." in h2h
     assert "**10 % of starts from S**: P(`mine` < `r-max`) 0.00" in h2h
     assert "open 40 against 30 (1.3 ×)." in h2h
+
+
+def test_run_times_names_the_fastest_and_slowest_map_and_counts_those_within_the_limit():
+    from scenarios.artifacts.heldout import run_times
+
+    d = {"rows": {"r-max": {"caves-512 s10 (route 998)": "10/10 · 85 · 12.5 s",
+                            "maze-w4-512 uniform (route 3644)": "10/10 · 90 · 71.0 s",
+                            "rooms-512 s10 (route 988)": "9/10 · 60 · 8 s"}}}
+    text = run_times(d, "r-max", 60)
+    assert text == ("`r-max`, median wall time per run: 8 s (rooms-512 s10) to 71 s "
+                    "(maze-w4-512 uniform); within 60 s on 2 of 3 maps.\n")
+    assert "no timed runs" in run_times(d, "haql", 60)

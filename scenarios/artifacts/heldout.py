@@ -253,3 +253,20 @@ def head_to_head(d: dict[str, Any], a: str, b: str) -> str:
                    f"{_est(r['poi'][a][b], 2)}; median episodes, map by map: "
                    + "; ".join(cells) + ".")
     return " ".join(out) + "\n"
+
+
+def run_times(d: dict[str, Any], method: str, limit_s: float) -> str:
+    """``method``'s median wall time per run on each map of the table (the time in its
+    cells), its slowest and fastest map, and how many maps are within ``limit_s``."""
+    times = []
+    for col, cell in d["rows"].get(method, {}).items():
+        m = re.search(r"([\d.]+) s$", cell)
+        if m:
+            times.append((float(m[1]), label(col).split(" (")[0]))
+    if not times:
+        return f"`{method}` has no timed runs in this table.\n"
+    times.sort()
+    within = sum(t <= limit_s for t, _ in times)
+    return (f"`{method}`, median wall time per run: {times[0][0]:g} s ({times[0][1]}) to "
+            f"{times[-1][0]:g} s ({times[-1][1]}); within {limit_s:g} s on {within} of "
+            f"{len(times)} maps.\n")

@@ -238,3 +238,4 @@ def test_run_times_names_the_fastest_and_slowest_map_and_counts_those_within_the
     assert text == ("`r-max`, median wall time per run: 8 s (rooms-512 s10) to 71 s "
                     "(maze-w4-512 uniform); within 60 s on 2 of 3 maps.\n")
     assert "no timed runs" in run_times(d, "haql", 60)
+    assert run_times(d, "r-max").endswith("71 s (maze-w4-512 uniform).\n")

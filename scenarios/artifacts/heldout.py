@@ -255,9 +255,10 @@ def head_to_head(d: dict[str, Any], a: str, b: str) -> str:
     return " ".join(out) + "\n"
 
 
-def run_times(d: dict[str, Any], method: str, limit_s: float) -> str:
+def run_times(d: dict[str, Any], method: str, limit_s: float | None = None) -> str:
     """``method``'s median wall time per run on each map of the table (the time in its
-    cells), its slowest and fastest map, and how many maps are within ``limit_s``."""
+    cells): its fastest and slowest map, and how many maps are within ``limit_s`` (if
+    given)."""
     times = []
     for col, cell in d["rows"].get(method, {}).items():
         m = re.search(r"([\d.]+) s$", cell)
@@ -266,7 +267,8 @@ def run_times(d: dict[str, Any], method: str, limit_s: float) -> str:
     if not times:
         return f"`{method}` has no timed runs in this table.\n"
     times.sort()
-    within = sum(t <= limit_s for t, _ in times)
+    within = "" if limit_s is None else (
+        f"; within {limit_s:g} s on {sum(t <= limit_s for t, _ in times)} of "
+        f"{len(times)} maps")
     return (f"`{method}`, median wall time per run: {times[0][0]:g} s ({times[0][1]}) to "
-            f"{times[-1][0]:g} s ({times[-1][1]}); within {limit_s:g} s on {within} of "
-            f"{len(times)} maps.\n")
+            f"{times[-1][0]:g} s ({times[-1][1]}){within}.\n")

@@ -19,7 +19,9 @@ records (``tests/data/golden_sweep.json``: every method in the grid, in physics 
 ``exact`` and at ``noisy``), one per method in each part a study can depend on: ``grid``,
 ``physics-exact``, ``physics-noisy``. A change that alters results must regenerate the
 golden file (its test fails otherwise), which changes the digests of the methods it
-touched; every table measured with an old digest then renders with a banner naming what
+touched. An artifact records the digests of the methods it measured, read as the methods its
+data or command names (all of them when it names none: a physics check of fixed policies,
+say); every table measured with an old digest then renders with a banner naming what
 changed and the command that re-measures it, until that command is re-run. A refactor that
 keeps every record leaves every table fresh, and so does a new method (no table measured
 it). The study script's own code is hashed too (:func:`study_code_digest`).

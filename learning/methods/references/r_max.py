@@ -29,8 +29,9 @@ Planning: every cell's cost to G is kept exact for the current model, incrementa
 One multi-source Dijkstra over the known moves backwards (seeded by the untried moves and
 G) sets them at a run's first move (and after a resume, or a warm start's switch of Φ).
 After that, a move that becomes known changes one cell's look-ahead, and an LPA*-style
-repair (Koenig, Likhachev & Furcy 2004, run to consistency everywhere, with no start to
-focus on) re-settles only the cells whose cost it changes. Most newly known moves change
+repair (Koenig, Likhachev & Furcy 2004) re-settles only the cells whose cost it changes,
+lazily: up to the agent's own cost (D* Lite's stop), everywhere only when a reader needs
+every cell (the greedy test's table, a warm start's switch). Most newly known moves change
 nothing: a free move into ground not yet visited costs 1 + Φ both ways. So the work a
 run spends planning grows with the walls it finds, not with the moves it learns (an A*
 from scratch at every newly known move, the first version here, took minutes a 512²
@@ -38,8 +39,9 @@ run). The behaviour is then greedy on these costs, one look-ahead a step. Its ru
 ties: among moves of equal cost, the first untried one (so of equally cheap unknowns the
 nearest is tried now), else the greedy test's rule, the first known to work, else the
 first in action order. The costs are the one fixed point of the model's Bellman
-equation, so the repaired field equals a Dijkstra's from scratch number for number, and a
-resumed run (which rebuilds the field) acts as the uninterrupted one does.
+equation, so the field settled everywhere equals a Dijkstra's from scratch number for
+number (a test checks it), and every cost the behaviour reads is already exact; a resumed
+run (which rebuilds the field from scratch) acts as the uninterrupted one does.
 """
 
 from __future__ import annotations

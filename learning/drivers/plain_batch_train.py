@@ -41,6 +41,8 @@ def train_plain_batch(cfg: PlainConfig, model: TabularMDP, n_episodes: int,
     k = len(rngs)
     start_rngs = list(rngs) if start_rngs is None else list(start_rngs)
     next_state, reward, terminal = model.next_state, model.reward, model.terminal
+    # flat tables: one gather per step for a (state, action) pair instead of a 2-D one
+    next_flat, reward_flat = next_state.ravel(), reward.ravel()
     starts, max_steps, start = model.start_states, int(model.max_steps), int(model.start)
     batch = type(cfg).learner(n_states, n_actions, list(rngs))
     views = [OneRun(batch, i, n_actions) for i in range(k)]
@@ -52,23 +54,28 @@ def train_plain_batch(cfg: PlainConfig, model: TabularMDP, n_episodes: int,
     episode = np.zeros(k, np.int64)
     env_steps = np.zeros(k, np.int64)
     active = np.ones(k, bool)
+    runs = _read_only(np.arange(k, dtype=np.int64))  # the runs still training
     begin = getattr(batch, "episode_start_batch", None)
+    act, update = batch.act_batch, batch.update_batch
     t0 = time.perf_counter()
     with learner_calls(views[0]):  # its failure is the runs', said in one line
         if begin is not None:
-            begin(np.arange(k))
-        while n_episodes and active.any():
-            runs = np.flatnonzero(active)
+            begin(runs)
+        while n_episodes and runs.size:
             sr = s[runs]
-            a = actions_of(batch.act_batch(runs, sr), runs.size, n_actions)
-            s2 = next_state[sr, a]
-            r = reward[sr, a]
+            a = actions_of(act(runs, sr), runs.size, n_actions)
+            pair = sr * n_actions + a
+            s2 = next_flat[pair]
+            r = reward_flat[pair]
             done = terminal[s2]
-            t[runs] += 1
-            batch.update_batch(runs, sr, a, r, s2, done)
+            tr = t[runs] + 1
+            t[runs] = tr
+            update(runs, sr, a, r, s2, done)
             ret[runs] += r
             s[runs] = s2
-            ended = done | (t[runs] >= max_steps)
+            ended = done | (tr >= max_steps)
+            if not ended.any():  # most steps: nobody's episode ends
+                continue
             restart = []
             for i, d in zip(runs[ended].tolist(), done[ended].tolist(), strict=True):
                 e = int(episode[i])
@@ -86,6 +93,8 @@ def train_plain_batch(cfg: PlainConfig, model: TabularMDP, n_episodes: int,
                 s[i] = starts[start_rngs[i].integers(0, starts.shape[0])]
                 t[i], ret[i] = 0, 0.0
                 restart.append(i)
+            if not active[runs].all():
+                runs = _read_only(np.flatnonzero(active))
             if restart and begin is not None:
                 begin(np.array(restart, np.int64))
     wall = (time.perf_counter() - t0) / max(1, k * n_episodes)
@@ -98,3 +107,10 @@ def train_plain_batch(cfg: PlainConfig, model: TabularMDP, n_episodes: int,
         res.agent = PlainAgent(cfg, views[i], st)  # type: ignore[attr-defined]
         results.append(res)
     return results
+
+
+def _read_only(runs: np.ndarray) -> np.ndarray:
+    """``runs`` is handed to the learner at every step until a run finishes: a learner
+    that wrote into it would change which runs the next step advances."""
+    runs.flags.writeable = False
+    return runs

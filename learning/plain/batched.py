@@ -72,11 +72,12 @@ def actions_of(answer: Any, k: int, n_actions: int) -> np.ndarray:
     if a.shape != (k,) or a.dtype.kind not in "iu":
         raise LearnerAnswerError(f"returned {_short(answer)}, not {k} integer actions (one "
                                  "per run asked)")
-    bad = np.flatnonzero((a < 0) | (a >= n_actions))
-    if bad.size:
+    a = a.astype(np.int64, copy=False)
+    if np.count_nonzero(a.view(np.uint64) >= n_actions):  # one test: negatives wrap high
+        bad = np.flatnonzero((a < 0) | (a >= n_actions))
         raise LearnerAnswerError(f"returned action {a[bad[0]]!r} for the run at position "
                                  f"{int(bad[0])}, not an action in 0..{n_actions - 1}")
-    return a.astype(np.int64, copy=False)
+    return a
 
 
 def _short(x: Any) -> str:

@@ -11,8 +11,11 @@ docs/python-api.md renders). On ``paper-50``, goal-only rewards:
   :func:`learning.drivers.plain_train.train_grid`, the same ``--episodes`` from scratch,
   best of ``--repeats``;
 * a batched learner (``tests/plain_learners/st_ql_batched.py``, numpy, one call per step
-  for all its runs): ``--batch-seeds`` runs in one lock-step batch, grid env steps/s and
-  physics primitives/s over the batch's wall time;
+  for all its runs, drawing what ``st-ql`` draws): ``--batch-seeds`` runs in one lock-step
+  batch, grid env steps/s and physics primitives/s over the batch's wall time; the same
+  for ST-QL written for numpy's speed (``tests/plain_learners/st_ql_blocks.py``: each run
+  draws its numbers in blocks), and its grid rate with ``--wide-batch`` runs in the batch
+  (what the per-call cost of numpy becomes when more runs share each call);
 * physics at ``exact``: a sweep of ``--seeds`` compiled ``st-ql`` runs alone, then the
   same sweep with as many runs of each port beside them (one worker): the compiled
   runs' primitives per second of their own training time in both, and the ports'.
@@ -44,6 +47,7 @@ SCENARIO = "paper-50"
 PORT = "tests.plain_learners.st_ql:STQLPort"
 JIT_PORT = "tests.plain_learners.st_ql_jit:STQLJit"
 BATCHED = "tests.plain_learners.st_ql_batched:STQLBatched"
+BLOCKS = "tests.plain_learners.st_ql_blocks:STQLBlocks"
 
 
 def _port_importable() -> None:
@@ -82,25 +86,29 @@ def physics_rates(seeds: int, episodes: int, port: str | None) -> dict[str, floa
     return out
 
 
-def batched_rates(seeds: int, episodes: int, physics_episodes: int) -> dict[str, float]:
-    """The batched port's ``seeds`` runs in one lock-step batch: grid env steps/s and physics
-    primitives/s, each over the batch's wall time."""
+def batched_rates(learner: str, seeds: int, episodes: int,
+                  physics_episodes: int | None) -> dict[str, float]:
+    """The batched ``learner``'s ``seeds`` runs in one lock-step batch: grid env steps/s
+    and (unless ``physics_episodes`` is None) physics primitives/s, each over the batch's
+    wall time."""
     _, model = load(SCENARIO, rewards="goal-only")
-    cfg = make_config(BATCHED)
+    cfg = make_config(learner)
     rs = [streams(i) for i in range(seeds)]
     t0 = time.perf_counter()
     runs = train_plain_batch(cfg, model, episodes, [r.learner for r in rs], 10,
                              [r.starts for r in rs])
-    grid = sum(r.env_steps for r in runs) / (time.perf_counter() - t0)
-    specs = make_specs(SCENARIO, [BATCHED], list(range(seeds)), physics_episodes, ["physics"],
-                       rewards="goal-only")
-    records = run_local(specs, jobs=1)  # over its own training time, as the rows above
-    physics = sum(r["env_steps"] for r in records) / sum(r["wall_time_s"] for r in records)
-    return {"seeds": seeds, "grid": grid, "physics": physics}
+    out = {"seeds": seeds, "grid": sum(r.env_steps for r in runs) / (time.perf_counter() - t0)}
+    if physics_episodes is not None:
+        specs = make_specs(SCENARIO, [learner], list(range(seeds)), physics_episodes,
+                           ["physics"], rewards="goal-only")
+        records = run_local(specs, jobs=1)  # over its own training time, as the rows above
+        out["physics"] = (sum(r["env_steps"] for r in records)
+                          / sum(r["wall_time_s"] for r in records))
+    return out
 
 
 def measure(episodes: int, repeats: int, seeds: int, physics_episodes: int,
-            batch_seeds: int) -> dict[str, Any]:
+            batch_seeds: int, wide_batch: int) -> dict[str, Any]:
     _port_importable()
     compiled = grid_steps_per_s("st-ql", episodes, repeats)
     port = grid_steps_per_s(PORT, episodes, repeats)
@@ -110,7 +118,9 @@ def measure(episodes: int, repeats: int, seeds: int, physics_episodes: int,
     alone = physics_rates(seeds, physics_episodes, None)
     beside = physics_rates(seeds, physics_episodes, PORT)
     beside_jit = physics_rates(seeds, physics_episodes, JIT_PORT)
-    batched = batched_rates(batch_seeds, episodes // 10, physics_episodes)  # (warm now)
+    batched = batched_rates(BATCHED, batch_seeds, episodes // 10, physics_episodes)  # warm
+    blocks = batched_rates(BLOCKS, batch_seeds, episodes // 10, physics_episodes)
+    blocks["wide"] = batched_rates(BLOCKS, wide_batch, episodes // 10, None)
     return {
         "scenario": SCENARIO, "episodes": episodes, "repeats": repeats,
         "grid": {"st-ql": compiled, "python port": port, "slowdown": compiled / port,
@@ -119,6 +129,7 @@ def measure(episodes: int, repeats: int, seeds: int, physics_episodes: int,
                     "st-ql alone": alone["st-ql"], "st-ql beside the port": beside["st-ql"],
                     "python port": beside[PORT], "jitclass port": beside_jit[JIT_PORT]},
         "batched": batched,
+        "block draws": blocks,
     }
 
 
@@ -129,12 +140,14 @@ class Args:
     seeds: int = arg(4, "physics runs per method")
     physics_episodes: int = arg(30, "physics episodes per run")
     batch_seeds: int = arg(10, "runs of the batched learner in its one batch")
+    wide_batch: int = arg(100, "runs in the wider batch of the block-draws learner (grid)")
     artifact: str | None = artifact_arg("plain-learner")
 
 
 def main(argv: list[str] | None = None) -> int:
     a = parse(Args, __doc__, argv)
-    data = measure(a.episodes, a.repeats, a.seeds, a.physics_episodes, a.batch_seeds)
+    data = measure(a.episodes, a.repeats, a.seeds, a.physics_episodes, a.batch_seeds,
+                   a.wide_batch)
     print(json.dumps(data, indent=1))
     if a.artifact is not None:
         cmd = study_command("scenarios.bench.plain", Args, a)

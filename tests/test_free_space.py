@@ -67,6 +67,7 @@ def test_back_move_undoes_each_move():
 
 
 @pytest.mark.parametrize("n", [0, 1, 2, 3, 7, 64, 1000, 4097])
-def test_stable_order_is_numpys_stable_argsort(n):
-    keys = np.random.default_rng(n).integers(-1, 20, n)
+@pytest.mark.parametrize("spread", [20, 100_000])  # a counting sort; a merge sort's range
+def test_stable_order_is_numpys_stable_argsort(n, spread):
+    keys = np.random.default_rng(n).integers(-1, spread, n)
     assert np.array_equal(stable_order(keys), np.argsort(keys, kind="mergesort"))

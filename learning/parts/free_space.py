@@ -121,9 +121,43 @@ def distances_change(nb, dist, blocked, s, a):
 
 @njit(cache=True)
 def stable_order(keys):
-    """The indices that sort ``keys`` ascending, equal keys in index order: what
-    ``np.argsort(keys, kind="mergesort")`` gives, as a plain bottom-up merge sort
-    (numba's generic one costs ~1.3 s of compilation)."""
+    """The indices that sort the integer ``keys`` ascending, equal keys in index order: what
+    ``np.argsort(keys, kind="mergesort")`` gives. Keys here are distances, spread over a
+    range about as wide as their number, so a counting sort does it in O(n + range); a
+    range much wider than that falls back to a merge sort (:func:`_merge_order`). The
+    repair's sort was its largest cost: on a 512² maze a merge sort here took as long as
+    the rest of the repair (sampled with perf), and the repairs most of the training."""
+    n = keys.shape[0]
+    if n == 0:
+        return np.arange(0)
+    lo = keys[0]
+    hi = keys[0]
+    for i in range(1, n):
+        k = keys[i]
+        if k < lo:
+            lo = k
+        elif k > hi:
+            hi = k
+    span = hi - lo + 1
+    if span > 4 * n + 1024:
+        return _merge_order(keys)
+    count = np.zeros(span + 1, np.int64)
+    for i in range(n):
+        count[keys[i] - lo + 1] += 1
+    for j in range(1, span + 1):
+        count[j] += count[j - 1]  # count[k - lo]: where key k's run starts
+    idx = np.empty(n, np.int64)
+    for i in range(n):
+        j = keys[i] - lo
+        idx[count[j]] = i
+        count[j] += 1
+    return idx
+
+
+@njit(cache=True)
+def _merge_order(keys):
+    """:func:`stable_order` as a plain bottom-up merge sort (numba's generic one costs
+    ~1.3 s of compilation)."""
     n = keys.shape[0]
     idx = np.arange(n)
     buf = np.empty(n, np.int64)
@@ -169,30 +203,35 @@ def repair_distances(nb, blocked, dist, queue, goal, s):
     O(affected states), not O(states) (measured on mazes, where most new walls changed
     distances: see BENCHMARKS.md). ``queue`` keeps the reachable states, in an order no
     longer sorted by distance (:func:`learning.methods.rnh_ql_plus.optimism.refresh_values` needs
-    only the set)."""
+    only the set).
+
+    The affected set is marked in ``dist`` itself, not in an array over every state (whose
+    allocation and zeroing at each repair made the repair O(states) again: 9 us at 512²,
+    39 us at 1024²): while it is found, an affected state holds ``-2 - its old distance``
+    (at most -2; a state without a route holds -1, a routed one its distance >= 0); while
+    it waits for its new distance, -2."""
     n_a = nb.shape[1]
-    affected = np.zeros(dist.shape[0], np.bool_)
     order = np.empty(64, np.int32)
     order[0] = s
-    affected[s] = True
+    dist[s] = -2 - dist[s]
     n_aff = 1
     head = 0
     while head < n_aff:
         x = order[head]
         head += 1
-        dx = dist[x]
+        dx = -2 - dist[x]  # its old distance
         for b in range(n_a):
             v = nb[x, b]  # v reaches x by the opposite move
-            if v < 0 or affected[v] or dist[v] != dx + 1 or blocked[v, back_move(b)]:
-                continue
+            if v < 0 or dist[v] != dx + 1 or blocked[v, back_move(b)]:
+                continue  # (an affected v holds at most -2, never dx + 1)
             keep = False
             for c in range(n_a):
                 w = nb[v, c]
-                if w >= 0 and not blocked[v, c] and dist[w] == dx and not affected[w]:
+                if w >= 0 and not blocked[v, c] and dist[w] == dx:  # unaffected, at dx
                     keep = True
                     break
             if not keep:
-                affected[v] = True
+                dist[v] = -2 - dist[v]
                 if n_aff == order.shape[0]:
                     grown = np.empty(2 * n_aff, np.int32)
                     for i in range(n_aff):  # a loop: a slice copy compiles numba's
@@ -207,12 +246,12 @@ def repair_distances(nb, blocked, dist, queue, goal, s):
         best = -1
         for c in range(n_a):
             w = nb[v, c]
-            if w >= 0 and not blocked[v, c] and not affected[w] and dist[w] >= 0:
+            if w >= 0 and not blocked[v, c] and dist[w] >= 0:  # routed and unaffected
                 if best < 0 or dist[w] + 1 < best:
                     best = dist[w] + 1
         seed_d[i] = best
     for i in range(n_aff):
-        dist[order[i]] = -1
+        dist[order[i]] = -2  # waiting for its new distance
     by_d = stable_order(seed_d)
     p = 0
     while p < n_aff and seed_d[by_d[p]] < 0:
@@ -230,14 +269,13 @@ def repair_distances(nb, blocked, dist, queue, goal, s):
             v = fifo[f_head]
             d = fifo_d[f_head]
             f_head += 1
-        if not affected[v]:
+        if dist[v] != -2:
             continue  # settled already, at a distance no larger
-        affected[v] = False
         dist[v] = d
         left -= 1
         for b in range(n_a):
             u = nb[v, b]
-            if u >= 0 and affected[u] and not blocked[u, back_move(b)]:
+            if u >= 0 and dist[u] == -2 and not blocked[u, back_move(b)]:
                 fifo[f_tail] = u
                 fifo_d[f_tail] = d + 1
                 f_tail += 1

@@ -151,10 +151,9 @@ def train_physics_runs(sc: Scenario, model: TabularModel, groups: Sequence[RunGr
     that drive unrecorded runs of compiled learners whole (:mod:`scenarios.runs.physics_fused`;
     ``fused=False`` steps them in lock-step with the rest, as before: the same runs).
     """
-    # lazy: scenarios.recording (rerun) costs 270 ms in every run's process
-    from scenarios.recording.hooks import ChunkLogger, EpisodeTaps
-
     recorded = dict(recorded or {})
+    if recorded:  # only then: scenarios.recording (rerun) costs 270 ms to import
+        from scenarios.recording.hooks import ChunkLogger, EpisodeTaps
     geom = geometry_of(model)
     starts = np.asarray(geom.start_states)
     agents, bounds = [], []

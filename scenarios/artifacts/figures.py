@@ -64,6 +64,8 @@ FIGURES = (
                    "scenarios.studies.maps.ranking:figure_from_artifact"),
     ArtifactFigure("docs/heldout-fresh-profiles.png", FRESH,
                    "scenarios.studies.maps.ranking:figure_from_artifact"),
+    ArtifactFigure("docs/growth.png", ("growth.open-s10",),
+                   "scenarios.studies.maps.growth:figure_from_artifact"),
 )
 
 SCREENSHOTS = (

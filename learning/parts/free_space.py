@@ -126,7 +126,7 @@ def stable_order(keys):
     range about as wide as their number, so a counting sort does it in O(n + range); a
     range much wider than that falls back to a merge sort (:func:`_merge_order`). The
     repair's sort was its largest cost: on a 512² maze a merge sort here took as long as
-    the rest of the repair (sampled with perf), and the repairs most of the training."""
+    the rest of the repair (sampled with perf, BENCHMARKS.md)."""
     n = keys.shape[0]
     if n == 0:
         return np.arange(0)

@@ -54,23 +54,24 @@ def train_plain_batch(cfg: PlainConfig, model: TabularMDP, n_episodes: int,
     episode = np.zeros(k, np.int64)
     env_steps = np.zeros(k, np.int64)
     active = np.ones(k, bool)
-    runs = _read_only(np.arange(k, dtype=np.int64))  # the runs still training
+    runs = np.arange(k, dtype=np.int64)  # the runs still training
     begin = getattr(batch, "episode_start_batch", None)
     act, update = batch.act_batch, batch.update_batch
     t0 = time.perf_counter()
     with learner_calls(views[0]):  # its failure is the runs', said in one line
         if begin is not None:
-            begin(runs)
+            begin(runs.copy())
         while n_episodes and runs.size:
+            asked = runs.copy()  # the learner's to keep (a torch tensor may share it)
             sr = s[runs]
-            a = actions_of(act(runs, sr), runs.size, n_actions)
+            a = actions_of(act(asked, sr), runs.size, n_actions)
             pair = sr * n_actions + a
             s2 = next_flat[pair]
             r = reward_flat[pair]
             done = terminal[s2]
             tr = t[runs] + 1
             t[runs] = tr
-            update(runs, sr, a, r, s2, done)
+            update(asked, sr, a, r, s2, done)
             ret[runs] += r
             s[runs] = s2
             ended = done | (tr >= max_steps)
@@ -94,7 +95,7 @@ def train_plain_batch(cfg: PlainConfig, model: TabularMDP, n_episodes: int,
                 t[i], ret[i] = 0, 0.0
                 restart.append(i)
             if not active[runs].all():
-                runs = _read_only(np.flatnonzero(active))
+                runs = np.flatnonzero(active)
             if restart and begin is not None:
                 begin(np.array(restart, np.int64))
     wall = (time.perf_counter() - t0) / max(1, k * n_episodes)
@@ -108,9 +109,3 @@ def train_plain_batch(cfg: PlainConfig, model: TabularMDP, n_episodes: int,
         results.append(res)
     return results
 
-
-def _read_only(runs: np.ndarray) -> np.ndarray:
-    """``runs`` is handed to the learner at every step until a run finishes: a learner
-    that wrote into it would change which runs the next step advances."""
-    runs.flags.writeable = False
-    return runs

@@ -15,19 +15,20 @@ from __future__ import annotations
 
 import numpy as np
 
+from tests.plain_learners.st_ql_batched import STQLBatched
+
 BLOCK = 4096  # decisions per draw from a run's stream
 
 
-class STQLBlocks:
+class STQLBlocks(STQLBatched):
+    """The draw-for-draw port with its acting drawn in blocks; its update and greedy policy
+    are the port's own."""
+
     name = "ST-QL (numpy, batched, block draws)"
-    eps = 0.1
-    batched = True
 
     def __init__(self, n_states: int, n_actions: int, rngs: list[np.random.Generator]) -> None:
+        super().__init__(n_states, n_actions, rngs)
         k = len(rngs)
-        self.rngs = list(rngs)
-        self.q = np.zeros((k, n_states, n_actions))
-        self.alpha, self.gamma = 0.1, 0.95
         self.draws = np.empty((k, BLOCK, 1 + n_actions))
         self.pos = np.zeros(k, np.int64)
         for i in range(k):
@@ -49,14 +50,6 @@ class STQLBlocks:
         tied = rows == rows.max(axis=1, keepdims=True)
         keys = np.where(tied | (d[:, :1] < self.eps), d[:, 1:], -1.0)
         return keys.argmax(axis=1)
-
-    def update_batch(self, runs, states, actions, rewards, next_states, terminal) -> None:
-        q = self.q
-        target = rewards + np.where(terminal, 0.0, self.gamma * q[runs, next_states].max(axis=1))
-        q[runs, states, actions] += self.alpha * (target - q[runs, states, actions])
-
-    def greedy(self, run: int, state: int) -> int:
-        return int(np.argmax(self.q[run, state]))
 
     def greedy_all(self, run: int) -> np.ndarray:
         return self.q[run].argmax(axis=1)

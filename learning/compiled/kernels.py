@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from learning.compiled.hooks import act, begin, draw_start, end, exploit, update
+from learning.compiled.pipeline import TemplateCompiler
 from learning.methods.registry import family_of_state
 
 
@@ -89,7 +90,7 @@ def compiled_for(template: Callable, st: Any, **jit: Any) -> Any:
         fn = FunctionType(template.__code__, names, template.__name__)
         fn.__qualname__, fn.__module__ = template.__qualname__, template.__module__
         fn.__doc__ = template.__doc__
-        kernel = _COMPILED[key] = njit(cache=True, **jit)(fn)
+        kernel = _COMPILED[key] = njit(cache=True, pipeline_class=TemplateCompiler, **jit)(fn)
     return kernel
 
 

@@ -118,13 +118,15 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
         if not mine[i]:
             continue
         rb = robots[i]
+        sti = row(stt, i)  # once per run and call: a row is a view of every array, each
+        #                    view a reference counted (two atomic operations) when made
         left = budget
         while left > 0:
             k = stage[i]
             if k == START:
                 s0 = hooks.draw_start(generator_from(start_h[i]), starts)
                 s[i] = s0
-                hooks.begin_row(row(stt, i), s0)
+                hooks.begin_row(sti, s0)
                 robots[i] = blank[0]
                 rb.x = rb.bx = (s0 % p.nx + 0.5) * p.cell_m
                 rb.y = rb.by = (s0 // p.nx + 0.5) * p.cell_m
@@ -133,7 +135,7 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                 t[i], ret[i], ncontact[i], wall[i], callp[i] = 0, 0.0, 0, 0.0, 0
                 stage[i] = ACT
             elif k == ACT:
-                a[i] = hooks.act_h(row(stt, i), s[i], learner_h[i])
+                a[i] = hooks.act_h(sti, s[i], learner_h[i])
                 if a[i] < 0 or a[i] >= N_ACTIONS:  # a learner of the user's: Python says
                     stage[i] = BAD
                     break
@@ -159,16 +161,16 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                 t[i] += 1
                 ret[i] += r
                 ncontact[i] += rb.ncontact
-                hooks.update_h(row(stt, i), s[i], a[i], r, s2, terminated, learner_h[i])
+                hooks.update_h(sti, s[i], a[i], r, s2, terminated, learner_h[i])
                 s[i] = s2
                 if not (terminated or t[i] >= max_steps):
                     stage[i] = ACT
                     continue
-                hooks.end(row(stt, i))
+                hooks.end(sti)
                 e = done[i]
                 logs_i[0, i, e], logs_i[1, i, e], logs_i[2, i, e] = t[i], ncontact[i], callp[i]
                 logs_f[0, i, e], logs_f[1, i, e] = ret[i], 1.0 if terminated else 0.0
-                logs_f[2, i, e], logs_f[3, i, e] = hooks.shaping(row(stt, i))
+                logs_f[2, i, e], logs_f[3, i, e] = hooks.shaping(sti)
                 logs_f[4, i, e], logs_f[5, i, e] = wall[i], rb.steps * dt
                 done[i] = e + 1
                 ended += 1

@@ -1,136 +1,41 @@
-"""The training templates' compiler: numba's own, plus one pass that drops the copies of
-arguments that inlining leaves behind.
+"""The hot loops' compiler: numba's own, plus one pass that reads each field of a named
+tuple once and drops the copies that inlining leaves behind.
 
-Why: numba inlines a hook (``inline="always"``) by assigning each argument at the call
-site to the hook's parameter, ``st.1 = st``. Assigning a named tuple of arrays takes a
-reference to every array in it, and the copy dies at the end of the hook: two atomic
-operations per array per call. The rnh-ql+ state holds about thirty arrays and the step
-calls two hooks, so a step paid about 120 of them before any work, which LLVM's
-reference-count pruning cannot remove because the hooks branch and call out (measured
-with ``perf``: ``NRT_incref``/``NRT_decref`` took 23 % of an ``rnh-ql+`` run on a 512²
-maze, BENCHMARKS.md). Python's own semantics make the copy an alias, so using the
-argument itself is the same program: the pass replaces every use of a variable defined
-once as a copy of another variable defined once, and deletes the copy.
+Why: numba takes a reference (an atomic add, and an atomic subtract when it dies) to every
+array it reads out of a named tuple, at every read, and to every array of a tuple it copies.
+Inlining a hook (``inline="always"``, or an ``overload``) assigns each argument at the call
+site to the hook's parameter (``st.1 = st``: a reference to each of the state's thirty-odd
+arrays), and the hook then reads the fields it needs, again at every call. LLVM's
+reference-count pruning cannot remove these counts where the hooks branch and call out.
+Measured with ``perf`` (BENCHMARKS.md): ``NRT_incref``/``NRT_decref`` took 23 % of an
+``rnh-ql+`` run on a 512² maze, and two thirds of the fused physics learning run.
+
+A named tuple is immutable, so a field read right after the tuple is defined is the same
+value wherever the program reads it, and a copy of a variable assigned once is the variable
+itself. The pass (after typing, so it knows which values are named tuples, and after the
+typed inliner, so it sees the overloads' bodies too):
+
+* drops each copy ``x = y`` of a variable assigned once to a variable assigned once, of
+  the same type, using ``y`` wherever ``x`` was used;
+* moves each read of a named tuple's field to just after the tuple's one definition (a
+  read of a field of that, after it, and so on), one read per field: a loop that reads
+  the state's arrays at every step then takes each reference once, before the loop.
 """
 
 from __future__ import annotations
 
 from collections import defaultdict
+from types import FunctionType
 
-from numba.core import ir
+from numba import njit
+from numba.core import ir, types
 from numba.core.compiler import CompilerBase, DefaultPassBuilder
 from numba.core.compiler_machinery import FunctionPass, register_pass
 from numba.core.ir_utils import replace_vars
-from numba.core.untyped_passes import InlineInlinables
+from numba.core.typed_passes import InlineOverloads
 
 
-def _single_copies(blocks) -> dict[str, ir.Var]:
-    """{name: the variable it copies} for every variable assigned exactly once, from a
-    variable also assigned exactly once (or an argument, assigned once by definition),
-    followed through chains of copies to the first."""
-    defs: dict[str, list[ir.Assign]] = {}
-    for block in blocks.values():
-        for stmt in block.body:
-            if isinstance(stmt, ir.Assign):
-                defs.setdefault(stmt.target.name, []).append(stmt)
-    copies: dict[str, ir.Var] = {}
-    for name, assigns in defs.items():
-        if len(assigns) != 1 or not isinstance(assigns[0].value, ir.Var):
-            continue
-        source = assigns[0].value
-        if len(defs.get(source.name, ())) == 1:
-            copies[name] = source
-    for name in copies:
-        seen = {name}
-        source = copies[name]
-        while source.name in copies and source.name not in seen:
-            seen.add(source.name)
-            source = copies[source.name]
-        copies[name] = source
-    return copies
-
-
-def _drop_copies(blocks) -> bool:
-    """Use the original variable in place of each single copy of a single variable
-    (:func:`_single_copies`), and delete the copy (and its ``del``)."""
-    copies = _single_copies(blocks)
-    if not copies:
-        return False
-    for block in blocks.values():
-        block.body = [stmt for stmt in block.body
-                      if not (isinstance(stmt, ir.Assign) and stmt.target.name in copies)
-                      and not (isinstance(stmt, ir.Del) and stmt.value in copies)]
-    replace_vars(blocks, copies)
-    return True
-
-
-def _hoist_state_reads(func_ir, blocks, root: str) -> bool:
-    """Read each field (and field of a field) of the argument ``root`` once, at the top of
-    the function, and make every read of it in the body a copy of that one (which
-    :func:`_drop_copies` then removes). A named tuple is immutable and the argument is
-    never reassigned (checked), so a read is the same value wherever it is made."""
-    entry = blocks[min(blocks)]
-    args = [stmt for stmt in entry.body
-            if isinstance(stmt, ir.Assign) and isinstance(stmt.value, ir.Arg)
-            and stmt.value.name == root]
-    defs = _definitions(blocks)
-    if len(args) != 1 or len(defs[root]) != 1:
-        return False
-    scope, loc = entry.scope, args[0].loc
-    hoisted: dict[tuple[str, ...], ir.Var] = {(): args[0].target}
-    paths: dict[str, tuple[str, ...]] = {root: ()}  # variable -> the field path it reads
-    reads: list[tuple[ir.Assign, tuple[str, ...]]] = []
-    changed = True
-    while changed:  # fields of fields: follow reads of reads until none is new
-        changed = False
-        for block in blocks.values():
-            for stmt in block.body:
-                if (isinstance(stmt, ir.Assign) and isinstance(stmt.value, ir.Expr)
-                        and stmt.value.op == "getattr" and stmt.value.value.name in paths
-                        and stmt.target.name not in paths
-                        and len(defs[stmt.target.name]) == 1):
-                    path = paths[stmt.value.value.name] + (stmt.value.attr,)
-                    paths[stmt.target.name] = path
-                    reads.append((stmt, path))
-                    changed = True
-    if not reads:
-        return False
-    top: list[ir.Assign] = []
-    for _, path in sorted(reads, key=lambda r: len(r[1])):
-        if path not in hoisted:
-            var = scope.redefine(f"state_{'_'.join(path)}", loc)
-            top.append(ir.Assign(ir.Expr.getattr(hoisted[path[:-1]], path[-1], loc), var,
-                                 loc))
-            hoisted[path] = var
-    for stmt, path in reads:
-        stmt.value = hoisted[path]
-    at = entry.body.index(args[0]) + 1
-    entry.body[at:at] = top
-    return True
-
-
-@register_pass(mutates_CFG=False, analysis_only=False)
-class DropInlinedCopies(FunctionPass):
-    """:func:`_drop_copies`, then :func:`_hoist_state_reads` of the state ``st`` and
-    :func:`_drop_copies` again for the copies that leaves."""
-
-    _name = "drop_inlined_copies"
-
-    def __init__(self):
-        FunctionPass.__init__(self)
-
-    def run_pass(self, state):
-        blocks = state.func_ir.blocks
-        changed = _drop_copies(blocks)
-        if _hoist_state_reads(state.func_ir, blocks, "st"):
-            _drop_copies(blocks)
-            changed = True
-        if changed:
-            state.func_ir._definitions = _definitions(blocks)
-        return changed
-
-
-def _definitions(blocks) -> dict:
+def _definitions(blocks) -> defaultdict:
     """What numba's ``func_ir._definitions`` holds: each variable's assigned values."""
     out: defaultdict = defaultdict(list)
     for block in blocks.values():
@@ -140,11 +45,121 @@ def _definitions(blocks) -> dict:
     return out
 
 
+def _drop_copies(blocks, typemap) -> bool:
+    """Use ``y`` for ``x`` wherever a variable ``x`` assigned once is a copy of a variable
+    ``y`` assigned once (an argument is assigned once) of the same type; delete the copy."""
+    defs = _definitions(blocks)
+    copies: dict[str, ir.Var] = {}
+    for name, values in defs.items():
+        if len(values) == 1 and isinstance(values[0], ir.Var):
+            source = values[0]
+            if len(defs.get(source.name, ())) == 1 and typemap[name] == typemap[source.name]:
+                copies[name] = source
+    if not copies:
+        return False
+    for name in copies:  # through chains of copies to the first
+        seen, source = {name}, copies[name]
+        while source.name in copies and source.name not in seen:
+            seen.add(source.name)
+            source = copies[source.name]
+        copies[name] = source
+    for block in blocks.values():
+        block.body = [stmt for stmt in block.body
+                      if not (isinstance(stmt, ir.Assign) and stmt.target.name in copies)
+                      and not (isinstance(stmt, ir.Del) and stmt.value in copies)]
+    replace_vars(blocks, copies)
+    return True
+
+
+def _hoist_tuple_reads(blocks, typemap) -> bool:
+    """Move each read ``x = t.f`` of a named tuple ``t`` assigned once (into ``x`` assigned
+    once) to just after ``t``'s definition; a second read of the same field becomes a copy
+    of the first (which :func:`_drop_copies` removes). Reads of a read's fields follow it.
+    Statements are matched by identity: numba's IR compares them by value, slowly."""
+    defs = _definitions(blocks)
+    single = {name for name, values in defs.items() if len(values) == 1}
+    definition: dict[str, ir.Assign] = {}
+    for block in blocks.values():
+        for stmt in block.body:
+            if isinstance(stmt, ir.Assign) and stmt.target.name in single:
+                definition[stmt.target.name] = stmt
+    first: dict[tuple[str, str], ir.Assign] = {}
+    after: dict[int, list[ir.Assign]] = defaultdict(list)  # id(definition) -> reads moved
+    moved: set[int] = set()
+    changed = False
+    for block in blocks.values():
+        for stmt in block.body:
+            if not (isinstance(stmt, ir.Assign) and isinstance(stmt.value, ir.Expr)
+                    and stmt.value.op == "getattr"):
+                continue
+            tup = stmt.value.value.name
+            if (stmt.target.name not in single or tup not in definition
+                    or not isinstance(typemap[tup], types.BaseNamedTuple)):
+                continue
+            key = (tup, stmt.value.attr)
+            read = first.get(key)
+            if read is None:
+                first[key] = stmt
+                after[id(definition[tup])].append(stmt)
+                moved.add(id(stmt))
+            elif typemap[read.target.name] == typemap[stmt.target.name]:
+                stmt.value = read.target  # a copy of the first read
+                changed = True
+
+    def emit(stmt, body):
+        body.append(stmt)
+        for read in after.get(id(stmt), ()):
+            emit(read, body)
+
+    for block in blocks.values():
+        body: list = []
+        for stmt in block.body:
+            if id(stmt) not in moved:
+                emit(stmt, body)
+        changed = changed or [id(x) for x in body] != [id(x) for x in block.body]
+        block.body = body
+    return changed
+
+
+@register_pass(mutates_CFG=False, analysis_only=False)
+class ReadTuplesOnce(FunctionPass):
+    """:func:`_hoist_tuple_reads`, then :func:`_drop_copies` until nothing changes."""
+
+    _name = "read_tuples_once"
+
+    def __init__(self):
+        FunctionPass.__init__(self)
+
+    def run_pass(self, state):
+        blocks, typemap = state.func_ir.blocks, state.typemap
+        changed = False
+        for _ in range(8):  # a dropped copy can make reads of it reads of the original
+            if not (_drop_copies(blocks, typemap) | _hoist_tuple_reads(blocks, typemap)):
+                break
+            changed = True
+        if changed:
+            state.func_ir._definitions = _definitions(blocks)
+        return changed
+
+
 class TemplateCompiler(CompilerBase):
-    """numba's nopython pipeline with :class:`DropInlinedCopies` right after inlining."""
+    """numba's nopython pipeline with :class:`ReadTuplesOnce` right after the typed
+    inliner."""
 
     def define_pipelines(self):
         pm = DefaultPassBuilder.define_nopython_pipeline(self.state)
-        pm.add_pass_after(DropInlinedCopies, InlineInlinables)
+        pm.add_pass_after(ReadTuplesOnce, InlineOverloads)
         pm.finalize()
         return [pm]
+
+
+def read_once(fn, **jit):
+    """The njit function ``fn`` compiled again by :class:`TemplateCompiler`, for a hot loop
+    of a package that cannot import this one (``sim``): a copy under its own name (so
+    numba's cache files of the two never meet), called by a caller here instead of ``fn``."""
+    py = fn.py_func
+    copy = FunctionType(py.__code__, py.__globals__, py.__name__, py.__defaults__,
+                        py.__closure__)
+    copy.__qualname__ = f"{py.__qualname__}_read_once"
+    copy.__module__, copy.__doc__ = py.__module__, py.__doc__
+    return njit(pipeline_class=TemplateCompiler, **jit)(copy)

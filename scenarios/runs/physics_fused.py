@@ -41,6 +41,7 @@ from numba import njit
 from learning.compiled import hooks
 from learning.compiled.generator_handle import HANDLE_SIZE, generator_from
 from learning.compiled.named_state import row
+from learning.compiled.pipeline import TemplateCompiler, read_once
 from learning.compiled.state_box import box_of
 from learning.jitcache import restamp
 from learning.jitcache import sources_digest as learning_digest
@@ -90,13 +91,15 @@ def drop_stale_cache(module: Path | None = None) -> bool:
 
 
 drop_stale_cache()
+# the primitive's loop reads the world's named tuples at every control period: read once
+ADVANCE_ONE = read_once(advance_one, cache=True)
 ACT, MOVE, START, TEST, FINISHED, BAD = 0, 1, 2, 3, 4, 5  # where a run stands between calls
 CALL_PRIMITIVES = 16384  # primitives a call drives at most, shared among its runs: a call
 #                          then takes ~15-50 ms (1-3 us a primitive; haql cut off in a noisy
 #                          world ~15 us), the bound on answering Ctrl-C and progress
 
 
-@njit(cache=True)
+@njit(cache=True, pipeline_class=TemplateCompiler)
 def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend, nblock,
                noise_h, traj, contacts, booked, pt, prof_t, geo_t, st, bias, rules, mine,
                stage, s, a, t, ret, ncontact, done, wall, callp, logs_i, logs_f, n_episodes,
@@ -142,7 +145,7 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                 begin_one(rb, a[i], p.cell_m, p.nx, p.ny, p.localisation)
                 stage[i] = MOVE
             elif k == MOVE:
-                advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g,
+                ADVANCE_ONE(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g,
                             sc)
                 if rb.status == Status.NOISE:
                     refill_one(i, noise, npos, nend, nblock, noise_h)
@@ -239,7 +242,7 @@ def jit_driver(with_start: bool) -> Any:
         jit_hooks.act_h, jit_hooks.update_h = _jit_act, _jit_update
         jit_hooks.end, jit_hooks.shaping = _jit_end, _jit_shaping
         names = dict(drive_runs.py_func.__globals__, hooks=jit_hooks, row=_nth)
-        fn = _JIT_DRIVERS[with_start] = njit(cache=False)(
+        fn = _JIT_DRIVERS[with_start] = njit(cache=False, pipeline_class=TemplateCompiler)(
             FunctionType(drive_runs.py_func.__code__, names, "drive_jit_runs"))
     return fn
 

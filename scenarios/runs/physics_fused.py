@@ -77,7 +77,8 @@ def drop_stale_cache(module: Path | None = None) -> bool:
     every method's hooks (``learning``) and the kernel's stepping (``sim.physics``), and numba
     keys a cached function on its own file only, so after an upgrade that moved a learner's
     module the cached call would import a module that is gone (seen) or run old rules. The
-    stamp is a hash of both packages' sources and this file. True if it dropped the cache;
+    stamp is a hash of both packages' sources and this file; the primitive's read-once copy
+    goes with it. True if it dropped the cache;
     with ``NUMBA_CACHE_DIR`` set the cache is left alone (as the packages' own guards do).
     ``module``: this file (another, for tests)."""
     if os.environ.get("NUMBA_CACHE_DIR"):
@@ -86,8 +87,12 @@ def drop_stale_cache(module: Path | None = None) -> bool:
     cache = here.parent / "__pycache__"
     digest = hashlib.sha256((learning_digest() + physics_digest()).encode()
                             + here.read_bytes() + _REWARD_RULE.read_bytes()).hexdigest()
-    return restamp(cache, STAMP, digest, lambda: [*cache.glob(f"{here.stem}.*.nbi"),
-                                                  *cache.glob(f"{here.stem}.*.nbc")])
+    copies = Path(advance_one.py_func.__code__.co_filename).parent / "__pycache__"
+    return restamp(cache, STAMP, digest, lambda: [
+        *cache.glob(f"{here.stem}.*.nbi"), *cache.glob(f"{here.stem}.*.nbc"),
+        # the primitive's read-once copy (below) is cached beside the primitive, and
+        # compiled by learning's pass: sim's own guard does not see that pass change
+        *copies.glob("*_read_once-*.nbi"), *copies.glob("*_read_once-*.nbc")])
 
 
 drop_stale_cache()

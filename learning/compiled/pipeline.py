@@ -29,6 +29,7 @@ from types import FunctionType
 
 from numba import njit
 from numba.core import ir, types
+from numba.core.analysis import compute_cfg_from_blocks
 from numba.core.compiler import CompilerBase, DefaultPassBuilder
 from numba.core.compiler_machinery import FunctionPass, register_pass
 from numba.core.ir_utils import replace_vars
@@ -45,15 +46,47 @@ def _definitions(blocks) -> defaultdict:
     return out
 
 
+def _settled(blocks) -> set[str]:
+    """The variables assigned once whose assignment comes before every use on every path
+    (it dominates them): in a loop, such a variable is never read before this iteration
+    assigned it, so at any use it and whatever it was computed from hold this iteration's
+    values. Only these are rewritten; a variable read before its assignment in a later
+    iteration (a value carried round the loop) is left as it is."""
+    dominators = compute_cfg_from_blocks(blocks).dominators()
+    defined: dict[str, tuple[int, int]] = {}
+    count: dict[str, int] = defaultdict(int)
+    for label, block in blocks.items():
+        for k, stmt in enumerate(block.body):
+            if isinstance(stmt, ir.Assign):
+                defined[stmt.target.name] = (label, k)
+                count[stmt.target.name] += 1
+    settled = {name for name, n in count.items() if n == 1}
+    for label, block in blocks.items():
+        for k, stmt in enumerate(block.body):
+            if isinstance(stmt, ir.Assign):
+                value = stmt.value
+                used = ([value] if isinstance(value, ir.Var) else
+                        value.list_vars() if isinstance(value, ir.Expr) else [])
+            else:
+                used = stmt.list_vars()
+            for var in used:
+                if var.name in settled:
+                    at, j = defined[var.name]
+                    if at not in dominators[label] or (at == label and j >= k):
+                        settled.discard(var.name)
+    return settled
+
+
 def _drop_copies(blocks, typemap) -> bool:
-    """Use ``y`` for ``x`` wherever a variable ``x`` assigned once is a copy of a variable
-    ``y`` assigned once (an argument is assigned once) of the same type; delete the copy."""
+    """Use ``y`` for ``x`` wherever a variable ``x`` is a copy of a variable ``y`` of the
+    same type, both :func:`_settled`; delete the copy."""
     defs = _definitions(blocks)
+    settled = _settled(blocks)
     copies: dict[str, ir.Var] = {}
     for name, values in defs.items():
-        if len(values) == 1 and isinstance(values[0], ir.Var):
+        if name in settled and isinstance(values[0], ir.Var):
             source = values[0]
-            if len(defs.get(source.name, ())) == 1 and typemap[name] == typemap[source.name]:
+            if source.name in settled and typemap[name] == typemap[source.name]:
                 copies[name] = source
     if not copies:
         return False
@@ -75,9 +108,9 @@ def _hoist_tuple_reads(blocks, typemap) -> bool:
     """Move each read ``x = t.f`` of a named tuple ``t`` assigned once (into ``x`` assigned
     once) to just after ``t``'s definition; a second read of the same field becomes a copy
     of the first (which :func:`_drop_copies` removes). Reads of a read's fields follow it.
-    Statements are matched by identity: numba's IR compares them by value, slowly."""
-    defs = _definitions(blocks)
-    single = {name for name, values in defs.items() if len(values) == 1}
+    Both variables must be :func:`_settled`. Statements are matched by identity: numba's
+    IR compares them by value, slowly."""
+    single = _settled(blocks)
     definition: dict[str, ir.Assign] = {}
     for block in blocks.values():
         for stmt in block.body:
@@ -123,7 +156,8 @@ def _hoist_tuple_reads(blocks, typemap) -> bool:
 
 @register_pass(mutates_CFG=False, analysis_only=False)
 class ReadTuplesOnce(FunctionPass):
-    """:func:`_hoist_tuple_reads`, then :func:`_drop_copies` until nothing changes."""
+    """:func:`_drop_copies` and :func:`_hoist_tuple_reads` in turn until neither changes
+    anything (at most 8 rounds)."""
 
     _name = "read_tuples_once"
 

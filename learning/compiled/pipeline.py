@@ -32,18 +32,8 @@ from numba.core import ir, types
 from numba.core.analysis import compute_cfg_from_blocks
 from numba.core.compiler import CompilerBase, DefaultPassBuilder
 from numba.core.compiler_machinery import FunctionPass, register_pass
-from numba.core.ir_utils import replace_vars
+from numba.core.ir_utils import build_definitions, replace_vars
 from numba.core.typed_passes import InlineOverloads
-
-
-def _definitions(blocks) -> defaultdict:
-    """What numba's ``func_ir._definitions`` holds: each variable's assigned values."""
-    out: defaultdict = defaultdict(list)
-    for block in blocks.values():
-        for stmt in block.body:
-            if isinstance(stmt, ir.Assign):
-                out[stmt.target.name].append(stmt.value)
-    return out
 
 
 def _settled(blocks) -> set[str]:
@@ -80,7 +70,7 @@ def _settled(blocks) -> set[str]:
 def _drop_copies(blocks, typemap) -> bool:
     """Use ``y`` for ``x`` wherever a variable ``x`` is a copy of a variable ``y`` of the
     same type, both :func:`_settled`; delete the copy."""
-    defs = _definitions(blocks)
+    defs = build_definitions(blocks)
     settled = _settled(blocks)
     copies: dict[str, ir.Var] = {}
     for name, values in defs.items():
@@ -172,7 +162,7 @@ class ReadTuplesOnce(FunctionPass):
                 break
             changed = True
         if changed:
-            state.func_ir._definitions = _definitions(blocks)
+            state.func_ir._definitions = build_definitions(blocks)
         return changed
 
 

@@ -40,6 +40,8 @@ from numba import njit
 
 from learning.compiled import hooks
 from learning.compiled.generator_handle import HANDLE_SIZE, generator_from
+from learning.compiled.hooks import act, begin, update  # stand-ins: see fused_driver
+from learning.compiled.kernels import compiled_for
 from learning.compiled.named_state import row
 from learning.compiled.pipeline import TemplateCompiler, read_once
 from learning.compiled.state_box import box_of
@@ -50,7 +52,7 @@ from sim.physics.drive_profiles import Profiles
 from sim.physics.jitcache import sources_digest as physics_digest
 from sim.physics.kernel.noise import refill_one
 from sim.physics.kernel.primitive import advance_one, begin_one
-from sim.physics.kernel.state import Geometry, Params, Scratch, Status
+from sim.physics.kernel.state import BORROWS, Geometry, Params, Scratch, Status
 from sim.scenario import move_reward
 
 _move_reward = njit(inline="always")(move_reward)  # the env's rule, this very function
@@ -97,14 +99,14 @@ def drop_stale_cache(module: Path | None = None) -> bool:
 
 drop_stale_cache()
 # the primitive's loop reads the world's named tuples at every control period: read once
-ADVANCE_ONE = read_once(advance_one, cache=True)
+# (and, as the primitive itself, without reference counting: BORROWS)
+ADVANCE_ONE = read_once(advance_one, **BORROWS)
 ACT, MOVE, START, TEST, FINISHED, BAD = 0, 1, 2, 3, 4, 5  # where a run stands between calls
 CALL_PRIMITIVES = 16384  # primitives a call drives at most, shared among its runs: a call
 #                          then takes ~15-50 ms (1-3 us a primitive; haql cut off in a noisy
 #                          world ~15 us), the bound on answering Ctrl-C and progress
 
 
-@njit(cache=True, pipeline_class=TemplateCompiler)
 def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend, nblock,
                noise_h, traj, contacts, booked, pt, prof_t, geo_t, st, bias, rules, mine,
                stage, s, a, t, ret, ncontact, done, wall, callp, logs_i, logs_f, n_episodes,
@@ -116,6 +118,11 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
     float64[6, n, episodes] (return, success, shaping mean, shaping std, wall [s] before this call,
     simulated time [s]). Returns (primitives driven, episodes ended, runs waiting on a
     Chipmunk check).
+
+    A template, compiled per method by :func:`fused_driver`: ``act``, ``update`` and
+    ``begin`` are the method's own hooks, inlined, so the loop has no call between a
+    primitive and its learner (as a call, each hook took and dropped a reference to each of
+    the row's thirty-odd arrays, twice a primitive).
     """
     stt = box.state
     p, prof, g, sc = Params(*pt), Profiles(*prof_t), Geometry(*geo_t), Scratch(*st)
@@ -134,7 +141,7 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
             if k == START:
                 s0 = hooks.draw_start(generator_from(start_h[i]), starts)
                 s[i] = s0
-                hooks.begin_row(sti, s0)
+                begin(sti, s0)
                 robots[i] = blank[0]
                 rb.x = rb.bx = (s0 % p.nx + 0.5) * p.cell_m
                 rb.y = rb.by = (s0 // p.nx + 0.5) * p.cell_m
@@ -143,7 +150,7 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                 t[i], ret[i], ncontact[i], wall[i], callp[i] = 0, 0.0, 0, 0.0, 0
                 stage[i] = ACT
             elif k == ACT:
-                a[i] = hooks.act_h(sti, s[i], learner_h[i])
+                a[i] = act(sti, s[i], generator_from(learner_h[i]))
                 if a[i] < 0 or a[i] >= N_ACTIONS:  # a learner of the user's: Python says
                     stage[i] = BAD
                     break
@@ -169,7 +176,7 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
                 t[i] += 1
                 ret[i] += r
                 ncontact[i] += rb.ncontact
-                hooks.update_h(sti, s[i], a[i], r, s2, terminated, learner_h[i])
+                update(sti, s[i], a[i], r, s2, terminated, generator_from(learner_h[i]))
                 s[i] = s2
                 if not (terminated or t[i] >= max_steps):
                     stage[i] = ACT
@@ -192,6 +199,14 @@ def drive_runs(box, learner_h, start_h, starts, robots, blank, noise, npos, nend
     return prims, ended, checks
 
 
+def fused_driver(st: Any) -> Any:
+    """:func:`drive_runs` compiled for the method of the stacked state ``st``, its hooks
+    inlined (:func:`learning.compiled.kernels.compiled_for`: one dispatcher per method,
+    all cached in this file's cache under the template's name, told apart by the state's
+    class in the signature; :func:`drop_stale_cache` guards them)."""
+    return compiled_for(drive_runs, st)
+
+
 # ------------------------------------------------------------------ a @jitclass learner's runs
 
 @njit(inline="always")
@@ -200,12 +215,12 @@ def _nth(learners, i):
 
 
 @njit(inline="always")
-def _jit_act(learner, s, h):
+def _jit_act(learner, s, rng):  # rng: unread (a jitclass draws from its own field)
     return learner.act(s)
 
 
 @njit(inline="always")
-def _jit_update(learner, s, a, r, s2, terminated, h):
+def _jit_update(learner, s, a, r, s2, terminated, rng):
     learner.update(s, a, r, s2, terminated)
 
 
@@ -243,12 +258,11 @@ def jit_driver(with_start: bool) -> Any:
     if fn is None:
         jit_hooks = ModuleType("jit_learner_hooks")
         jit_hooks.draw_start = hooks.draw_start
-        jit_hooks.begin_row = _jit_start if with_start else _jit_no_start
-        jit_hooks.act_h, jit_hooks.update_h = _jit_act, _jit_update
         jit_hooks.end, jit_hooks.shaping = _jit_end, _jit_shaping
-        names = dict(drive_runs.py_func.__globals__, hooks=jit_hooks, row=_nth)
+        names = dict(drive_runs.__globals__, hooks=jit_hooks, row=_nth, act=_jit_act,
+                     update=_jit_update, begin=_jit_start if with_start else _jit_no_start)
         fn = _JIT_DRIVERS[with_start] = njit(cache=False, pipeline_class=TemplateCompiler)(
-            FunctionType(drive_runs.py_func.__code__, names, "drive_jit_runs"))
+            FunctionType(drive_runs.__code__, names, "drive_jit_runs"))
     return fn
 
 
@@ -278,7 +292,8 @@ class FusedRuns:
                  starts: np.ndarray, rules: Rules, n_episodes: int, test_every: int,
                  loop: dict[str, np.ndarray], driver: Any = None) -> None:
         n = agent.n
-        self._drive = drive_runs if driver is None else driver  # (a jitclass learner's own)
+        self._drive = fused_driver(agent.states) if driver is None else driver  # (or a
+        #                                                        jitclass learner's own)
         self.agent, self.b0, self.batch, self.n_episodes = agent, b0, batch, n_episodes
         sl = slice(b0, b0 + n)
         self.mine = np.zeros(n, np.bool_)

@@ -14,6 +14,7 @@ import math
 from numba import njit
 
 from sim.physics.kernel.queries import CHECK_MARGIN_M, sweep_step
+from sim.physics.kernel.state import BORROWS
 
 CENTRE_TOL_M = 1e-9  # a leg starting this close to its cell centre uses the cached guard [m]
 
@@ -43,7 +44,7 @@ def guard_leg(rb, p, guards):
     return True
 
 
-@njit(cache=True)
+@njit(**BORROWS)
 def cast_guard(rb, p, g, s):
     """Cast the leg's guard: from the exact cell centre when on it (then cached), else from
     the pose."""

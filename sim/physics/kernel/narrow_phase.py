@@ -33,6 +33,8 @@ import math
 import numpy as np
 from numba import njit
 
+from sim.physics.kernel.state import BORROWS
+
 CONTACTS_MAX = 8  # contacts one check books in compiled code (more: Chipmunk decides)
 TOUCH_BAND_M = 1e-12  # a box this close to touching: Chipmunk's GJK decides [m]
 CONTACT_FIELDS = 7  # a booked contact: step, kind, x, y, normal x, normal y, depth
@@ -111,7 +113,7 @@ def _touches(g, k, x, y, r, out, row):
     return _box(x, y, r, b[0], b[1], b[2], b[3], out, row)
 
 
-@njit(cache=True)
+@njit(**BORROWS)
 def contacts_began(rb, p, g, s, out):
     """The contacts robot ``rb``'s last step began, as ``RouteBatch``'s Chipmunk check books
     them: every static shape the disc touches now that it did not touch before the step when

@@ -19,9 +19,10 @@ from __future__ import annotations
 from numba import njit
 
 from sim.physics.generator_handle import generator_from
+from sim.physics.kernel.state import BORROWS
 
 
-@njit(cache=True)
+@njit(**BORROWS)
 def refill(i, noise, npos, nend, nblock, rng):
     """Robot ``i``'s next normals from ``rng``: the block goes on (doubling chunks) or a new
     block starts. ``npos[i]``: the next unread normal; ``nend[i]``: the end of those drawn."""

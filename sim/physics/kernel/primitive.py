@@ -55,7 +55,7 @@ from sim.physics.kernel.queries import (
     sweep_step,
     within,
 )
-from sim.physics.kernel.state import Geometry, Params, Phase, Scratch, Status
+from sim.physics.kernel.state import BORROWS, Geometry, Params, Phase, Scratch, Status
 from sim.physics.kernel.wheels import deliver
 from sim.physics.motion import (
     SETTLE_M_S,
@@ -141,7 +141,7 @@ def advance(robots, noise, npos, nend, traj, contacts, booked, pt, prof_t, geo_t
     return waiting
 
 
-@njit(cache=True)
+@njit(**BORROWS)
 def advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g, s):
     """Robot ``i``'s primitive until it is DONE or needs the caller: :func:`advance`'s body
     for one robot, the tuples as named ones (the fused training step calls it per robot)."""
@@ -293,7 +293,7 @@ def advance_one(i, robots, noise, npos, nend, traj, contacts, booked, p, prof, g
             _finish_leg(rb, p)
 
 
-@njit(cache=True)
+@njit(**BORROWS)
 def _plan(rb, p, turn_sums, drive_sums):
     """Plan a leg from the pose (:func:`plan_leg`); False when there is nothing to do. The
     pose is the one the controller knows: the estimate with localisation; in open loop
@@ -387,7 +387,7 @@ def _finish_leg(rb, p):
         rb.phase = Phase.PLAN
 
 
-@njit(cache=True)
+@njit(**BORROWS)
 def _bump(rb, p, g, s):
     """A contact began (booked by the caller): the primitive ends with the robot and the
     control body at rest; with carried pose where it is (before the last step when that

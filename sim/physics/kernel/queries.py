@@ -14,6 +14,7 @@ import math
 
 from numba import njit
 
+from sim.physics.kernel.state import BORROWS
 from sim.physics.kernel.sweep import (
     _box_distance,
     _fold_shapes,
@@ -68,7 +69,7 @@ def in_clear_region(rb, x1, y1):
             and rb.box_y0 < rb.y < rb.box_y1 and rb.box_y0 < y1 < rb.box_y1)
 
 
-@njit(cache=True)
+@njit(**BORROWS)
 def new_clear_region(rb, p, g, s):
     """The robot's clear ball and clear box from its pose: every centre in either leaves the
     disc at least CLEAR_MARGIN_M from every static shape. A step whose start and end lie in

@@ -30,8 +30,15 @@ from sim.physics.fidelity import (
     slip_start_probability,
 )
 
-__all__ = ["FIDELITY_KNOBS", "ROBOT", "Geometry", "Params", "Phase", "Robots", "Scratch", "Status",
-           "by_name", "params_of"]
+__all__ = ["BORROWS", "FIDELITY_KNOBS", "ROBOT", "Geometry", "Params", "Phase", "Robots",
+           "Scratch", "Status", "by_name", "params_of"]
+
+# numba options of the kernel's compiled helpers that only read and write the arrays they are
+# handed (they allocate nothing, keep nothing): no reference counting. numba otherwise takes
+# and drops a reference to every array argument (and each array of a tuple argument) at
+# each call, an atomic operation each: 26 at each call of a primitive's loop, eight at
+# each query of the shapes. The caller holds the arrays for the call's whole length.
+BORROWS = dict(cache=True, _nrt=False)
 
 
 class Status(IntEnum):

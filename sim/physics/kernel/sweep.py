@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from sim.physics.kernel.state import BORROWS
 from sim.physics.static import merged_boxes
 from sim.scenario import Scenario
 
@@ -272,7 +273,7 @@ def _fold_shapes(wall, item, out, circles, walls, boxes, cell_m, nx, ny, start, 
     return out
 
 
-@njit(cache=True)
+@njit(**BORROWS)
 def sweep_fraction(circles, walls, boxes, cell_m, nx, ny, start, items, seen, stamp,
                    radius, ax, ay, bx, by):
     """Fraction of (ax, ay) -> (bx, by) a disc of ``radius`` sweeps before touching a static
@@ -282,7 +283,7 @@ def sweep_fraction(circles, walls, boxes, cell_m, nx, ny, start, items, seen, st
                         ny, start, items, seen, stamp, radius, ax, ay, bx, by)
 
 
-@njit(cache=True)
+@njit(**BORROWS)
 def overlap_depth(circles, walls, boxes, cell_m, nx, ny, start, items, seen, stamp, radius,
                   x, y):
     """Deepest overlap [m] of a disc of ``radius`` at (x, y) with any static shape (0: none);

@@ -3,11 +3,12 @@
 
 Each is a numba ``overload`` that, while compiling, looks up the module whose
 ``State`` the argument is (:data:`learning.methods.registry.FAMILY_OF_STATE`) and inlines
-that module's hook. So one source loop (the step and batch agents, the fused physics
-loop) compiles once per method with only that method's rules in it,
+that module's hook. So one source loop (the step and batch agents) compiles once per
+method with only that method's rules in it,
 and numba's on-disk cache (which cannot key on functions passed as arguments)
 keys on the state's type instead. The training loop and the read-outs of
-:mod:`learning.compiled.kernels` take the hooks as their own globals instead
+:mod:`learning.compiled.kernels` (and the fused physics loop, through the same
+:func:`~learning.compiled.kernels.compiled_for`) take the hooks as their own globals instead
 (:func:`~learning.compiled.kernels.compiled_for`): numba compiles an inlined overload's
 implementation on its own as well, a third more compiling on a cold cache; the step
 agent calls ``begin`` and ``exploit`` through their non-inlined doors

@@ -27,6 +27,21 @@ REPO = Path(__file__).resolve().parent.parent
 MAPS = REPO / "sim" / "builtin" / "maps"
 
 
+@pytest.fixture(autouse=True, scope="session")
+def sb3_logs_in_a_session_folder(tmp_path_factory):
+    """Stable-Baselines3 makes a log folder in the system's temporary folder at every
+    ``learn`` (``SB3-<date>``, empty with the default logger): the SB3 tests and examples
+    put theirs under pytest's session folder instead (examples run as subprocesses read
+    it from the environment), so a test run leaves nothing behind in /tmp."""
+    old = os.environ.get("SB3_LOGDIR")
+    os.environ["SB3_LOGDIR"] = str(tmp_path_factory.mktemp("sb3-logs"))
+    yield
+    if old is None:
+        os.environ.pop("SB3_LOGDIR", None)
+    else:
+        os.environ["SB3_LOGDIR"] = old
+
+
 @pytest.fixture(scope="session")
 def paper50():
     return resolve_scenario("paper-50")

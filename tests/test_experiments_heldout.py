@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from scenarios.studies.maps import heldout
+from scenarios.sweep.backends import run_local
+from scenarios.sweep.run import make_specs, run_sweep
 
 
 def test_problems_and_methods_parse():
@@ -34,6 +38,36 @@ def test_the_study_runs_and_prints_its_table(tmp_path, capsys):
     assert "**Uniform starts**, 3 maps" in text and "**20 % of starts from S**, 1 map:" in text
     assert "| rnh-ql+ | " in text.split("**Uniform starts**")[1]  # a ranking row
     assert "Per map, the method with the lowest median" in text
+
+
+def test_the_study_keeps_only_what_it_reads_and_resumes_from_it(tmp_path, capsys):
+    """A run's record drops its greedy policy and per-episode series (what makes a 512²
+    folder 500 MB); --resume reads the kept records back, and whole records written by a
+    comparison, and runs nothing again."""
+    out = tmp_path / "h"
+    argv = ["--out", str(out), "--problems", "maze-w2-24@uniform", "--suite-episodes", "30",
+            "--methods", "st-ql", "--seeds", "2"]
+    assert heldout.main(argv) == 0
+    table = (out / "heldout.md").read_text()
+    [results] = out.glob("*/st-ql/results.json")
+    runs = json.loads(results.read_text())["runs"]
+    assert len(runs) == 2 and all(set(r) == set(heldout.KEPT_FIELDS) for r in runs)
+    capsys.readouterr()
+    assert heldout.main([*argv, "--resume"]) == 0
+    assert "resuming: 2 of 2 runs already finished" in capsys.readouterr().err
+    assert (out / "heldout.md").read_text() == table
+    # a folder a comparison wrote (whole records) is resumed the same way
+    whole = tmp_path / "whole"
+    spec_dir = results.parent.parent.name
+    toml, _, episodes = heldout.write_problem("maze-w2-24", 0.0, 37, 0.02, whole / "maps")
+    run_sweep(make_specs(str(toml), ["st-ql"], [0, 1], episodes, ["grid"],
+                         rewards="goal-only", s_starts=0.0),
+              whole / spec_dir / "st-ql", run_local, figures=False, progress=None)
+    assert "greedy_policy" in json.loads((whole / spec_dir / "st-ql" / "results.json"
+                                          ).read_text())["runs"][0]
+    assert heldout.main([*argv[:1], str(whole), *argv[2:], "--resume"]) == 0
+    assert "resuming: 2 of 2 runs already finished" in capsys.readouterr().err
+    assert (whole / "heldout.md").read_text() == table
 
 
 def test_the_ranking_orders_by_iqm_and_names_each_maps_winner():

@@ -81,6 +81,16 @@ def check_compare_record(rec: dict[str, Any]) -> None:
     """A comparison's run holds every field its summary and figures read, each of its type;
     ValueError names the first that does not (a hand-edited run surfaced as a traceback in
     the summary)."""
+    check_summary_fields(rec)
+    for name in COMPARE_SERIES:
+        v = rec.get(name)
+        if not isinstance(v, list) or not all(isinstance(x, _NUM) for x in v):
+            raise ValueError(f"field {name!r} is not a list of numbers")
+
+
+def check_summary_fields(rec: dict[str, Any]) -> None:
+    """The fields of a run the summary reads (a study that keeps no per-episode series
+    checks only these)."""
     for name, (types, nullable) in COMPARE_FIELDS.items():
         if name not in rec:
             raise ValueError(f"has no field {name!r}")
@@ -89,10 +99,6 @@ def check_compare_record(rec: dict[str, Any]) -> None:
             continue
         if not isinstance(v, types) or (isinstance(v, bool) and bool not in types):
             raise ValueError(f"field {name!r} is {v!r}, not a {types[-1].__name__}")
-    for name in COMPARE_SERIES:
-        v = rec.get(name)
-        if not isinstance(v, list) or not all(isinstance(x, _NUM) for x in v):
-            raise ValueError(f"field {name!r} is not a list of numbers")
 
 
 def check_state_file(path: Path, flag: str = "--out") -> None:
@@ -131,9 +137,11 @@ def _read_text(path: Path) -> str:
                                "run again with --resume") from None
 
 
-def finished_compare(out_dir: Path) -> dict[str, dict[str, Any]]:
+def finished_compare(out_dir: Path, check: Callable[[dict[str, Any]], None] =
+                     check_compare_record) -> dict[str, dict[str, Any]]:
     """The runs of a finished comparison in ``out_dir`` (its ``results.json``), by key; a
-    ``results.json`` that is not one of rnhql's is refused with one line."""
+    ``results.json`` that is not one of rnhql's (``check`` says what a run must hold) is
+    refused with one line."""
     path = out_dir / RESULTS
     if not path.exists() and not path.is_symlink():
         return {}
@@ -151,7 +159,7 @@ def finished_compare(out_dir: Path) -> dict[str, dict[str, Any]]:
     for i, rec in enumerate(runs):
         try:
             rec = parse_record(json.dumps(rec, allow_nan=True))
-            check_compare_record(rec)
+            check(rec)
         except ValueError as exc:
             raise ResumeStateError(str(path), f"runs[{i}]", str(exc), fix) from None
         done[rec["key"]] = rec

@@ -8,6 +8,7 @@ import pytest
 
 from scenarios.studies.maps import heldout
 from scenarios.sweep.backends import run_local
+from scenarios.sweep.kept import KEPT_FIELDS
 from scenarios.sweep.run import make_specs, run_sweep
 
 
@@ -51,7 +52,7 @@ def test_the_study_keeps_only_what_it_reads_and_resumes_from_it(tmp_path, capsys
     table = (out / "heldout.md").read_text()
     [results] = out.glob("*/st-ql/results.json")
     runs = json.loads(results.read_text())["runs"]
-    assert len(runs) == 2 and all(set(r) == set(heldout.KEPT_FIELDS) for r in runs)
+    assert len(runs) == 2 and all(set(r) == set(KEPT_FIELDS) for r in runs)
     capsys.readouterr()
     assert heldout.main([*argv, "--resume"]) == 0
     assert "resuming: 2 of 2 runs already finished" in capsys.readouterr().err
@@ -273,3 +274,10 @@ def test_run_times_names_the_fastest_and_slowest_map_and_counts_those_within_the
                     "(maze-w4-512 uniform); within 60 s on 2 of 3 maps.\n")
     assert "no timed runs" in run_times(d, "haql", 60)
     assert run_times(d, "r-max").endswith("71 s (maze-w4-512 uniform).\n")
+
+
+def test_a_sweep_keeping_the_summarys_fields_draws_no_figures(tmp_path):
+    from scenarios.sweep import kept
+
+    with pytest.raises(ValueError, match="draws no figures"):
+        kept.run_sweep([], tmp_path, run_local, figures=True)

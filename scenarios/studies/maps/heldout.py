@@ -33,14 +33,16 @@ wall time per run. Under it, per protocol, the rankings of
 its stratified bootstrap interval, the probability of improvement of each over each
 other, and each map's winner; the artifact keeps every seed's episodes, which the
 performance profiles (``docs/heldout-profiles.png``) are drawn from.
+
+Each sweep's folder keeps of every run only what its summary reads
+(:mod:`scenarios.sweep.kept`): a 512² half of a judging set is a few MB, not 500, and can
+be kept and resumed on another machine (``docs/results/unfinished``).
 """
 
 from __future__ import annotations
 
-import functools
 import re
 import sys
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from shlex import quote
@@ -48,13 +50,12 @@ from typing import Any
 
 from scenarios.artifacts import check_artifact_name, write_artifact
 from scenarios.artifacts.heldout import heldout
-from scenarios.runs.results import write_results
-from scenarios.runs.spec import RunSpec, load
+from scenarios.runs.spec import load
 from scenarios.script_args import arg, parse, parser_of
 from scenarios.studies.maps.ranking import ranking
 from scenarios.sweep.backends import Progress, run_local
-from scenarios.sweep.resume_state import COMPARE_FIELDS, check_summary_fields, finished_compare
-from scenarios.sweep.run import SweepFiles, assemble, make_specs, run_sweep
+from scenarios.sweep.kept import run_sweep  # each run kept as its summary reads it
+from scenarios.sweep.run import make_specs
 from sim.files import atomic_write_text
 from sim.grid.planning import far_start_goal
 from sim.maps.generators import KINDS, generate
@@ -136,30 +137,6 @@ def write_problem(name: str, share: float, map_seed: int, braid: float, folder: 
     return toml, route, 8 * size
 
 
-# what the study reads of a run: its summary's fields. A 512² run's record also holds its
-# greedy policy and per-episode series (400 kB); 1,260 of them would fill 500 MB the table
-# never reads, and a folder that small can be kept (and resumed) anywhere.
-KEPT_FIELDS = ("key", *COMPARE_FIELDS)
-
-
-def kept(rec: dict[str, Any]) -> dict[str, Any]:
-    return {k: rec[k] for k in KEPT_FIELDS if k in rec}
-
-
-def _write_kept(specs: Sequence[RunSpec], runs: list[dict[str, Any]], out: Path
-                ) -> dict[str, Any]:
-    results = assemble(specs, [kept(r) for r in runs])
-    write_results(out, results)
-    return results
-
-
-# results.json and summary.md as a comparison writes them, each run with its kept fields;
-# --resume reads them back (and a comparison's whole records, from before this was kept)
-HELDOUT_FILES = SweepFiles(_write_kept, keep=kept,
-                           finished=functools.partial(finished_compare,
-                                                      check=check_summary_fields))
-
-
 def cell(stat: dict[str, Any], seeds: int) -> str:
     e = stat["episodes_to_stable_optimal"]["median"]
     return (f"{round(stat['optimal_route_fraction'] * seeds)}/{seeds} · "
@@ -201,8 +178,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{col}: {label}: {len(specs)} runs", file=sys.stderr)
             tag = re.sub(r"[^A-Za-z0-9+.=-]", "_", label)
             res = run_sweep(specs, out / stem / tag, run_local, resume=args.resume,
-                            files=HELDOUT_FILES, jobs=args.jobs,
-                            progress=Progress(len(specs)))
+                            figures=False, jobs=args.jobs, progress=Progress(len(specs)))
             rows.setdefault(label, {})[col] = cell(res["summary"][m]["grid"], args.seeds)
             done = sorted((r for r in res["runs"] if r["method"] == m and r["world"] == "grid"),
                           key=lambda r: r["seed"])

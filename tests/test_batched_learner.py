@@ -1,6 +1,6 @@
 """A batched plain learner (one call per step for every run of a batch): the same runs as
 the compiled method it ports, in the grid's lock-step batches and in physics, its failures
-said as any learner's."""
+said as any learner's; recorded, resumed and graded in physics as a Python learner is."""
 
 from __future__ import annotations
 
@@ -114,3 +114,25 @@ def test_the_block_draws_port_learns_as_st_ql_does():
             for m in ("st-ql", BLOCKS)}
     assert rate["st-ql"] > 0.9  # the yardstick learned
     assert abs(rate[BLOCKS] - rate["st-ql"]) < 0.05, rate
+
+
+@pytest.mark.parametrize("world", ["grid", "physics"])
+def test_its_run_is_recorded_like_a_python_learners(tmp_path, world):
+    rrd = tmp_path / "run.rrd"
+    run = api.train("paper-40", BATCHED, episodes=10, world=world, record=rrd)
+    assert run.recording == rrd and rrd.stat().st_size > 10_000
+    assert run.record["config"]["learner"] == BATCHED
+
+
+def test_its_sweep_resumes_and_its_physics_runs_are_graded_by_their_drives(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    first = api.compare("paper-40", [BATCHED], worlds=("grid", "physics"), seeds=2,
+                        episodes=10, jobs=1, out=out)
+    phys = first.of(BATCHED, "physics")
+    assert len(phys) == 2 and all(0.0 <= r.record["final_policy"]["p_goal"] <= 1.0
+                                  and r.record["final_policy"]["rollouts"] > 0 for r in phys)
+    capsys.readouterr()
+    again = api.compare("paper-40", [BATCHED], worlds=("grid", "physics"), seeds=2,
+                        episodes=10, jobs=1, out=out, resume=True)
+    assert "4 of 4 runs already finished" in capsys.readouterr().err
+    assert [dict(r.record) for r in again.runs] == [dict(r.record) for r in first.runs]

@@ -1,6 +1,6 @@
 """A plain learner written as a numba ``@jitclass`` runs in a compiled loop: the same runs as
 the compiled method it ports, its failures said as any learner's, nothing left in numba's
-on-disk cache."""
+on-disk cache; recorded, resumed and graded in physics as a Python learner is."""
 
 from __future__ import annotations
 
@@ -130,3 +130,25 @@ def test_a_jitclass_warm_start_equals_the_python_ports():
     assert recs[0]["pretrain"]["episodes"] == 20
     assert differing(*recs) == []
     assert np.array_equal(runs[0].policy, runs[1].policy)
+
+
+@pytest.mark.parametrize("world", ["grid", "physics"])
+def test_its_run_is_recorded_like_a_python_learners(tmp_path, world):
+    rrd = tmp_path / "run.rrd"
+    run = api.train("paper-40", JIT, episodes=10, world=world, record=rrd)
+    assert run.recording == rrd and rrd.stat().st_size > 10_000
+    assert run.record["config"]["learner"] == JIT
+
+
+def test_its_sweep_resumes_and_its_physics_runs_are_graded_by_their_drives(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    first = api.compare("paper-40", [JIT], worlds=("grid", "physics"), seeds=2,
+                        episodes=10, jobs=1, out=out)
+    phys = first.of(JIT, "physics")
+    assert len(phys) == 2 and all(0.0 <= r.record["final_policy"]["p_goal"] <= 1.0
+                                  and r.record["final_policy"]["rollouts"] > 0 for r in phys)
+    capsys.readouterr()
+    again = api.compare("paper-40", [JIT], worlds=("grid", "physics"), seeds=2,
+                        episodes=10, jobs=1, out=out, resume=True)
+    assert "4 of 4 runs already finished" in capsys.readouterr().err
+    assert [dict(r.record) for r in again.runs] == [dict(r.record) for r in first.runs]

@@ -52,7 +52,7 @@ def test_the_study_keeps_only_what_it_reads_and_resumes_from_it(tmp_path, capsys
     table = (out / "heldout.md").read_text()
     [results] = out.glob("*/st-ql/results.json")
     runs = json.loads(results.read_text())["runs"]
-    assert len(runs) == 2 and all(set(r) == set(KEPT_FIELDS) for r in runs)
+    assert len(runs) == 2 and all(set(r) == set(KEPT_FIELDS) - {"final_policy"} for r in runs)
     capsys.readouterr()
     assert heldout.main([*argv, "--resume"]) == 0
     assert "resuming: 2 of 2 runs already finished" in capsys.readouterr().err
@@ -281,3 +281,15 @@ def test_a_sweep_keeping_the_summarys_fields_draws_no_figures(tmp_path):
 
     with pytest.raises(ValueError, match="draws no figures"):
         kept.run_sweep([], tmp_path, run_local, figures=True)
+
+
+def test_kept_records_give_a_physics_sweep_the_same_summary_as_whole_ones(tmp_path):
+    from scenarios.runs.results import summarise
+    from scenarios.sweep.kept import kept
+
+    specs = make_specs("paper-40", ["st-ql"], [0, 1], 5, ["grid", "physics"],
+                       rewards="goal-only")
+    whole = run_sweep(specs, tmp_path / "whole", run_local, figures=False, progress=None)
+    runs = whole["runs"]
+    assert all("final_policy" in kept(r) for r in runs if r["world"] == "physics")
+    assert summarise([kept(r) for r in runs]) == summarise(runs)

@@ -24,7 +24,9 @@ from scenarios.runs.spec import RunSpec
 from scenarios.sweep import run as _run
 from scenarios.sweep.resume_state import COMPARE_FIELDS, check_summary_fields, finished_compare
 
-KEPT_FIELDS = ("key", *COMPARE_FIELDS)
+# the summary's fields, and a physics run's final-policy grading (a few numbers: P(G) and
+# the drives' means, which the summary's physics rows read)
+KEPT_FIELDS = ("key", *COMPARE_FIELDS, "final_policy")
 
 
 def kept(rec: dict[str, Any]) -> dict[str, Any]:

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
 from scenarios.studies.maps import heldout
 from scenarios.sweep.backends import run_local
 from scenarios.sweep.kept import KEPT_FIELDS
+from scenarios.sweep.resume_state import ResumeStateError
 from scenarios.sweep.run import make_specs, run_sweep
 
 
@@ -52,7 +54,8 @@ def test_the_study_keeps_only_what_it_reads_and_resumes_from_it(tmp_path, capsys
     table = (out / "heldout.md").read_text()
     [results] = out.glob("*/st-ql/results.json")
     runs = json.loads(results.read_text())["runs"]
-    assert len(runs) == 2 and all(set(r) == set(KEPT_FIELDS) - {"final_policy"} for r in runs)
+    grid_only = set(KEPT_FIELDS) - {"final_policy", "robot_seconds", "pretrain"}
+    assert len(runs) == 2 and all(set(r) == grid_only for r in runs)
     capsys.readouterr()
     assert heldout.main([*argv, "--resume"]) == 0
     assert "resuming: 2 of 2 runs already finished" in capsys.readouterr().err
@@ -68,7 +71,32 @@ def test_the_study_keeps_only_what_it_reads_and_resumes_from_it(tmp_path, capsys
                                           ).read_text())["runs"][0]
     assert heldout.main([*argv[:1], str(whole), *argv[2:], "--resume"]) == 0
     assert "resuming: 2 of 2 runs already finished" in capsys.readouterr().err
-    assert (whole / "heldout.md").read_text() == table
+    assert all(set(r) == grid_only for r in json.loads(
+        (whole / spec_dir / "st-ql" / "results.json").read_text())["runs"])
+    # the same table but for the wall times (those runs ran again, on their own)
+    wall = re.compile(r" · [0-9.]+ s \|")
+    assert wall.sub(" |", (whole / "heldout.md").read_text()) == wall.sub(" |", table)
+
+
+def test_a_kept_run_read_back_from_the_partial_file_is_checked(tmp_path, capsys):
+    """After Ctrl-C the kept runs wait in runs.partial.jsonl: --resume runs only the rest,
+    and a line that lacks a field the summary reads is refused, naming the line."""
+    out = tmp_path / "h"
+    argv = ["--out", str(out), "--problems", "maze-w2-24@uniform", "--methods", "st-ql",
+            "--seeds", "2"]
+    assert heldout.main(argv) == 0
+    [folder] = out.glob("*/st-ql")
+    runs = json.loads((folder / "results.json").read_text())["runs"]
+    (folder / "results.json").unlink()
+    (folder / "runs.partial.jsonl").write_text(json.dumps(runs[0]) + "\n")
+    capsys.readouterr()
+    assert heldout.main([*argv, "--resume"]) == 0
+    assert "resuming: 1 of 2 runs already finished" in capsys.readouterr().err
+    (folder / "results.json").unlink()
+    lacking = {k: v for k, v in runs[0].items() if k != "episodes_to_stable_optimal"}
+    (folder / "runs.partial.jsonl").write_text(json.dumps(lacking) + "\n\n")
+    with pytest.raises(ResumeStateError, match=r"line 1.*episodes_to_stable_optimal"):
+        heldout.main([*argv, "--resume"])
 
 
 def test_the_ranking_orders_by_iqm_and_names_each_maps_winner():
@@ -284,8 +312,9 @@ def test_a_sweep_keeping_the_summarys_fields_draws_no_figures(tmp_path):
 
 
 def test_kept_records_give_a_physics_sweep_the_same_summary_as_whole_ones(tmp_path):
-    from scenarios.runs.results import summarise
+    from scenarios.runs.results import summarise, summary_markdown
     from scenarios.sweep.kept import kept
+    from scenarios.sweep.run import assemble
 
     specs = make_specs("paper-40", ["st-ql"], [0, 1], 5, ["grid", "physics"],
                        rewards="goal-only")
@@ -293,3 +322,5 @@ def test_kept_records_give_a_physics_sweep_the_same_summary_as_whole_ones(tmp_pa
     runs = whole["runs"]
     assert all("final_policy" in kept(r) for r in runs if r["world"] == "physics")
     assert summarise([kept(r) for r in runs]) == summarise(runs)
+    assert "robot seconds" in summary_markdown(whole)
+    assert summary_markdown(assemble(specs, [kept(r) for r in runs])) == summary_markdown(whole)

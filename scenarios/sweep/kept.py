@@ -24,9 +24,9 @@ from scenarios.runs.spec import RunSpec
 from scenarios.sweep import run as _run
 from scenarios.sweep.resume_state import COMPARE_FIELDS, check_summary_fields, finished_compare
 
-# the summary's fields, and a physics run's final-policy grading (a few numbers: P(G) and
-# the drives' means, which the summary's physics rows read)
-KEPT_FIELDS = ("key", *COMPARE_FIELDS, "final_policy")
+# the summary's fields, a physics run's final-policy grading (P(G) and the drives' means)
+# and its robot time (the robot-time table of summary.md), and a warm start's grid rung
+KEPT_FIELDS = ("key", *COMPARE_FIELDS, "final_policy", "robot_seconds", "pretrain")
 
 
 def kept(rec: dict[str, Any]) -> dict[str, Any]:
@@ -37,13 +37,14 @@ def kept(rec: dict[str, Any]) -> dict[str, Any]:
 def _write_kept(specs: Sequence[RunSpec], runs: list[dict[str, Any]], out: Path
                 ) -> dict[str, Any]:
     results = _run.assemble(specs, [kept(r) for r in runs])
-    write_results(out, results)
+    write_results(out, results, list(dict.fromkeys(s.method for s in specs)))
     return results
 
 
 KEPT_FILES = _run.SweepFiles(_write_kept, keep=kept,
                              finished=functools.partial(finished_compare,
-                                                        check=check_summary_fields))
+                                                        check=check_summary_fields),
+                             check=check_summary_fields)
 
 
 def run_sweep(specs: Sequence[RunSpec], out_dir: Path,

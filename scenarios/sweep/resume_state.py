@@ -169,13 +169,18 @@ def finished_compare(out_dir: Path, check: Callable[[dict[str, Any]], None] =
 Finished = Callable[[Path], dict[str, dict[str, Any]]]
 
 
-def read_partial(out_dir: Path, finished: Finished | None = None) -> dict[str, dict[str, Any]]:
+def read_partial(out_dir: Path, finished: Finished | None = None,
+                 check: Callable[[dict[str, Any]], None] | None = None
+                 ) -> dict[str, dict[str, Any]]:
     """Finished runs, by key: those of a finished sweep (``finished``; by default its
     ``results.json``), then those of an interrupted one. So ``--resume`` after a sweep that
     finished re-runs nothing of it (an extended sweep runs only what is new). A torn last
-    line (a write cut short) is ignored; any other line that is not a run is refused."""
+    line (a write cut short) is ignored; any other line that is not a run (``check`` says
+    what a run holds: by default a comparison's whole record, nothing for a study with its
+    own ``finished``) is refused."""
     path = out_dir / PARTIAL
-    whole = finished is None  # a comparison keeps whole records (a study, a few fields each)
+    if check is None and finished is None:  # a comparison keeps whole records
+        check = check_compare_record
     done = (finished or finished_compare)(out_dir)
     if not path.exists() and not path.is_symlink():
         return done
@@ -186,8 +191,8 @@ def read_partial(out_dir: Path, finished: Finished | None = None) -> dict[str, d
             continue
         try:
             rec = parse_record(line)
-            if whole:
-                check_compare_record(rec)
+            if check is not None:
+                check(rec)
         except ValueError as exc:
             if i == len(lines):  # no newline after it: the write was cut short
                 continue

@@ -194,6 +194,9 @@ class SweepFiles:
     # the runs of a finished sweep in the directory, by key (--resume re-runs none of
     # them); None: those of its results.json
     finished: Finished | None = None
+    # what each run read back from runs.partial.jsonl must hold (ValueError says what it
+    # lacks); None: a comparison's whole record when ``finished`` is None, else nothing
+    check: Callable[[dict[str, Any]], None] | None = None
 
 
 def compare_files(figures: bool = True) -> SweepFiles:
@@ -328,7 +331,7 @@ def _check_kept_runs(specs: Sequence[RunSpec], done: dict[str, dict[str, Any]],
 def _run_sweep(specs: Sequence[RunSpec], out_dir: Path,
                execute: Callable[..., list[dict[str, Any]]], resume: bool, files: SweepFiles,
                **execute_kwargs: Any) -> dict[str, Any]:
-    done = read_partial(out_dir, files.finished) if resume else {}
+    done = read_partial(out_dir, files.finished, files.check) if resume else {}
     keys = {s.key for s in specs}
     foreign = [k for k in done if k not in keys]
     if foreign:

@@ -12,6 +12,7 @@ from scenarios import api
 from scenarios.runs.physics_batch import plan_tasks
 from scenarios.sweep.run import make_specs
 from tests.plain_learners import differing
+from tests.plain_learners.features import check_recorded, check_resumes_and_graded
 
 BATCHED = "tests.plain_learners.st_ql_batched:STQLBatched"
 
@@ -116,23 +117,11 @@ def test_the_block_draws_port_learns_as_st_ql_does():
     assert abs(rate[BLOCKS] - rate["st-ql"]) < 0.05, rate
 
 
+
 @pytest.mark.parametrize("world", ["grid", "physics"])
 def test_its_run_is_recorded_like_a_python_learners(tmp_path, world):
-    rrd = tmp_path / "run.rrd"
-    run = api.train("paper-40", BATCHED, episodes=10, world=world, record=rrd)
-    assert run.recording == rrd and rrd.stat().st_size > 10_000
-    assert run.record["config"]["learner"] == BATCHED
+    check_recorded(BATCHED, world, tmp_path)
 
 
 def test_its_sweep_resumes_and_its_physics_runs_are_graded_by_their_drives(tmp_path, capsys):
-    out = tmp_path / "sweep"
-    first = api.compare("paper-40", [BATCHED], worlds=("grid", "physics"), seeds=2,
-                        episodes=10, jobs=1, out=out)
-    phys = first.of(BATCHED, "physics")
-    assert len(phys) == 2 and all(0.0 <= r.record["final_policy"]["p_goal"] <= 1.0
-                                  and r.record["final_policy"]["rollouts"] > 0 for r in phys)
-    capsys.readouterr()
-    again = api.compare("paper-40", [BATCHED], worlds=("grid", "physics"), seeds=2,
-                        episodes=10, jobs=1, out=out, resume=True)
-    assert "4 of 4 runs already finished" in capsys.readouterr().err
-    assert [dict(r.record) for r in again.runs] == [dict(r.record) for r in first.runs]
+    check_resumes_and_graded(BATCHED, tmp_path, capsys)

@@ -13,6 +13,7 @@ import pytest
 from learning.plain.learner import LearnerError
 from scenarios import api
 from tests.plain_learners import differing
+from tests.plain_learners.features import check_recorded, check_resumes_and_graded
 
 JIT = "tests.plain_learners.st_ql_jit:STQLJit"
 
@@ -132,23 +133,11 @@ def test_a_jitclass_warm_start_equals_the_python_ports():
     assert np.array_equal(runs[0].policy, runs[1].policy)
 
 
+
 @pytest.mark.parametrize("world", ["grid", "physics"])
 def test_its_run_is_recorded_like_a_python_learners(tmp_path, world):
-    rrd = tmp_path / "run.rrd"
-    run = api.train("paper-40", JIT, episodes=10, world=world, record=rrd)
-    assert run.recording == rrd and rrd.stat().st_size > 10_000
-    assert run.record["config"]["learner"] == JIT
+    check_recorded(JIT, world, tmp_path)
 
 
 def test_its_sweep_resumes_and_its_physics_runs_are_graded_by_their_drives(tmp_path, capsys):
-    out = tmp_path / "sweep"
-    first = api.compare("paper-40", [JIT], worlds=("grid", "physics"), seeds=2,
-                        episodes=10, jobs=1, out=out)
-    phys = first.of(JIT, "physics")
-    assert len(phys) == 2 and all(0.0 <= r.record["final_policy"]["p_goal"] <= 1.0
-                                  and r.record["final_policy"]["rollouts"] > 0 for r in phys)
-    capsys.readouterr()
-    again = api.compare("paper-40", [JIT], worlds=("grid", "physics"), seeds=2,
-                        episodes=10, jobs=1, out=out, resume=True)
-    assert "4 of 4 runs already finished" in capsys.readouterr().err
-    assert [dict(r.record) for r in again.runs] == [dict(r.record) for r in first.runs]
+    check_resumes_and_graded(JIT, tmp_path, capsys)
